@@ -1,0 +1,80 @@
+"""The command line. Only this package parses arguments, configures logging, shows progress bars
+and exits. Each sub-module that defines ``register(subparsers)`` adds one or more sub-commands;
+they are discovered automatically so that commands live in their own small modules.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import logging
+import pkgutil
+import sys
+import traceback
+
+from .. import __version__
+from ..errors import MotionTrackError
+
+log = logging.getLogger("motiontrack")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="motiontrack",
+        description="Find and follow moving objects in video; evaluate trackers against ground truth.",
+    )
+    parser.add_argument("--version", action="version", version=f"motiontrack {__version__}")
+    parser.add_argument("--debug", action="store_true", help="show tracebacks and debug logging")
+    parser.add_argument("-q", "--quiet", action="store_true", help="only warnings and errors")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for mod in sorted(pkgutil.iter_modules(__path__), key=lambda m: m.name):
+        if mod.name.startswith("_"):
+            continue
+        module = importlib.import_module(f"{__name__}.{mod.name}")
+        if hasattr(module, "register"):
+            module.register(sub)
+    return parser
+
+
+def _configure_logging(debug: bool, quiet: bool) -> None:
+    level = logging.DEBUG if debug else (logging.WARNING if quiet else logging.INFO)
+    handler = logging.StreamHandler(sys.stderr)
+    handler.setFormatter(logging.Formatter("motiontrack: %(levelname)s: %(message)s"
+                                           if not debug else "%(name)s: %(levelname)s: %(message)s"))
+    root = logging.getLogger("motiontrack")
+    root.handlers[:] = [handler]
+    root.setLevel(level)
+    root.propagate = False
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    _configure_logging(args.debug, args.quiet)
+    if not getattr(args, "func", None):
+        parser.print_help(sys.stderr)
+        return 2
+    try:
+        code = args.func(args)
+        return int(code or 0)
+    except MotionTrackError as exc:
+        if args.debug:
+            traceback.print_exc()
+        print(f"motiontrack: error: {exc}", file=sys.stderr)
+        return exc.exit_code
+    except KeyboardInterrupt:
+        print("motiontrack: interrupted", file=sys.stderr)
+        return 130
+    except BrokenPipeError:
+        return 141
+    except Exception as exc:  # a bug: still one line unless --debug
+        if args.debug:
+            traceback.print_exc()
+        else:
+            print(f"motiontrack: internal error: {type(exc).__name__}: {exc} (run with --debug for "
+                  "the traceback)", file=sys.stderr)
+        return 1
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,357 @@
+"""Configuration: one frozen dataclass per stage, defaults defined once, TOML in and out.
+
+Every field carries its allowed range in its metadata (see :func:`param`); values are checked when a
+section is built, so an out-of-range value is rejected with the range in the message. Unknown keys
+are errors. ``--set stage.param=value`` on the command line maps onto the same fields through
+:func:`apply_overrides`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import sys
+import typing
+from dataclasses import dataclass, field, fields, is_dataclass, replace
+from pathlib import Path
+from typing import Any, Iterable
+
+from .errors import ConfigError, InputError
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+__all__ = [
+    "param",
+    "SourceConfig",
+    "PreprocessConfig",
+    "FrameDiffParams",
+    "MOG2Params",
+    "KNNParams",
+    "MedianParams",
+    "CNTParams",
+    "GSOCParams",
+    "FarnebackParams",
+    "MotionConfig",
+    "CleanupConfig",
+    "RegionsConfig",
+    "TrackerConfig",
+    "OutputConfig",
+    "PipelineConfig",
+    "load_config",
+    "save_config",
+    "to_dict",
+    "from_dict",
+    "apply_overrides",
+]
+
+
+def param(default: Any, *, lo: float | None = None, hi: float | None = None,
+          choices: Iterable[Any] | None = None, odd: bool = False, doc: str = "") -> Any:
+    """A config field with its allowed range: ``lo <= value <= hi``, one of ``choices``,
+    and for kernel sizes ``odd`` (0 means "off" and is always allowed for odd fields)."""
+    meta = {"lo": lo, "hi": hi, "choices": tuple(choices) if choices is not None else None,
+            "odd": odd, "doc": doc}
+    return field(default=default, metadata=meta)
+
+
+class _Section:
+    """Mixin: validate every field against its :func:`param` metadata after construction."""
+
+    def __post_init__(self) -> None:
+        name = type(self).__name__
+        for f in fields(self):  # type: ignore[arg-type]
+            v = getattr(self, f.name)
+            m = f.metadata
+            if not m:
+                continue
+            if m.get("choices") is not None and v not in m["choices"]:
+                raise ConfigError(f"{name}.{f.name} must be one of {list(m['choices'])}, got {v!r}")
+            if isinstance(v, (int, float)) and not isinstance(v, bool):
+                lo, hi = m.get("lo"), m.get("hi")
+                if (lo is not None and v < lo) or (hi is not None and v > hi):
+                    rng = f"[{'-inf' if lo is None else lo}, {'inf' if hi is None else hi}]"
+                    raise ConfigError(f"{name}.{f.name} must be in {rng}, got {v!r}")
+                if m.get("odd") and v != 0 and int(v) % 2 == 0:
+                    raise ConfigError(f"{name}.{f.name} must be 0 (off) or an odd kernel size, got {v!r}")
+
+
+# --------------------------------------------------------------------------------------- stages
+@dataclass(frozen=True)
+class SourceConfig(_Section):
+    start: int = param(0, lo=0, doc="first frame index to process (0-based)")
+    max_frames: int = param(0, lo=0, doc="stop after this many frames (0 = all)")
+    reconnect_attempts: int = param(5, lo=0, hi=1000, doc="live sources: reconnect tries after a drop")
+    reconnect_backoff: float = param(0.5, lo=0.0, hi=60.0, doc="live sources: first back-off (s), doubling")
+    reconnect_backoff_max: float = param(8.0, lo=0.0, hi=600.0, doc="live sources: longest back-off (s)")
+
+
+@dataclass(frozen=True)
+class PreprocessConfig(_Section):
+    grayscale: bool = param(True, doc="detect motion on the gray image")
+    blur: str = param("gaussian", choices=("none", "gaussian", "median"))
+    blur_kernel: int = param(5, lo=0, hi=51, odd=True)
+    scale: float = param(0.5, lo=0.05, hi=1.0,
+                         doc="processing scale: detect on a smaller image, boxes reported in original pixels")
+    roi: str = param("", doc="path to a region-of-interest mask image (non-zero = keep); empty = whole frame")
+
+
+@dataclass(frozen=True)
+class FrameDiffParams(_Section):
+    threshold: int = param(25, lo=1, hi=255, doc="absolute gray-level difference that counts as motion")
+
+
+@dataclass(frozen=True)
+class MOG2Params(_Section):
+    history: int = param(500, lo=1)
+    var_threshold: float = param(16.0, lo=0.0)
+    detect_shadows: bool = param(True)
+    learning_rate: float = param(-1.0, lo=-1.0, hi=1.0, doc="-1 = automatic (1/history)")
+
+
+@dataclass(frozen=True)
+class KNNParams(_Section):
+    history: int = param(500, lo=1)
+    dist2_threshold: float = param(400.0, lo=0.0)
+    detect_shadows: bool = param(True)
+    learning_rate: float = param(-1.0, lo=-1.0, hi=1.0)
+
+
+@dataclass(frozen=True)
+class MedianParams(_Section):
+    """Temporal-median background (the Reading People Tracker's motion detector)."""
+
+    threshold: float = param(0.1, lo=0.0, hi=1.0,
+                             doc="DETECT_DIFF_THRESH: |frame - background| / 255 above this is motion")
+    history: int = param(25, lo=3, hi=255, doc="frames kept for the median")
+    update_every: int = param(5, lo=1, doc="sample a frame into the history every N frames")
+
+
+@dataclass(frozen=True)
+class CNTParams(_Section):
+    min_pixel_stability: int = param(15, lo=1)
+    max_pixel_stability: int = param(15 * 60, lo=1)
+    use_history: bool = param(True)
+    is_parallel: bool = param(True)
+
+
+@dataclass(frozen=True)
+class GSOCParams(_Section):
+    n_samples: int = param(20, lo=1)
+    replace_rate: float = param(0.003, lo=0.0, hi=1.0)
+    propagation_rate: float = param(0.01, lo=0.0, hi=1.0)
+    hits_threshold: int = param(32, lo=1)
+
+
+@dataclass(frozen=True)
+class FarnebackParams(_Section):
+    """Dense optical flow (Farnebäck); flow magnitude above ``threshold`` px/frame is motion."""
+
+    threshold: float = param(1.0, lo=0.0)
+    pyr_scale: float = param(0.5, lo=0.1, hi=0.9)
+    levels: int = param(3, lo=1, hi=10)
+    winsize: int = param(15, lo=3, hi=101)
+    iterations: int = param(3, lo=1, hi=50)
+    poly_n: int = param(5, choices=(5, 7))
+    poly_sigma: float = param(1.1, lo=0.1, hi=3.0)
+
+
+@dataclass(frozen=True)
+class MotionConfig(_Section):
+    method: str = param("mog2", doc="motion detector: see `motiontrack list`")
+    warmup: int = param(0, lo=0, doc="frames whose detections are ignored while the model settles")
+    frame_diff: FrameDiffParams = field(default_factory=FrameDiffParams)
+    mog2: MOG2Params = field(default_factory=MOG2Params)
+    knn: KNNParams = field(default_factory=KNNParams)
+    median: MedianParams = field(default_factory=MedianParams)
+    cnt: CNTParams = field(default_factory=CNTParams)
+    gsoc: GSOCParams = field(default_factory=GSOCParams)
+    farneback: FarnebackParams = field(default_factory=FarnebackParams)
+
+    def params_for(self, method: str | None = None) -> dict[str, Any]:
+        """The parameter section of ``method`` (default: the selected one) as a dict."""
+        section = getattr(self, method or self.method, None)
+        return dataclasses.asdict(section) if is_dataclass(section) else {}
+
+
+@dataclass(frozen=True)
+class CleanupConfig(_Section):
+    """Mask clean-up, applied in this order: median filter, opening (erode), closing (dilate)."""
+
+    median_kernel: int = param(3, lo=0, hi=31, odd=True, doc="median filter on the mask (0 = off)")
+    erode_kernel: int = param(3, lo=0, hi=31, doc="square erosion kernel (0 = off)")
+    erode_iterations: int = param(1, lo=0, hi=20)
+    dilate_kernel: int = param(3, lo=0, hi=31, doc="square dilation kernel (0 = off)")
+    dilate_iterations: int = param(2, lo=0, hi=20, doc="fills gaps of about kernel*iterations px")
+
+
+@dataclass(frozen=True)
+class RegionsConfig(_Section):
+    """Connected components → regions. Areas are in original-frame pixels.
+
+    ``min_size``/``max_size`` are the thesis' MIN_REGION_SIZE / MAX_REGION_SIZE (fractions of the
+    image area); ``min_area``/``max_area`` the same in pixels. All four apply (0 = no limit).
+    """
+
+    connectivity: int = param(8, choices=(4, 8))
+    min_area: float = param(150.0, lo=0.0, doc="minimum region area in pixels")
+    max_area: float = param(0.0, lo=0.0, doc="maximum region area in pixels (0 = none)")
+    min_size: float = param(0.0, lo=0.0, hi=1.0, doc="MIN_REGION_SIZE, fraction of image area")
+    max_size: float = param(0.25, lo=0.0, hi=1.0, doc="MAX_REGION_SIZE, fraction of image area (0 = none)")
+    min_hw_ratio: float = param(0.0, lo=0.0, doc="minimum height/width (0 = none)")
+    max_hw_ratio: float = param(0.0, lo=0.0, doc="maximum height/width (0 = none)")
+    merge_threshold: float = param(0.0, lo=0.0,
+                                   doc="REGION_MERGE_THRESH: merge regions whose distance D is below this (0 = off)")
+
+
+@dataclass(frozen=True)
+class TrackerConfig(_Section):
+    method: str = param("kalman", doc="multi-object tracker: see `motiontrack list`")
+    cost: str = param("iou", choices=("iou", "center"), doc="association cost")
+    min_iou: float = param(0.1, lo=0.0, hi=1.0, doc="gate: IoU below this never matches (cost=iou)")
+    max_distance: float = param(1.0, lo=0.0,
+                                doc="gate: centre distance / predicted box diagonal above this never matches")
+    confirm_hits: int = param(3, lo=1, hi=100, doc="hits needed to turn tentative into confirmed")
+    max_lost: int = param(15, lo=0, hi=10000, doc="frames a confirmed track may coast unseen before deletion")
+    process_noise: float = param(1.0, lo=0.0, doc="Kalman process noise scale (pixels/frame²)")
+    measurement_noise: float = param(4.0, lo=0.0, doc="Kalman measurement noise std (pixels)")
+    history: int = param(64, lo=0, hi=100000, doc="trajectory points kept per track (bounded)")
+    output_lost: bool = param(False, doc="report coasting (lost) tracks in tracks.txt")
+
+
+@dataclass(frozen=True)
+class OutputConfig(_Section):
+    video: bool = param(True, doc="write the annotated video")
+    codec: str = param("vp80", choices=("vp80", "vp90", "mp4v", "avc1", "mjpg", "xvid"))
+    mask_video: bool = param(False, doc="also write the motion mask as a video")
+    mask_inset: bool = param(True, doc="draw a small mask inset in the annotated video")
+    trail: int = param(32, lo=0, hi=10000, doc="trail length drawn per track (points)")
+
+
+@dataclass(frozen=True)
+class PipelineConfig(_Section):
+    source: SourceConfig = field(default_factory=SourceConfig)
+    preprocess: PreprocessConfig = field(default_factory=PreprocessConfig)
+    motion: MotionConfig = field(default_factory=MotionConfig)
+    cleanup: CleanupConfig = field(default_factory=CleanupConfig)
+    regions: RegionsConfig = field(default_factory=RegionsConfig)
+    tracker: TrackerConfig = field(default_factory=TrackerConfig)
+    output: OutputConfig = field(default_factory=OutputConfig)
+
+
+# ------------------------------------------------------------------------------- (de)serialise
+def to_dict(cfg: Any) -> dict[str, Any]:
+    """Nested plain dict (TOML-ready) of a config dataclass."""
+    return dataclasses.asdict(cfg)
+
+
+def _coerce(value: Any, typ: Any, where: str) -> Any:
+    """Check a scalar against its field type; ints are accepted where floats are expected."""
+    if typ is bool:
+        if isinstance(value, bool):
+            return value
+        raise ConfigError(f"{where} must be true or false, got {value!r}")
+    if typ is int:
+        if isinstance(value, bool) or not isinstance(value, int):
+            if isinstance(value, float) and value.is_integer():
+                return int(value)
+            raise ConfigError(f"{where} must be an integer, got {value!r}")
+        return value
+    if typ is float:
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise ConfigError(f"{where} must be a number, got {value!r}")
+        return float(value)
+    if typ is str:
+        if not isinstance(value, str):
+            raise ConfigError(f"{where} must be a string, got {value!r}")
+        return value
+    return value
+
+
+def from_dict(cls: type, data: dict[str, Any], where: str = "") -> Any:
+    """Build a config dataclass from a nested dict; unknown keys and bad types are errors."""
+    if not isinstance(data, dict):
+        raise ConfigError(f"{where or cls.__name__} must be a table, got {data!r}")
+    hints = typing.get_type_hints(cls)
+    known = {f.name for f in fields(cls)}
+    unknown = sorted(set(data) - known)
+    if unknown:
+        prefix = f"{where}." if where else ""
+        raise ConfigError(
+            f"unknown config key(s) {', '.join(prefix + k for k in unknown)}; "
+            f"valid keys{' in ' + where if where else ''}: {', '.join(sorted(known))}"
+        )
+    kwargs: dict[str, Any] = {}
+    for name, value in data.items():
+        typ = hints[name]
+        sub = f"{where}.{name}" if where else name
+        if is_dataclass(typ):
+            kwargs[name] = from_dict(typ, value, sub)
+        else:
+            kwargs[name] = _coerce(value, typ, sub)
+    return cls(**kwargs)
+
+
+def load_config(path: str | Path | None = None, overrides: Iterable[str] = ()) -> PipelineConfig:
+    """Load a TOML config (or the defaults when ``path`` is None) and apply ``--set`` overrides."""
+    data: dict[str, Any] = {}
+    if path is not None:
+        p = Path(path)
+        if not p.is_file():
+            raise InputError(f"config file not found: {p}")
+        try:
+            data = tomllib.loads(p.read_text(encoding="utf-8"))
+        except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+            raise InputError(f"malformed config file {p}: {exc}") from None
+    cfg = from_dict(PipelineConfig, data)
+    return apply_overrides(cfg, overrides)
+
+
+def _parse_value(text: str) -> Any:
+    """A ``--set`` value: a TOML literal (``3``, ``0.5``, ``true``, ``"a"``) or a bare string."""
+    try:
+        return tomllib.loads(f"v = {text}")["v"]
+    except tomllib.TOMLDecodeError:
+        return text
+
+
+def apply_overrides(cfg: Any, overrides: Iterable[str]) -> Any:
+    """Apply ``key.path=value`` overrides to a (frozen) config, returning a new one."""
+    for item in overrides:
+        if "=" not in item:
+            raise ConfigError(f"--set expects stage.param=value, got {item!r}")
+        key, text = item.split("=", 1)
+        path = [k for k in key.strip().split(".") if k]
+        if not path:
+            raise ConfigError(f"--set expects stage.param=value, got {item!r}")
+        cfg = _set_path(cfg, path, _parse_value(text.strip()), key.strip())
+    return cfg
+
+
+def _set_path(obj: Any, path: list[str], value: Any, full: str) -> Any:
+    d = to_dict(obj)
+    node = d
+    for i, k in enumerate(path[:-1]):
+        if not isinstance(node.get(k), dict):
+            raise ConfigError(f"unknown config key {'.'.join(path[: i + 1])!r} in --set {full}")
+        node = node[k]
+    if path[-1] not in node or isinstance(node[path[-1]], dict):
+        valid = ", ".join(sorted(k for k, v in node.items() if not isinstance(v, dict)))
+        raise ConfigError(f"unknown config key {full!r}; valid keys here: {valid}")
+    node[path[-1]] = value
+    return from_dict(type(obj), d)
+
+
+def save_config(cfg: Any, path: str | Path) -> None:
+    """Write the resolved config as TOML (atomically)."""
+    import tomli_w
+
+    from .io.atomic import atomic_write_text
+
+    atomic_write_text(Path(path), tomli_w.dumps(to_dict(cfg)))
+
+
+def config_replace(cfg: Any, **changes: Any) -> Any:
+    """``dataclasses.replace`` that re-validates (frozen sections validate in ``__post_init__``)."""
+    return replace(cfg, **changes)

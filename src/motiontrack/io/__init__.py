@@ -1,0 +1,1 @@
+"""Input and output: video sources and sinks, annotation formats, atomic files."""

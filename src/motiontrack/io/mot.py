@@ -1,0 +1,157 @@
+"""MOTChallenge CSV: ground truth, tracker results and detections; ``seqinfo.ini``.
+
+Layouts (columns, 1-based):
+
+* MOT15 / results / detections (10 columns):
+  ``frame, id, left, top, width, height, conf|consider, world_x, world_y, world_z``
+* MOT16/17/20 ground truth (9 columns): ``frame, id, left, top, width, height, consider, class,
+  visibility``
+
+In ground truth, column 7 is the *consider* flag (0 = ignore); in results and detections it is the
+confidence. Frames are 1-based.
+"""
+
+from __future__ import annotations
+
+import configparser
+import io
+from pathlib import Path
+from typing import Iterable
+
+import numpy as np
+
+from ..errors import InputError
+from ..types import Annotations
+from .atomic import atomic_open
+
+__all__ = ["read_mot", "parse_mot", "write_mot", "format_mot_rows", "read_seqinfo"]
+
+
+def read_mot(path: str | Path, kind: str = "auto") -> Annotations:
+    """Read a MOTChallenge CSV file.
+
+    Parameters
+    ----------
+    path : path of the ``.txt``/``.csv`` file.
+    kind : ``"gt"`` (column 7 = consider flag), ``"results"``/``"det"`` (column 7 = confidence), or
+        ``"auto"``: ``gt`` when the file is named ``gt*`` and otherwise ``results``.
+    """
+    p = Path(path)
+    if not p.is_file():
+        raise InputError(f"annotation file not found: {p}")
+    if kind == "auto":
+        kind = "gt" if p.name.lower().startswith("gt") else "results"
+    try:
+        text = p.read_text(encoding="utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise InputError(f"{p}: not a text file ({exc.reason} at byte {exc.start})") from None
+    ann = parse_mot(text, kind=kind, name=str(p))
+    return Annotations(**{k: getattr(ann, k) for k in (
+        "frames", "ids", "boxes", "scores", "consider", "classes", "visibility", "world")},
+        meta={"format": "mot", "kind": kind, "path": str(p)})
+
+
+def parse_mot(text: str, kind: str = "results", name: str = "<string>") -> Annotations:
+    """Parse MOTChallenge CSV text; a malformed line raises :class:`InputError` naming it."""
+    if kind not in ("gt", "results", "det"):
+        raise ValueError(f"kind must be 'gt', 'results' or 'det', got {kind!r}")
+    rows: list[list[float]] = []
+    ncols: int | None = None
+    for lineno, raw in enumerate(io.StringIO(text), start=1):
+        line = raw.strip()
+        if not line or line.startswith("#"):
+            continue
+        parts = [t.strip() for t in (line.split(",") if "," in line else line.split())]
+        if len(parts) < 6:
+            raise InputError(f"{name}:{lineno}: expected at least 6 comma-separated values "
+                             f"(frame,id,left,top,width,height), got {len(parts)}: {line[:80]!r}")
+        try:
+            vals = [float(t) for t in parts[:10]]
+        except ValueError:
+            raise InputError(f"{name}:{lineno}: non-numeric value in {line[:80]!r}") from None
+        if not all(np.isfinite(vals)):
+            raise InputError(f"{name}:{lineno}: non-finite value in {line[:80]!r}")
+        if vals[0] < 1 or not float(vals[0]).is_integer():
+            raise InputError(f"{name}:{lineno}: frame must be an integer >= 1, got {parts[0]!r}")
+        if vals[4] <= 0 or vals[5] <= 0:
+            raise InputError(f"{name}:{lineno}: box width and height must be > 0, got "
+                             f"w={parts[4]}, h={parts[5]}")
+        ncols = len(parts) if ncols is None else ncols
+        rows.append(vals + [-1.0] * (10 - len(vals)))
+    if not rows:
+        return Annotations.empty()
+    a = np.asarray(rows, dtype=np.float64)
+    n = len(a)
+    if kind == "gt":
+        consider = a[:, 6] != 0
+        scores = np.ones(n)
+    else:
+        consider = np.ones(n, dtype=bool)
+        scores = a[:, 6]
+    if ncols == 9 and kind == "gt":
+        # MOT16/17/20 ground truth: class and visibility
+        classes, visibility = a[:, 7].astype(np.int64), a[:, 8]
+        world = np.full((n, 3), -1.0)
+    else:
+        classes, visibility = np.full(n, -1, dtype=np.int64), np.full(n, -1.0)
+        world = a[:, 7:10]
+    return Annotations.from_columns(
+        frames=a[:, 0].astype(np.int64), ids=a[:, 1].astype(np.int64), boxes=a[:, 2:6],
+        scores=scores, consider=consider, classes=classes, visibility=visibility, world=world,
+    )
+
+
+def _fmt(v: float) -> str:
+    return f"{v:.6g}" if not float(v).is_integer() else str(int(v))
+
+
+def format_mot_rows(frames: Iterable[int], ids: Iterable[int], boxes: np.ndarray,
+                    scores: Iterable[float] | None = None, world: np.ndarray | None = None) -> str:
+    """Rows of a MOTChallenge *results* file (10 columns), newline-terminated."""
+    boxes = np.asarray(boxes, dtype=np.float64).reshape(-1, 4)
+    n = len(boxes)
+    scores = np.ones(n) if scores is None else np.asarray(list(scores), dtype=np.float64)
+    world = np.full((n, 3), -1.0) if world is None else np.asarray(world, dtype=np.float64)
+    out = []
+    for f, i, b, s, w in zip(frames, ids, boxes, scores, world):
+        out.append(
+            f"{int(f)},{int(i)},{b[0]:.2f},{b[1]:.2f},{b[2]:.2f},{b[3]:.2f},{_fmt(s)},"
+            f"{_fmt(w[0])},{_fmt(w[1])},{_fmt(w[2])}\n"
+        )
+    return "".join(out)
+
+
+def write_mot(ann: Annotations, path: str | Path, kind: str = "results") -> None:
+    """Write annotations as MOTChallenge CSV (atomically). ``kind="gt"`` writes the consider flag
+    in column 7 and, when classes are known, the 9-column MOT17 layout."""
+    order = np.lexsort((ann.ids, ann.frames))
+    a = ann.select(order) if len(ann) else ann
+    with atomic_open(path) as fh:
+        if kind == "gt" and len(a) and (a.classes >= 0).any():
+            for f, i, b, c, k, v in zip(a.frames, a.ids, a.boxes, a.consider, a.classes, a.visibility):
+                fh.write(f"{f},{i},{b[0]:.2f},{b[1]:.2f},{b[2]:.2f},{b[3]:.2f},{int(c)},{k},{_fmt(v)}\n")
+        else:
+            col7 = a.consider.astype(np.float64) if kind == "gt" else a.scores
+            fh.write(format_mot_rows(a.frames, a.ids, a.boxes, col7, a.world))
+
+
+def read_seqinfo(path: str | Path) -> dict[str, object]:
+    """Read ``seqinfo.ini``: name, imDir, frameRate, seqLength, imWidth, imHeight, imExt."""
+    p = Path(path)
+    if p.is_dir():
+        p = p / "seqinfo.ini"
+    if not p.is_file():
+        raise InputError(f"seqinfo.ini not found: {p}")
+    cp = configparser.ConfigParser()
+    try:
+        cp.read_string(p.read_text(encoding="utf-8"))
+        sec = cp["Sequence"]
+    except (configparser.Error, KeyError) as exc:
+        raise InputError(f"malformed {p}: {exc}") from None
+    out: dict[str, object] = {}
+    for key, value in sec.items():
+        try:
+            out[key] = int(value) if value.strip().lstrip("-").isdigit() else float(value)
+        except ValueError:
+            out[key] = value
+    return out

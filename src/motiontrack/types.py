@@ -1,0 +1,334 @@
+"""The data model: small frozen dataclasses that validate themselves.
+
+Conventions
+-----------
+* Boxes are ``(x, y, w, h)`` in pixels of the *original* frame: ``x, y`` is the top-left corner,
+  ``w, h`` the width and height (MOTChallenge convention).
+* Frame numbers in :class:`Annotations` are 1-based (MOTChallenge); :class:`Frame.index` and
+  :class:`FrameResult.index` are 0-based video frame indices, so ``frame number = index + 1``.
+* Stacked arrays are ``float64`` of shape ``(N, 4)``; every function handles ``N = 0``.
+"""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass, field
+from typing import Mapping
+
+import numpy as np
+
+__all__ = [
+    "Box",
+    "Region",
+    "TrackState",
+    "Track",
+    "Frame",
+    "FrameResult",
+    "Annotations",
+    "boxes_to_array",
+]
+
+
+@dataclass(frozen=True)
+class Box:
+    """Axis-aligned box ``(x, y, w, h)`` in pixels; ``x, y`` is the top-left corner."""
+
+    x: float
+    y: float
+    w: float
+    h: float
+
+    def __post_init__(self) -> None:
+        for name in ("x", "y", "w", "h"):
+            v = getattr(self, name)
+            if not np.isfinite(v):
+                raise ValueError(f"box {name} must be finite, got {name}={v!r}")
+        if self.w <= 0 or self.h <= 0:
+            raise ValueError(f"box must have w > 0 and h > 0, got w={self.w}, h={self.h}")
+
+    @property
+    def x2(self) -> float:
+        return self.x + self.w
+
+    @property
+    def y2(self) -> float:
+        return self.y + self.h
+
+    @property
+    def center(self) -> tuple[float, float]:
+        return (self.x + self.w / 2.0, self.y + self.h / 2.0)
+
+    @property
+    def bottom_center(self) -> tuple[float, float]:
+        """The foot point: where a standing person touches the ground plane."""
+        return (self.x + self.w / 2.0, self.y + self.h)
+
+    @property
+    def area(self) -> float:
+        return self.w * self.h
+
+    def as_array(self) -> np.ndarray:
+        return np.array([self.x, self.y, self.w, self.h], dtype=np.float64)
+
+    def scaled(self, factor: float) -> "Box":
+        """The same box with all coordinates multiplied by ``factor``."""
+        return Box(self.x * factor, self.y * factor, self.w * factor, self.h * factor)
+
+    @classmethod
+    def from_xyxy(cls, x1: float, y1: float, x2: float, y2: float) -> "Box":
+        return cls(float(x1), float(y1), float(x2 - x1), float(y2 - y1))
+
+    @classmethod
+    def from_center(cls, xc: float, yc: float, w: float, h: float) -> "Box":
+        return cls(float(xc - w / 2.0), float(yc - h / 2.0), float(w), float(h))
+
+
+def boxes_to_array(boxes) -> np.ndarray:
+    """Stack boxes (objects with ``.box`` or :class:`Box`) into a ``(N, 4) float64`` array."""
+    rows = [(b.box if hasattr(b, "box") else b).as_array() for b in boxes]
+    if not rows:
+        return np.zeros((0, 4), dtype=np.float64)
+    return np.stack(rows).astype(np.float64, copy=False)
+
+
+@dataclass(frozen=True)
+class Region:
+    """A connected foreground region (blob) found in a motion mask.
+
+    Attributes
+    ----------
+    box : Box
+        Bounding box in original-frame pixels.
+    centroid : tuple of float
+        Centre of mass ``(cx, cy)`` from image moments, original-frame pixels.
+    area : float
+        Number of foreground pixels, in original-frame pixels² (scaled back when the detector ran on
+        a smaller image).
+    score : float
+        Detection confidence; 1.0 for motion regions, the detector score for external detections.
+    """
+
+    box: Box
+    centroid: tuple[float, float]
+    area: float
+    score: float = 1.0
+
+    def __post_init__(self) -> None:
+        if self.area < 0:
+            raise ValueError(f"region area must be >= 0, got area={self.area}")
+
+
+class TrackState(str, enum.Enum):
+    """Track lifecycle: tentative → confirmed → lost → deleted."""
+
+    TENTATIVE = "tentative"
+    CONFIRMED = "confirmed"
+    LOST = "lost"
+    DELETED = "deleted"
+
+
+@dataclass(frozen=True)
+class Track:
+    """A snapshot of one track after a frame's update.
+
+    Attributes
+    ----------
+    id : int
+        Stable integer identity (1-based, never reused within a run).
+    box : Box
+        Current box (the filtered estimate, original pixels).
+    state : TrackState
+    velocity : tuple of float
+        Centre velocity ``(vx, vy)`` in pixels per frame.
+    hits : int
+        Frames with an associated measurement.
+    age : int
+        Frames since the track was born.
+    time_since_update : int
+        Frames since the last associated measurement (0 = measured this frame).
+    history : tuple
+        Recent centre points ``((x, y), ...)`` for trails; bounded length.
+    """
+
+    id: int
+    box: Box
+    state: TrackState
+    velocity: tuple[float, float] = (0.0, 0.0)
+    hits: int = 1
+    age: int = 1
+    time_since_update: int = 0
+    history: tuple[tuple[float, float], ...] = ()
+    score: float = 1.0
+
+    def __post_init__(self) -> None:
+        if self.id < 1:
+            raise ValueError(f"track id must be >= 1, got id={self.id}")
+
+
+@dataclass(frozen=True)
+class Frame:
+    """One decoded frame.
+
+    Attributes
+    ----------
+    index : int
+        0-based frame index in the source.
+    image : np.ndarray
+        ``(H, W, 3) uint8`` BGR (or ``(H, W) uint8`` gray).
+    timestamp : float
+        Seconds: the source's position for files, wall-clock time for live sources.
+    """
+
+    index: int
+    image: np.ndarray = field(repr=False)
+    timestamp: float = 0.0
+
+    def __post_init__(self) -> None:
+        if self.index < 0:
+            raise ValueError(f"frame index must be >= 0, got index={self.index}")
+        if not isinstance(self.image, np.ndarray) or self.image.ndim not in (2, 3):
+            raise ValueError("frame image must be a 2-D or 3-D numpy array")
+
+
+@dataclass(frozen=True)
+class FrameResult:
+    """What the pipeline yields for each frame.
+
+    ``mask`` is the cleaned motion mask (``uint8``, 0/255) at processing resolution, or ``None``
+    when detections came from elsewhere.
+    """
+
+    index: int
+    timestamp: float
+    frame: np.ndarray = field(repr=False)
+    mask: np.ndarray | None = field(repr=False)
+    regions: tuple[Region, ...]
+    tracks: tuple[Track, ...]
+    extras: Mapping[str, object] = field(default_factory=dict, repr=False)
+
+
+_ANN_COLUMNS = ("frames", "ids", "boxes", "scores", "consider", "classes", "visibility", "world")
+
+
+@dataclass(frozen=True, eq=False)
+class Annotations:
+    """A table of boxes over frames: ground truth, tracker output or detections.
+
+    All columns are numpy arrays of equal length N (N may be 0).
+
+    Attributes
+    ----------
+    frames : (N,) int64
+        1-based frame numbers (MOTChallenge).
+    ids : (N,) int64
+        Object / track ids (-1 for anonymous detections).
+    boxes : (N, 4) float64
+        ``x, y, w, h`` in pixels.
+    scores : (N,) float64
+        Confidence (ground truth: 1).
+    consider : (N,) bool
+        MOTChallenge "consider" flag: ``False`` marks ignore regions / distractors.
+    classes : (N,) int64
+        MOTChallenge class id (1 = pedestrian; -1 unknown).
+    visibility : (N,) float64
+        Visible fraction in [0, 1] (-1 unknown).
+    world : (N, 3) float64
+        World coordinates (metres for ours; -1 unknown).
+    """
+
+    frames: np.ndarray
+    ids: np.ndarray
+    boxes: np.ndarray
+    scores: np.ndarray
+    consider: np.ndarray
+    classes: np.ndarray
+    visibility: np.ndarray
+    world: np.ndarray
+    meta: Mapping[str, object] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        n = len(self.frames)
+        for name in _ANN_COLUMNS:
+            col = getattr(self, name)
+            if not isinstance(col, np.ndarray) or len(col) != n:
+                raise ValueError(
+                    f"annotation column {name!r} must be an array of length {n}, "
+                    f"got {type(col).__name__} of length {len(col)}"
+                )
+        if self.boxes.shape != (n, 4):
+            raise ValueError(f"boxes must have shape ({n}, 4), got {self.boxes.shape}")
+        if self.world.shape != (n, 3):
+            raise ValueError(f"world must have shape ({n}, 3), got {self.world.shape}")
+
+    @classmethod
+    def from_columns(
+        cls,
+        frames,
+        ids,
+        boxes,
+        scores=None,
+        consider=None,
+        classes=None,
+        visibility=None,
+        world=None,
+        meta: Mapping[str, object] | None = None,
+    ) -> "Annotations":
+        """Build from array-likes, filling missing columns with their defaults."""
+        frames = np.asarray(frames, dtype=np.int64).reshape(-1)
+        n = len(frames)
+        ids = np.asarray(ids, dtype=np.int64).reshape(-1)
+        boxes = np.asarray(boxes, dtype=np.float64).reshape(n, 4)
+
+        def col(v, default, dtype):
+            if v is None:
+                return np.full(n, default, dtype=dtype)
+            return np.asarray(v, dtype=dtype).reshape(-1)
+
+        return cls(
+            frames=frames,
+            ids=ids,
+            boxes=boxes,
+            scores=col(scores, 1.0, np.float64),
+            consider=col(consider, True, bool),
+            classes=col(classes, -1, np.int64),
+            visibility=col(visibility, -1.0, np.float64),
+            world=(
+                np.full((n, 3), -1.0, dtype=np.float64)
+                if world is None
+                else np.asarray(world, dtype=np.float64).reshape(n, 3)
+            ),
+            meta=dict(meta or {}),
+        )
+
+    @classmethod
+    def empty(cls) -> "Annotations":
+        return cls.from_columns(np.zeros(0), np.zeros(0), np.zeros((0, 4)))
+
+    def __len__(self) -> int:
+        return len(self.frames)
+
+    def select(self, mask: np.ndarray) -> "Annotations":
+        """Rows where the boolean ``mask`` is true (a new object; inputs are never mutated)."""
+        return Annotations(**{c: getattr(self, c)[mask] for c in _ANN_COLUMNS}, meta=self.meta)
+
+    def frame_numbers(self) -> np.ndarray:
+        """Sorted unique frame numbers present."""
+        return np.unique(self.frames)
+
+    def at(self, frame: int) -> "Annotations":
+        return self.select(self.frames == frame)
+
+    def by_frame(self) -> dict[int, np.ndarray]:
+        """Map frame number → row indices (sorted by frame); one pass, O(N log N)."""
+        if len(self) == 0:
+            return {}
+        order = np.argsort(self.frames, kind="stable")
+        f = self.frames[order]
+        cuts = np.flatnonzero(np.diff(f)) + 1
+        return {int(g[0]): idx for g, idx in zip(np.split(f, cuts), np.split(order, cuts))}
+
+    def concat(self, other: "Annotations") -> "Annotations":
+        return Annotations(
+            **{c: np.concatenate([getattr(self, c), getattr(other, c)]) for c in _ANN_COLUMNS},
+            meta={**self.meta, **other.meta},
+        )
