@@ -214,8 +214,12 @@ class TrackerConfig(_Section):
                                 doc="gate: centre distance / predicted box diagonal above this never matches")
     confirm_hits: int = param(3, lo=1, hi=100, doc="hits needed to turn tentative into confirmed")
     max_lost: int = param(15, lo=0, hi=10000, doc="frames a confirmed track may coast unseen before deletion")
-    process_noise: float = param(1.0, lo=0.0, doc="Kalman process noise scale (pixels/frame²)")
-    measurement_noise: float = param(4.0, lo=0.0, doc="Kalman measurement noise std (pixels)")
+    position_noise: float = param(0.05, lo=1e-6, hi=10.0,
+                                  doc="Kalman process noise std of position/size, fraction of box height")
+    velocity_noise: float = param(0.00625, lo=1e-6, hi=10.0,
+                                  doc="Kalman process noise std of velocity, fraction of box height per frame")
+    measurement_noise: float = param(0.05, lo=1e-6, hi=10.0,
+                                     doc="Kalman measurement noise std, fraction of box height")
     history: int = param(64, lo=0, hi=100000, doc="trajectory points kept per track (bounded)")
     output_lost: bool = param(False, doc="report coasting (lost) tracks in tracks.txt")
 

@@ -1,0 +1,17 @@
+"""Motion detection: image → foreground mask (uint8, 0 or 255), plus mask clean-up.
+
+Detectors are plug-ins in :data:`DETECTORS`; create one with ``DETECTORS.create(name, **params)``.
+Each detector has ``apply(image) -> mask`` and, where it keeps a background model,
+``background() -> image``.
+"""
+
+from .base import DETECTORS, MotionDetector
+from .cleanup import clean_mask
+from . import detectors as _detectors  # noqa: F401  (registers the built-in detectors)
+
+__all__ = ["DETECTORS", "MotionDetector", "clean_mask", "create_detector"]
+
+
+def create_detector(cfg) -> MotionDetector:
+    """The detector selected by a :class:`~motiontrack.config.MotionConfig`."""
+    return DETECTORS.create(cfg.method, **cfg.params_for())

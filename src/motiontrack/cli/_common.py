@@ -1,0 +1,53 @@
+"""Helpers shared by the command modules (argument types, signals, GT loading)."""
+
+from __future__ import annotations
+
+import signal
+from contextlib import contextmanager
+from typing import Iterator
+
+from ..errors import ConfigError
+
+
+def frame_range(text: str) -> tuple[int, int | None]:
+    """``A:B`` (inclusive, 1-based frame numbers), ``A:`` or ``:B``."""
+    if ":" not in text:
+        raise ConfigError(f"expected a frame range A:B, got {text!r}")
+    a, b = text.split(":", 1)
+    try:
+        lo = int(a) if a.strip() else 1
+        hi = int(b) if b.strip() else None
+    except ValueError:
+        raise ConfigError(f"expected integers in the frame range A:B, got {text!r}") from None
+    if lo < 1 or (hi is not None and hi < lo):
+        raise ConfigError(f"frame range must satisfy 1 <= A <= B, got {text!r}")
+    return lo, hi
+
+
+@contextmanager
+def sigterm_as_interrupt() -> Iterator[None]:
+    """Treat SIGTERM like Ctrl-C so that outputs are finalised the same way."""
+
+    def handler(signum, frame):  # pragma: no cover - exercised in subprocess tests
+        raise KeyboardInterrupt
+
+    try:
+        old = signal.signal(signal.SIGTERM, handler)
+    except ValueError:  # not in the main thread
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, old)
+
+
+def read_gt(path: str):
+    """Read a ground-truth file in any supported annotation format."""
+    try:
+        from ..io.annotations import read_annotations
+    except ImportError:  # pragma: no cover - the format dispatcher is optional during bring-up
+        from ..io.mot import read_mot
+
+        return read_mot(path, kind="gt")
+    return read_annotations(path, kind="gt")

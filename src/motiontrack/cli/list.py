@@ -1,0 +1,30 @@
+"""``motiontrack list``: every plug-in by stage, and the synthetic scenes."""
+
+from __future__ import annotations
+
+import argparse
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("list", help="list motion detectors, trackers and synthetic scenes")
+    p.set_defaults(func=cmd_list)
+
+
+def cmd_list(args) -> int:
+    from ..motion import DETECTORS
+    from ..track.tracker import TRACKERS
+
+    groups = [("motion detectors (--set motion.method=NAME)", DETECTORS.describe()),
+              ("trackers (--set tracker.method=NAME)", TRACKERS.describe())]
+    try:
+        from ..synth import SCENES, make_scene
+
+        groups.append(("synthetic scenes (SOURCE = synth:NAME)",
+                       {n: str(make_scene(n).describe().get("summary", "")) for n in SCENES}))
+    except ImportError:  # pragma: no cover
+        pass
+    for title, items in groups:
+        print(title)
+        for name, doc in items.items():
+            print(f"  {name:<12} {doc}")
+    return 0

@@ -1,0 +1,120 @@
+"""``motiontrack track SOURCE``: video in, tracks and annotated video out."""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import sys
+
+log = logging.getLogger("motiontrack")
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "track", help="track moving objects in a video, camera, stream, image folder or synth: scene",
+        description="Run the pipeline on SOURCE and write annotated video, tracks.txt (MOTChallenge), "
+                    "summary.json and the resolved config.toml to the output folder.")
+    p.add_argument("source", help="video file, camera index (0), rtsp/http URL, image folder or glob "
+                                  "('input/*.jpg'), or synth:NAME (see `motiontrack list`)")
+    p.add_argument("-o", "--out", default="out", help="output folder (default: out)")
+    p.add_argument("--config", help="TOML config file")
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="STAGE.PARAM=VALUE",
+                   help="override one config field, e.g. --set motion.method=knn (repeatable)")
+    p.add_argument("--start", type=int, help="first frame index (0-based)")
+    p.add_argument("--max-frames", type=int, help="process at most this many frames")
+    p.add_argument("--no-video", action="store_true", help="analysis only: no annotated video")
+    p.add_argument("--mask-video", action="store_true", help="also write the motion mask video")
+    p.add_argument("--codec", help="video codec: vp80 (default, WebM), vp90, mp4v, mjpg, xvid")
+    p.add_argument("--gt", help="ground truth to score the run against (any supported format)")
+    p.add_argument("--detections", help="MOTChallenge det.txt: track these detections instead of "
+                                        "detecting motion")
+    p.add_argument("--min-score", type=float, default=None,
+                   help="with --detections: drop detections below this confidence")
+    p.add_argument("--show", action="store_true", help="live window (q quits, space pauses)")
+    p.add_argument("--force", action="store_true", help="overwrite existing outputs")
+    p.set_defaults(func=cmd_track)
+
+
+def _build_config(args):
+    from ..config import load_config
+
+    overrides = list(args.overrides)
+    if args.start is not None:
+        overrides.append(f"source.start={args.start}")
+    if args.max_frames is not None:
+        overrides.append(f"source.max_frames={args.max_frames}")
+    if args.no_video:
+        overrides.append("output.video=false")
+    if args.mask_video:
+        overrides.append("output.mask_video=true")
+    if args.codec:
+        overrides.append(f'output.codec="{args.codec}"')
+    return load_config(args.config, overrides)
+
+
+def _viewer():
+    """A frame callback for --show, or an error explaining how to get a GUI."""
+    import cv2
+
+    from ..errors import ConfigError
+
+    info = cv2.getBuildInformation()
+    gui_line = next((ln for ln in info.splitlines() if ln.strip().startswith("GUI:")), "GUI: NONE")
+    if "NONE" in gui_line.upper():
+        raise ConfigError("--show needs an OpenCV build with a GUI; this one is headless. Install "
+                          "the GUI build with `pip uninstall opencv-contrib-python-headless && pip "
+                          "install opencv-contrib-python`, or watch the annotated video instead")
+
+    state = {"paused": False}
+
+    def show(img) -> bool:
+        cv2.imshow("motiontrack", img)
+        while True:
+            key = cv2.waitKey(0 if state["paused"] else 1) & 0xFF
+            if key == ord("q"):
+                cv2.destroyAllWindows()
+                return False
+            if key == ord(" "):
+                state["paused"] = not state["paused"]
+                continue
+            if not state["paused"]:
+                return True
+
+    return show
+
+
+def cmd_track(args) -> int:
+    from tqdm import tqdm
+
+    from ..io.mot import read_mot
+    from ..pipeline import TrackJob
+    from ._common import read_gt, sigterm_as_interrupt
+
+    cfg = _build_config(args)
+    gt = read_gt(args.gt) if args.gt else None
+    det = None
+    if args.detections:
+        det = read_mot(args.detections, kind="det")
+        if args.min_score is not None:
+            det = det.select(det.scores >= args.min_score)
+    job = TrackJob(args.source, cfg, args.out, force=args.force, gt=gt, detections=det,
+                   show=_viewer() if args.show else None)
+    log.info("source %s", job.src.info.describe())
+    with sigterm_as_interrupt(), tqdm(total=job.expected_frames(), unit="frame", disable=None,
+                                      file=sys.stderr, dynamic_ncols=True) as bar:
+        summary = job.run(progress=bar.update)
+    _print_summary(summary)
+    return 0
+
+
+def _print_summary(s) -> None:
+    lines = [f"frames    {s.frames} in {s.seconds:.2f} s ({s.fps:.1f} fps)",
+             f"tracks    {s.tracks}",
+             f"status    {s.status}" + (" (input truncated)" if s.truncated else "")]
+    if s.accuracy:
+        a = s.accuracy
+        lines.append("accuracy  " + "  ".join(
+            f"{k} {a[k]:.3f}" for k in ("HOTA", "MOTA", "IDF1", "recall", "precision") if k in a)
+            + (f"  IDSW {int(a['IDSW'])}" if "IDSW" in a else ""))
+    lines.append(f"outputs   {', '.join(s.outputs.values())}")
+    print("\n".join(lines))

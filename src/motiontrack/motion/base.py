@@ -1,0 +1,28 @@
+"""The motion-detector interface and registry."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..registry import Registry
+
+
+class MotionDetector:
+    """Turns each frame into a foreground mask.
+
+    ``apply`` takes the preprocessed frame (``(h, w)`` or ``(h, w, 3)`` uint8) and returns a
+    ``(h, w)`` uint8 mask with 255 = moving and 0 = background. Shadow pixels are never foreground.
+    """
+
+    #: whether the detector wants colour input (e.g. GSOC); the pipeline then skips grayscale
+    wants_color = False
+
+    def apply(self, image: np.ndarray) -> np.ndarray:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def background(self) -> np.ndarray | None:
+        """Current background estimate (for `--save background`), or None."""
+        return None
+
+
+DETECTORS: Registry[MotionDetector] = Registry("motion detector")

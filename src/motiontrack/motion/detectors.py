@@ -1,0 +1,203 @@
+"""Built-in motion detectors: frame differencing, OpenCV background subtractors, the Reading People
+Tracker's temporal-median background, and dense optical flow (Farnebäck)."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+from .base import DETECTORS, MotionDetector
+
+SHADOW_VALUE = 127  # MOG2/KNN mark shadows with 127; only 255 is foreground
+
+
+def _to_gray(image: np.ndarray) -> np.ndarray:
+    return cv2.cvtColor(image, cv2.COLOR_BGR2GRAY) if image.ndim == 3 else image
+
+
+def _binary(fg: np.ndarray) -> np.ndarray:
+    """Subtractor output → 0/255 with shadows (127) and soft values dropped."""
+    _, out = cv2.threshold(fg, 200, 255, cv2.THRESH_BINARY)
+    return out
+
+
+@DETECTORS.register("frame_diff")
+class FrameDiff(MotionDetector):
+    """Frame differencing: |frame_t − frame_{t−1}| > threshold."""
+
+    def __init__(self, threshold: int = 25) -> None:
+        self.threshold = int(threshold)
+        self._prev: np.ndarray | None = None
+
+    def apply(self, image: np.ndarray) -> np.ndarray:
+        gray = _to_gray(image)
+        if self._prev is None or self._prev.shape != gray.shape:
+            self._prev = gray.copy()
+            return np.zeros(gray.shape, np.uint8)
+        diff = cv2.absdiff(gray, self._prev)
+        self._prev = gray.copy()
+        _, mask = cv2.threshold(diff, self.threshold, 255, cv2.THRESH_BINARY)
+        return mask
+
+    def background(self) -> np.ndarray | None:
+        return self._prev
+
+
+class _OpenCVSubtractor(MotionDetector):
+    """Wraps a ``cv2.BackgroundSubtractor``; ``learning_rate`` −1 lets OpenCV choose."""
+
+    def __init__(self, subtractor, learning_rate: float = -1.0) -> None:
+        self.sub = subtractor
+        self.learning_rate = float(learning_rate)
+
+    def apply(self, image: np.ndarray) -> np.ndarray:
+        return _binary(self.sub.apply(image, learningRate=self.learning_rate))
+
+    def background(self) -> np.ndarray | None:
+        try:
+            return self.sub.getBackgroundImage()
+        except cv2.error:  # pragma: no cover - some subtractors have none
+            return None
+
+
+@DETECTORS.register("mog2")
+class MOG2(_OpenCVSubtractor):
+    """Gaussian-mixture background (Zivkovic 2004/2006), OpenCV's MOG2; shadows are not foreground."""
+
+    def __init__(self, history: int = 500, var_threshold: float = 16.0, detect_shadows: bool = True,
+                 learning_rate: float = -1.0) -> None:
+        super().__init__(cv2.createBackgroundSubtractorMOG2(int(history), float(var_threshold),
+                                                            bool(detect_shadows)), learning_rate)
+
+
+@DETECTORS.register("knn")
+class KNN(_OpenCVSubtractor):
+    """K-nearest-neighbours background (Zivkovic & van der Heijden 2006), OpenCV's KNN."""
+
+    def __init__(self, history: int = 500, dist2_threshold: float = 400.0, detect_shadows: bool = True,
+                 learning_rate: float = -1.0) -> None:
+        super().__init__(cv2.createBackgroundSubtractorKNN(int(history), float(dist2_threshold),
+                                                           bool(detect_shadows)), learning_rate)
+
+
+@DETECTORS.register("cnt")
+class CNT(_OpenCVSubtractor):
+    """CNT (counting) background subtractor from opencv-contrib bgsegm: very fast."""
+
+    def __init__(self, min_pixel_stability: int = 15, max_pixel_stability: int = 900,
+                 use_history: bool = True, is_parallel: bool = True) -> None:
+        super().__init__(cv2.bgsegm.createBackgroundSubtractorCNT(
+            int(min_pixel_stability), bool(use_history), int(max_pixel_stability), bool(is_parallel)))
+
+
+@DETECTORS.register("gsoc")
+class GSOC(_OpenCVSubtractor):
+    """GSOC background subtractor from opencv-contrib bgsegm (robust, slower; colour input)."""
+
+    wants_color = True
+
+    def __init__(self, n_samples: int = 20, replace_rate: float = 0.003, propagation_rate: float = 0.01,
+                 hits_threshold: int = 32) -> None:
+        super().__init__(cv2.bgsegm.createBackgroundSubtractorGSOC(
+            nSamples=int(n_samples), replaceRate=float(replace_rate),
+            propagationRate=float(propagation_rate), hitsThreshold=int(hits_threshold)))
+
+    def apply(self, image: np.ndarray) -> np.ndarray:
+        if image.ndim == 2:
+            image = cv2.cvtColor(image, cv2.COLOR_GRAY2BGR)
+        return _binary(self.sub.apply(image))
+
+
+@DETECTORS.register("mog")
+class MOG(_OpenCVSubtractor):
+    """Gaussian-mixture background (KaewTraKulPong & Bowden 2001) from bgsegm."""
+
+    def __init__(self) -> None:
+        super().__init__(cv2.bgsegm.createBackgroundSubtractorMOG())
+
+
+@DETECTORS.register("gmg")
+class GMG(_OpenCVSubtractor):
+    """Bayesian per-pixel background (Godbehere, Matsukawa & Goldberg 2012) from bgsegm."""
+
+    def __init__(self) -> None:
+        super().__init__(cv2.bgsegm.createBackgroundSubtractorGMG())
+
+
+@DETECTORS.register("lsbp")
+class LSBP(_OpenCVSubtractor):
+    """Local SVD binary pattern background subtractor from bgsegm (slow, robust to illumination)."""
+
+    def __init__(self) -> None:
+        super().__init__(cv2.bgsegm.createBackgroundSubtractorLSBP())
+
+
+@DETECTORS.register("median")
+class TemporalMedian(MotionDetector):
+    """Temporal-median background, as in the Reading People Tracker's motion detector.
+
+    Every ``update_every`` frames a frame is added to a ring of ``history`` samples and the
+    background is their per-pixel median. A pixel is foreground when
+    ``|frame − background| / 255 > threshold`` (DETECT_DIFF_THRESH, in [0, 1]). Until the ring
+    holds 3 samples the first frame is the background.
+    """
+
+    def __init__(self, threshold: float = 0.1, history: int = 25, update_every: int = 5) -> None:
+        self.threshold = float(threshold)
+        self.history = int(history)
+        self.update_every = int(update_every)
+        self._ring: np.ndarray | None = None
+        self._count = 0
+        self._frames = 0
+        self._bg: np.ndarray | None = None
+
+    def _add(self, gray: np.ndarray) -> None:
+        if self._ring is None or self._ring.shape[1:] != gray.shape:
+            self._ring = np.empty((self.history,) + gray.shape, np.uint8)
+            self._count = 0
+        self._ring[self._count % self.history] = gray
+        self._count += 1
+        n = min(self._count, self.history)
+        if n >= 3 or self._bg is None:
+            # np.partition is O(n) per pixel; the median is recomputed only when a sample arrives.
+            self._bg = np.median(self._ring[:n], axis=0).astype(np.uint8) if n >= 3 else gray.copy()
+
+    def apply(self, image: np.ndarray) -> np.ndarray:
+        gray = _to_gray(image)
+        if self._frames % self.update_every == 0:
+            self._add(gray)
+        self._frames += 1
+        diff = cv2.absdiff(gray, self._bg)
+        # threshold in [0, 1] of the 8-bit range; "> t" as the RPT's DETECT_DIFF_THRESH
+        _, mask = cv2.threshold(diff, self.threshold * 255.0, 255, cv2.THRESH_BINARY)
+        return mask
+
+    def background(self) -> np.ndarray | None:
+        return self._bg
+
+
+@DETECTORS.register("farneback")
+class FarnebackMotion(MotionDetector):
+    """Dense optical flow (Farnebäck 2003): pixels whose flow magnitude exceeds ``threshold``
+    (pixels per frame at processing scale) are foreground. Useful with a slowly panning camera
+    when combined with a high threshold. ``last_flow`` keeps the latest (h, w, 2) flow field."""
+
+    def __init__(self, threshold: float = 1.0, pyr_scale: float = 0.5, levels: int = 3,
+                 winsize: int = 15, iterations: int = 3, poly_n: int = 5, poly_sigma: float = 1.1) -> None:
+        self.threshold = float(threshold)
+        self.args = (float(pyr_scale), int(levels), int(winsize), int(iterations), int(poly_n),
+                     float(poly_sigma), 0)
+        self._prev: np.ndarray | None = None
+        self.last_flow: np.ndarray | None = None
+
+    def apply(self, image: np.ndarray) -> np.ndarray:
+        gray = _to_gray(image)
+        if self._prev is None or self._prev.shape != gray.shape:
+            self._prev = gray.copy()
+            self.last_flow = np.zeros(gray.shape + (2,), np.float32)
+            return np.zeros(gray.shape, np.uint8)
+        flow = cv2.calcOpticalFlowFarneback(self._prev, gray, None, *self.args)
+        self._prev = gray.copy()
+        self.last_flow = flow
+        mag = cv2.magnitude(flow[..., 0], flow[..., 1])
+        return np.where(mag > self.threshold, 255, 0).astype(np.uint8)

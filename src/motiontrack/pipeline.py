@@ -1,0 +1,299 @@
+"""The pipeline: the only module that knows the stage order.
+
+    source → preprocess → motion (mask) → clean-up → regions → tracker → FrameResult
+
+:func:`run` yields one :class:`~motiontrack.types.FrameResult` per frame (the Python API).
+:class:`TrackJob` drives :func:`run` and writes the outputs of ``motiontrack track`` (annotated
+video, mask video, ``tracks.txt``, ``summary.json``, resolved ``config.toml``); it finalises every
+output with what was processed so far when the run is interrupted.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable, Iterator
+
+import numpy as np
+
+from .annotate import annotate_frame
+from .config import PipelineConfig, load_config, save_config, to_dict
+from .io.atomic import atomic_open, atomic_write_text, check_writable
+from .io.mot import format_mot_rows
+from .io.sources import Source, open_source
+from .io.video import VideoSink, extension_for
+from .motion import create_detector
+from .motion.cleanup import clean_mask
+from .preprocess import load_roi, preprocess, scaled_size
+from .regions import find_regions
+from .track.tracker import TRACKERS
+from .types import Annotations, Box, Frame, FrameResult, Region
+
+log = logging.getLogger(__name__)
+
+__all__ = ["Pipeline", "run", "TrackJob", "JobSummary", "resolve_config"]
+
+
+def resolve_config(config: PipelineConfig | str | Path | None) -> PipelineConfig:
+    if config is None:
+        return PipelineConfig()
+    if isinstance(config, PipelineConfig):
+        return config
+    return load_config(config)
+
+
+def _regions_from_detections(det: Annotations, rows: np.ndarray | None) -> list[Region]:
+    if rows is None or len(rows) == 0:
+        return []
+    out = []
+    for i in rows:
+        x, y, w, h = det.boxes[i]
+        if w <= 0 or h <= 0:
+            continue
+        out.append(Region(box=Box(float(x), float(y), float(w), float(h)),
+                          centroid=(float(x + w / 2), float(y + h / 2)), area=float(w * h),
+                          score=float(det.scores[i])))
+    return out
+
+
+class Pipeline:
+    """Per-frame processing with all stage state (background model, tracker).
+
+    Parameters
+    ----------
+    cfg : PipelineConfig
+    image_size : (width, height) of the source frames.
+    detections : optional external detections (MOTChallenge det rows, 1-based frames); when given
+        they replace the motion stage.
+    """
+
+    def __init__(self, cfg: PipelineConfig, image_size: tuple[int, int],
+                 detections: Annotations | None = None) -> None:
+        self.cfg = cfg
+        self.image_size = image_size
+        self.scale = cfg.preprocess.scale
+        self.detections = detections
+        self._det_index = detections.by_frame() if detections is not None else None
+        self.detector = create_detector(cfg.motion) if detections is None else None
+        pre = cfg.preprocess
+        if self.detector is not None and self.detector.wants_color and pre.grayscale:
+            from dataclasses import replace
+
+            pre = replace(pre, grayscale=False)
+        self.pre_cfg = pre
+        pw, ph = scaled_size(image_size[0], image_size[1], self.scale)
+        self.roi = load_roi(pre.roi, pw, ph) if pre.roi else None
+        self.tracker = TRACKERS.get(cfg.tracker.method)(cfg.tracker, image_size)
+        self.frames_seen = 0
+
+    def process(self, frame: Frame) -> FrameResult:
+        cfg = self.cfg
+        mask = None
+        extras: dict[str, Any] = {}
+        if self._det_index is not None:
+            regions = _regions_from_detections(self.detections, self._det_index.get(frame.index + 1))
+        else:
+            small = preprocess(frame.image, self.pre_cfg)
+            raw = self.detector.apply(small)
+            if self.roi is not None:
+                raw = np.bitwise_and(raw, self.roi)
+            mask = clean_mask(raw, cfg.cleanup)
+            extras["raw_mask"] = raw
+            if self.frames_seen < cfg.motion.warmup:
+                regions = []
+            else:
+                regions = find_regions(mask, cfg.regions, self.scale, self.image_size)
+        tracks = self.tracker.update(regions)
+        self.frames_seen += 1
+        return FrameResult(index=frame.index, timestamp=frame.timestamp, frame=frame.image,
+                           mask=mask, regions=tuple(regions), tracks=tuple(tracks), extras=extras)
+
+
+def run(source: Any, config: PipelineConfig | str | Path | None = None,
+        detections: Annotations | None = None) -> Iterator[FrameResult]:
+    """Yield a :class:`FrameResult` for every frame of ``source`` (see :func:`open_source`)."""
+    cfg = resolve_config(config)
+    src = open_configured_source(source, cfg)
+    pipe = Pipeline(cfg, (src.info.width, src.info.height), detections)
+    try:
+        for frame in src:
+            yield pipe.process(frame)
+    finally:
+        src.close()
+
+
+def open_configured_source(source: Any, cfg: PipelineConfig) -> Source:
+    """Open ``source`` with the start/length and live-reconnection settings of ``cfg``."""
+    if isinstance(source, Source):
+        return source
+    sc = cfg.source
+    return open_source(source, sc.start, sc.max_frames, reconnect_attempts=sc.reconnect_attempts,
+                       backoff=sc.reconnect_backoff, backoff_max=sc.reconnect_backoff_max)
+
+
+# ------------------------------------------------------------------------------------ the job
+@dataclass
+class JobSummary:
+    """What ``summary.json`` holds."""
+
+    source: str
+    width: int
+    height: int
+    source_fps: float | None
+    frames: int = 0
+    seconds: float = 0.0
+    tracks: int = 0
+    status: str = "complete"
+    interrupted: bool = False
+    truncated: bool = False
+    outputs: dict[str, str] = field(default_factory=dict)
+    accuracy: dict[str, float] | None = None
+    extra: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def fps(self) -> float:
+        return self.frames / self.seconds if self.seconds > 0 else 0.0
+
+    def as_dict(self) -> dict[str, Any]:
+        d = {
+            "source": self.source, "width": self.width, "height": self.height,
+            "source_fps": self.source_fps, "frames": self.frames,
+            "seconds": round(self.seconds, 3), "fps": round(self.fps, 2), "tracks": self.tracks,
+            "status": self.status, "interrupted": self.interrupted, "truncated": self.truncated,
+            "outputs": self.outputs,
+        }
+        if self.accuracy is not None:
+            d["accuracy"] = self.accuracy
+        d.update(self.extra)
+        return d
+
+
+class TrackJob:
+    """``motiontrack track``: run the pipeline on a source and write every output to ``out_dir``.
+
+    Outputs are streamed to temporary files and renamed into place when the job ends, whether it
+    finishes, the source fails mid-way, or the user interrupts (then ``summary.json`` says
+    ``"interrupted": true``).
+    """
+
+    def __init__(self, source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: bool = False,
+                 gt: Annotations | None = None, detections: Annotations | None = None,
+                 show: Callable[[np.ndarray], bool] | None = None) -> None:
+        self.cfg = cfg
+        self.out = Path(out_dir)
+        self.src = open_configured_source(source, cfg)
+        self.gt = gt
+        if self.gt is None and hasattr(self.src, "ground_truth"):
+            self.gt = self.src.ground_truth()
+        self.detections = detections
+        self.show = show
+        self.paths = {
+            "tracks": self.out / "tracks.txt",
+            "summary": self.out / "summary.json",
+            "config": self.out / "config.toml",
+        }
+        if cfg.output.video:
+            self.paths["video"] = self.out / f"annotated{extension_for(cfg.output.codec)}"
+        if cfg.output.mask_video:
+            self.paths["mask_video"] = self.out / f"mask{extension_for(cfg.output.codec)}"
+        if self.gt is not None:
+            self.paths["gt"] = self.out / "gt.txt"
+        check_writable(list(self.paths.values()), force)
+
+    def expected_frames(self) -> int | None:
+        return self.src.expected_frames()
+
+    def run(self, progress: Callable[[int], None] | None = None) -> JobSummary:
+        cfg, info = self.cfg, self.src.info
+        self.out.mkdir(parents=True, exist_ok=True)
+        save_config(cfg, self.paths["config"])
+        fps = info.fps or 25.0
+        summary = JobSummary(source=info.name, width=info.width, height=info.height, source_fps=info.fps)
+        video = VideoSink(self.paths["video"], fps, cfg.output.codec) if "video" in self.paths else None
+        mask_video = (VideoSink(self.paths["mask_video"], fps, cfg.output.codec)
+                      if "mask_video" in self.paths else None)
+        ids: set[int] = set()
+        rows_f: list[int] = []
+        rows_id: list[int] = []
+        rows_box: list[np.ndarray] = []
+        t0 = time.perf_counter()
+        pipe = Pipeline(cfg, (info.width, info.height), self.detections)
+        from .errors import SourceError
+
+        with atomic_open(self.paths["tracks"]) as tracks_fh:
+            try:
+                for frame in self.src:
+                    res = pipe.process(frame)
+                    ts = [t for t in res.tracks]
+                    if ts:
+                        boxes = np.array([t.box.as_array() for t in ts])
+                        f = [res.index + 1] * len(ts)
+                        tid = [t.id for t in ts]
+                        tracks_fh.write(format_mot_rows(f, tid, boxes, [t.score for t in ts]))
+                        ids.update(tid)
+                        if self.gt is not None:
+                            rows_f += f
+                            rows_id += tid
+                            rows_box.append(boxes)
+                    if video is not None or self.show is not None:
+                        img = annotate_frame(res.frame, res.tracks, res.regions, res.mask,
+                                             cfg.output.trail, cfg.output.mask_inset,
+                                             text=f"frame {res.index}")
+                        if video is not None:
+                            video.write(img)
+                        if self.show is not None and not self.show(img):
+                            summary.status = "stopped by user"
+                            break
+                    if mask_video is not None and res.mask is not None:
+                        mask_video.write(res.mask)
+                    summary.frames += 1
+                    if progress is not None:
+                        progress(1)
+            except KeyboardInterrupt:
+                summary.interrupted = True
+                summary.status = "interrupted"
+                log.warning("interrupted after %d frames; writing what was processed", summary.frames)
+            except SourceError as exc:
+                summary.status = f"source failed: {exc}"
+                summary.truncated = True
+                log.error("%s; writing what was processed", exc)
+            finally:
+                summary.seconds = time.perf_counter() - t0
+                for sink in (video, mask_video):
+                    if sink is not None:
+                        sink.close()
+        summary.truncated = summary.truncated or self.src.truncated
+        summary.tracks = len(ids)
+        summary.outputs = {k: str(v) for k, v in self.paths.items()
+                           if v.exists() or k == "summary"}
+        if self.gt is not None:
+            pred = Annotations.from_columns(
+                rows_f, rows_id, np.concatenate(rows_box) if rows_box else np.zeros((0, 4)))
+            summary.accuracy = score_run(self.gt, pred, summary.frames, self.src)
+            from .io.mot import write_mot
+
+            write_mot(self.gt, self.paths["gt"], kind="gt")
+            summary.outputs["gt"] = str(self.paths["gt"])
+        atomic_write_text(self.paths["summary"], json.dumps(summary.as_dict(), indent=2) + "\n")
+        if summary.interrupted:
+            raise KeyboardInterrupt
+        return summary
+
+
+def score_run(gt: Annotations, pred: Annotations, frames: int, src: Source) -> dict[str, float]:
+    """Accuracy of a run against ground truth restricted to the processed frames."""
+    from .evaluate.mot import evaluate_tracking
+
+    start = getattr(src, "start", 0)
+    lo, hi = start + 1, start + frames
+    gt = gt.select((gt.frames >= lo) & (gt.frames <= hi))
+    res = evaluate_tracking(gt, pred)
+    keys = ("HOTA", "MOTA", "IDF1", "MOTP", "DetA", "AssA", "IDSW", "TP", "FP", "FN")
+    out = {k: float(res[k]) for k in keys if k in res}
+    tp, fp, fn = out.get("TP", 0.0), out.get("FP", 0.0), out.get("FN", 0.0)
+    out["recall"] = tp / (tp + fn) if tp + fn else 0.0
+    out["precision"] = tp / (tp + fp) if tp + fp else 0.0
+    return out

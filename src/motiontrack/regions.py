@@ -1,0 +1,145 @@
+"""Mask → regions: connected components, size and shape filters, merging of nearby regions.
+
+Region merging follows the Reading People Tracker's REGION_MERGE_THRESH rule: two regions are
+merged when
+
+    D = (dx + dy) / (max(W1, H1) + max(W2, H2) + 1)  <  merge_threshold
+
+where W, H are the regions' box widths and heights and ``dx``, ``dy`` are the **gaps between the
+two boxes** along x and y: ``dx = max(0, x2_left - x1_right)`` style, i.e. the number of pixels
+between the nearer edges, 0 when the boxes overlap (or touch) along that axis. Overlapping boxes
+therefore always have D = 0, and a gap of one region-size in both directions gives D ≈ 1. Merging
+is transitive (single linkage) and repeats until no pair is below the threshold.
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+from .config import RegionsConfig
+from .types import Box, Region
+
+__all__ = ["find_regions", "components", "filter_regions", "merge_regions", "merge_distance"]
+
+
+def components(mask: np.ndarray, connectivity: int = 8, scale: float = 1.0,
+               min_pixels: int = 1) -> list[Region]:
+    """Connected components of a 0/255 mask as regions in original-frame pixels.
+
+    Parameters
+    ----------
+    mask : (h, w) uint8, non-zero = foreground, at processing resolution.
+    connectivity : 4 or 8.
+    scale : processing scale; boxes, centroids and areas are divided by it (areas by scale²).
+    min_pixels : components smaller than this (in processing pixels) are dropped early.
+    """
+    n, _labels, stats, cents = cv2.connectedComponentsWithStats(
+        mask, connectivity=connectivity, ltype=cv2.CV_32S)
+    inv = 1.0 / scale
+    out: list[Region] = []
+    for i in range(1, n):
+        x, y, w, h, area = (int(v) for v in stats[i])
+        if area < min_pixels:
+            continue
+        out.append(Region(
+            box=Box(x * inv, y * inv, w * inv, h * inv),
+            # pixel i covers [i, i + 1): its centre is i + 0.5 (same convention as the box edges)
+            centroid=(float((cents[i, 0] + 0.5) * inv), float((cents[i, 1] + 0.5) * inv)),
+            area=float(area) * inv * inv,
+        ))
+    return out
+
+
+def filter_regions(regions: list[Region], cfg: RegionsConfig, image_area: float) -> list[Region]:
+    """Keep regions whose area and height/width ratio are within the limits of ``cfg``."""
+    lo = max(cfg.min_area, cfg.min_size * image_area)
+    hi_px = [v for v in (cfg.max_area, cfg.max_size * image_area) if v > 0]
+    hi = min(hi_px) if hi_px else np.inf
+    out = []
+    for r in regions:
+        if not lo <= r.area <= hi:
+            continue
+        ratio = r.box.h / r.box.w
+        if cfg.min_hw_ratio > 0 and ratio < cfg.min_hw_ratio:
+            continue
+        if cfg.max_hw_ratio > 0 and ratio > cfg.max_hw_ratio:
+            continue
+        out.append(r)
+    return out
+
+
+def merge_distance(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Pairwise merge distance D between boxes ``a`` (N, 4) and ``b`` (M, 4) (x, y, w, h) → (N, M).
+
+    ``D = (dx + dy) / (max(W1, H1) + max(W2, H2) + 1)`` with ``dx``, ``dy`` the gaps between
+    the boxes (0 when they overlap along that axis).
+    """
+    a = np.asarray(a, np.float64).reshape(-1, 4)
+    b = np.asarray(b, np.float64).reshape(-1, 4)
+    ax1, ay1, ax2, ay2 = a[:, 0:1], a[:, 1:2], a[:, 0:1] + a[:, 2:3], a[:, 1:2] + a[:, 3:4]
+    bx1, by1, bx2, by2 = b[:, 0], b[:, 1], b[:, 0] + b[:, 2], b[:, 1] + b[:, 3]
+    dx = np.maximum(0.0, np.maximum(bx1 - ax2, ax1 - bx2))
+    dy = np.maximum(0.0, np.maximum(by1 - ay2, ay1 - by2))
+    sa = np.maximum(a[:, 2:3], a[:, 3:4])
+    sb = np.maximum(b[:, 2], b[:, 3])
+    return (dx + dy) / (sa + sb + 1.0)
+
+
+def _union(rs: list[Region]) -> Region:
+    x1 = min(r.box.x for r in rs)
+    y1 = min(r.box.y for r in rs)
+    x2 = max(r.box.x2 for r in rs)
+    y2 = max(r.box.y2 for r in rs)
+    area = sum(r.area for r in rs)
+    cx = sum(r.centroid[0] * r.area for r in rs) / area if area > 0 else (x1 + x2) / 2
+    cy = sum(r.centroid[1] * r.area for r in rs) / area if area > 0 else (y1 + y2) / 2
+    return Region(box=Box.from_xyxy(x1, y1, x2, y2), centroid=(cx, cy), area=area,
+                  score=max(r.score for r in rs))
+
+
+def merge_regions(regions: list[Region], threshold: float) -> list[Region]:
+    """Merge regions whose pairwise distance D is below ``threshold`` (single linkage, repeated
+    until stable because a merged box can come close to a further region)."""
+    if threshold <= 0 or len(regions) < 2:
+        return list(regions)
+    current = list(regions)
+    while True:
+        boxes = np.array([r.box.as_array() for r in current])
+        d = merge_distance(boxes, boxes)
+        np.fill_diagonal(d, np.inf)
+        close = d < threshold
+        if not close.any():
+            return current
+        # connected components of the "close" graph
+        n = len(current)
+        parent = list(range(n))
+
+        def find(i: int) -> int:
+            while parent[i] != i:
+                parent[i] = parent[parent[i]]
+                i = parent[i]
+            return i
+
+        for i, j in zip(*np.nonzero(np.triu(close))):
+            ri, rj = find(int(i)), find(int(j))
+            if ri != rj:
+                parent[rj] = ri
+        groups: dict[int, list[Region]] = {}
+        for i in range(n):
+            groups.setdefault(find(i), []).append(current[i])
+        current = [g[0] if len(g) == 1 else _union(g) for g in groups.values()]
+
+
+def find_regions(mask: np.ndarray, cfg: RegionsConfig, scale: float, image_size: tuple[int, int]) -> list[Region]:
+    """Mask at processing scale → filtered, merged regions in original pixels.
+
+    Small specks are dropped before merging (below a quarter of the minimum area) so they cannot
+    glue real regions together; the area/shape filters apply to the merged regions.
+    """
+    width, height = image_size
+    image_area = float(width * height)
+    min_px = max(cfg.min_area, cfg.min_size * image_area) * scale * scale / 4.0
+    regions = components(mask, cfg.connectivity, scale, min_pixels=max(1, int(min_px)))
+    regions = merge_regions(regions, cfg.merge_threshold)
+    return filter_regions(regions, cfg, image_area)

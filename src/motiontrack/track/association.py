@@ -1,0 +1,75 @@
+"""Association: cost matrices and gated Hungarian assignment (pure functions)."""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.optimize import linear_sum_assignment
+
+__all__ = ["iou_matrix", "center_distance_matrix", "association_cost", "assign"]
+
+#: cost given to forbidden pairs (never chosen)
+INF_COST = 1e6
+
+
+def iou_matrix(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Intersection over union of boxes ``a`` (N, 4) and ``b`` (M, 4), ``x, y, w, h`` → (N, M)."""
+    a = np.asarray(a, np.float64).reshape(-1, 4)
+    b = np.asarray(b, np.float64).reshape(-1, 4)
+    ix1 = np.maximum(a[:, None, 0], b[None, :, 0])
+    iy1 = np.maximum(a[:, None, 1], b[None, :, 1])
+    ix2 = np.minimum(a[:, None, 0] + a[:, None, 2], b[None, :, 0] + b[None, :, 2])
+    iy2 = np.minimum(a[:, None, 1] + a[:, None, 3], b[None, :, 1] + b[None, :, 3])
+    inter = np.clip(ix2 - ix1, 0, None) * np.clip(iy2 - iy1, 0, None)
+    union = (a[:, 2] * a[:, 3])[:, None] + (b[:, 2] * b[:, 3])[None, :] - inter
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(union > 0, inter / union, 0.0)
+
+
+def center_distance_matrix(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Centre distance between ``a`` (N, 4) and ``b`` (M, 4) divided by the diagonal of ``a``."""
+    a = np.asarray(a, np.float64).reshape(-1, 4)
+    b = np.asarray(b, np.float64).reshape(-1, 4)
+    ca = a[:, :2] + a[:, 2:] / 2
+    cb = b[:, :2] + b[:, 2:] / 2
+    d = np.linalg.norm(ca[:, None, :] - cb[None, :, :], axis=2)
+    diag = np.hypot(a[:, 2], a[:, 3])[:, None]
+    return d / np.maximum(diag, 1e-9)
+
+
+def association_cost(pred: np.ndarray, det: np.ndarray, min_iou: float, max_distance: float,
+                     mode: str = "iou") -> np.ndarray:
+    """Cost of matching predicted boxes (N, 4) to detections (M, 4).
+
+    ``mode="iou"``: cost ``1 − IoU`` for pairs with IoU ≥ ``min_iou``; pairs below the IoU gate but
+    with normalised centre distance < ``max_distance`` get ``1 + distance`` (always worse than an
+    IoU match — this rescues small or fast objects whose boxes do not overlap the prediction);
+    everything else is forbidden. ``mode="center"``: normalised centre distance, gated by
+    ``max_distance``.
+    """
+    n, m = len(pred), len(det)
+    if n == 0 or m == 0:
+        return np.zeros((n, m))
+    dist = center_distance_matrix(pred, det)
+    if mode == "center":
+        return np.where(dist < max_distance, dist, INF_COST)
+    iou = iou_matrix(pred, det)
+    cost = np.where(iou >= max(min_iou, 1e-12), 1.0 - iou, INF_COST)
+    fallback = (cost >= INF_COST) & (dist < max_distance)
+    cost[fallback] = 1.0 + dist[fallback]
+    return cost
+
+
+def assign(cost: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Minimum-cost assignment ignoring forbidden pairs.
+
+    Returns ``(matches (K, 2) [row, col], unmatched_rows, unmatched_cols)``.
+    """
+    n, m = cost.shape
+    if n == 0 or m == 0:
+        return np.zeros((0, 2), np.int64), np.arange(n), np.arange(m)
+    rows, cols = linear_sum_assignment(cost)
+    keep = cost[rows, cols] < INF_COST
+    matches = np.column_stack([rows[keep], cols[keep]]).astype(np.int64)
+    un_r = np.setdiff1d(np.arange(n), matches[:, 0])
+    un_c = np.setdiff1d(np.arange(m), matches[:, 1])
+    return matches, un_r, un_c

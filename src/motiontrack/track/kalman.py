@@ -1,0 +1,78 @@
+"""Constant-velocity Kalman filter for boxes, as pure batched functions.
+
+State ``x = [cx, cy, w, h, vx, vy, vw, vh]`` (centre, size and their velocities, pixels and
+pixels/frame); measurement ``z = [cx, cy, w, h]``. Noise is proportional to the box height so the
+same parameters work for near and far objects (the scheme of DeepSORT, Wojke et al. 2017).
+All functions accept a batch: ``x`` (N, 8), ``P`` (N, 8, 8); N may be 0.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+NDIM = 4
+F = np.eye(2 * NDIM)
+F[:NDIM, NDIM:] = np.eye(NDIM)  # x_{t+1} = x_t + v_t (dt = 1 frame)
+H = np.eye(NDIM, 2 * NDIM)
+
+
+def box_to_z(boxes: np.ndarray) -> np.ndarray:
+    """(N, 4) ``x, y, w, h`` → (N, 4) measurements ``cx, cy, w, h``."""
+    b = np.asarray(boxes, np.float64).reshape(-1, 4)
+    return np.column_stack([b[:, 0] + b[:, 2] / 2, b[:, 1] + b[:, 3] / 2, b[:, 2], b[:, 3]])
+
+
+def z_to_box(z: np.ndarray) -> np.ndarray:
+    """(N, ≥4) states or measurements → (N, 4) ``x, y, w, h`` boxes."""
+    z = np.asarray(z, np.float64).reshape(len(z), -1)
+    return np.column_stack([z[:, 0] - z[:, 2] / 2, z[:, 1] - z[:, 3] / 2, z[:, 2], z[:, 3]])
+
+
+def initiate(boxes: np.ndarray, pos_std: float, vel_std: float) -> tuple[np.ndarray, np.ndarray]:
+    """New tracks at rest from (N, 4) boxes → ``x`` (N, 8), ``P`` (N, 8, 8)."""
+    z = box_to_z(boxes)
+    n = len(z)
+    x = np.zeros((n, 2 * NDIM))
+    x[:, :NDIM] = z
+    h = z[:, 3:4]
+    std = np.hstack([2 * pos_std * h, 2 * pos_std * h, 2 * pos_std * h, 2 * pos_std * h,
+                     10 * vel_std * h, 10 * vel_std * h, 10 * vel_std * h, 10 * vel_std * h])
+    P = np.zeros((n, 2 * NDIM, 2 * NDIM))
+    idx = np.arange(2 * NDIM)
+    P[:, idx, idx] = std ** 2
+    return x, P
+
+
+def process_noise(x: np.ndarray, pos_std: float, vel_std: float) -> np.ndarray:
+    """Diagonal process noise ``Q`` (N, 8, 8) scaled by each box height."""
+    h = np.maximum(x[:, 3:4], 1.0)
+    std = np.hstack([pos_std * h] * NDIM + [vel_std * h] * NDIM)
+    Q = np.zeros((len(x), 2 * NDIM, 2 * NDIM))
+    idx = np.arange(2 * NDIM)
+    Q[:, idx, idx] = std ** 2
+    return Q
+
+
+def predict(x: np.ndarray, P: np.ndarray, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Kalman prediction ``x' = F x``, ``P' = F P Fᵀ + Q`` for a batch."""
+    x2 = x @ F.T
+    P2 = F @ P @ F.T + Q
+    return x2, P2
+
+
+def update(x: np.ndarray, P: np.ndarray, z: np.ndarray, meas_std: float) -> tuple[np.ndarray, np.ndarray]:
+    """Kalman correction with measurements ``z`` (N, 4) for a batch of N tracks."""
+    if len(x) == 0:
+        return x.copy(), P.copy()
+    h = np.maximum(x[:, 3:4], 1.0)
+    r = (meas_std * h) ** 2
+    R = np.zeros((len(x), NDIM, NDIM))
+    idx = np.arange(NDIM)
+    R[:, idx, idx] = np.repeat(r, NDIM, axis=1)
+    PHt = P @ H.T                                  # (N, 8, 4)
+    S = H @ PHt + R                                # (N, 4, 4)
+    K = np.linalg.solve(S, PHt.transpose(0, 2, 1)).transpose(0, 2, 1)  # P Hᵀ S⁻¹
+    innov = z - x @ H.T
+    x2 = x + np.einsum("nij,nj->ni", K, innov)
+    P2 = P - K @ H @ P
+    return x2, P2

@@ -1,0 +1,175 @@
+"""Multi-object tracker: constant-velocity Kalman filter + gated Hungarian assignment.
+
+Lifecycle (parameters of :class:`~motiontrack.config.TrackerConfig`):
+
+1. An unmatched detection starts a **tentative** track (no public id yet).
+2. A tentative track with ``confirm_hits`` matched frames becomes **confirmed** and receives the
+   next integer id (ids are therefore never wasted on noise and never reused).
+   A tentative track that misses a frame is deleted.
+3. A confirmed track that misses a frame becomes **lost** and coasts on its prediction; a match
+   makes it confirmed again with the same id.
+4. A lost track unseen for more than ``max_lost`` frames, or whose prediction has left the image,
+   is **deleted**.
+
+The per-frame step is vectorised over tracks (batched Kalman maths, one Hungarian solve).
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from typing import Sequence
+
+import numpy as np
+
+from ..config import TrackerConfig
+from ..registry import Registry
+from ..types import Box, Region, Track, TrackState
+from . import kalman
+from .association import assign, association_cost
+
+__all__ = ["TRACKERS", "MultiObjectTracker"]
+
+TRACKERS: Registry["MultiObjectTracker"] = Registry("tracker")
+
+
+class _TrackState:
+    __slots__ = ("tid", "state", "hits", "age", "tsu", "history", "score")
+
+    def __init__(self, history: int) -> None:
+        self.tid = 0
+        self.state = TrackState.TENTATIVE
+        self.hits = 1
+        self.age = 1
+        self.tsu = 0
+        self.history: deque = deque(maxlen=max(history, 1))
+        self.score = 1.0
+
+
+@TRACKERS.register("kalman")
+class MultiObjectTracker:
+    """SORT-style tracker with an explicit tentative → confirmed → lost → deleted lifecycle."""
+
+    def __init__(self, cfg: TrackerConfig | None = None, image_size: tuple[int, int] | None = None) -> None:
+        self.cfg = cfg or TrackerConfig()
+        self.image_size = image_size
+        self.x = np.zeros((0, 8))
+        self.P = np.zeros((0, 8, 8))
+        self.meta: list[_TrackState] = []
+        self.next_id = 1
+        self.frame_count = 0
+
+    # ------------------------------------------------------------------------------- helpers
+    def _boxes(self) -> np.ndarray:
+        return kalman.z_to_box(self.x[:, :4]) if len(self.x) else np.zeros((0, 4))
+
+    def _keep(self, keep: np.ndarray) -> None:
+        self.x, self.P = self.x[keep], self.P[keep]
+        self.meta = [m for m, k in zip(self.meta, keep) if k]
+
+    def predict(self) -> np.ndarray:
+        """Advance every track one frame; returns the predicted boxes (N, 4)."""
+        if len(self.x):
+            c = self.cfg
+            Q = kalman.process_noise(self.x, c.position_noise, c.velocity_noise)
+            self.x, self.P = kalman.predict(self.x, self.P, Q)
+            # keep sizes positive when a shrinking velocity overshoots
+            self.x[:, 2:4] = np.maximum(self.x[:, 2:4], 1.0)
+        return self._boxes()
+
+    # ------------------------------------------------------------------------------- update
+    def update(self, detections: Sequence[Region] | np.ndarray,
+               scores: np.ndarray | None = None) -> list[Track]:
+        """One tracking step with this frame's detections (regions or an (M, 4) box array).
+
+        Returns the snapshots of the tracks to report this frame: confirmed tracks matched in this
+        frame (plus coasting lost tracks when ``output_lost``).
+        """
+        c = self.cfg
+        if isinstance(detections, np.ndarray):
+            det = np.asarray(detections, np.float64).reshape(-1, 4)
+            det_scores = np.ones(len(det)) if scores is None else np.asarray(scores, np.float64)
+        else:
+            det = np.array([r.box.as_array() for r in detections]).reshape(-1, 4)
+            det_scores = np.array([r.score for r in detections], np.float64)
+        self.frame_count += 1
+
+        pred = self.predict()
+        cost = association_cost(pred, det, c.min_iou, c.max_distance, c.cost)
+        matches, un_tracks, un_dets = assign(cost)
+
+        if len(matches):
+            ti, di = matches[:, 0], matches[:, 1]
+            z = kalman.box_to_z(det[di])
+            self.x[ti], self.P[ti] = kalman.update(self.x[ti], self.P[ti], z, c.measurement_noise)
+            for t, d in zip(ti, di):
+                m = self.meta[t]
+                m.hits += 1
+                m.tsu = 0
+                m.score = float(det_scores[d])
+                if m.state == TrackState.TENTATIVE and m.hits >= c.confirm_hits:
+                    m.state = TrackState.CONFIRMED
+                    m.tid = self.next_id
+                    self.next_id += 1
+                elif m.state == TrackState.LOST:
+                    m.state = TrackState.CONFIRMED
+
+        keep = np.ones(len(self.meta), bool)
+        boxes = self._boxes()
+        for t in un_tracks:
+            m = self.meta[t]
+            m.tsu += 1
+            if m.state == TrackState.TENTATIVE:
+                keep[t] = False
+            else:
+                m.state = TrackState.LOST
+                if m.tsu > c.max_lost or self._outside(boxes[t]):
+                    keep[t] = False
+        for m in self.meta:
+            m.age += 1
+        self._keep(keep)
+
+        if len(un_dets):
+            x0, P0 = kalman.initiate(det[un_dets], c.position_noise, c.velocity_noise)
+            self.x = np.concatenate([self.x, x0])
+            self.P = np.concatenate([self.P, P0])
+            for d in un_dets:
+                m = _TrackState(c.history)
+                m.score = float(det_scores[d])
+                if c.confirm_hits <= 1:
+                    m.state = TrackState.CONFIRMED
+                    m.tid = self.next_id
+                    self.next_id += 1
+                self.meta.append(m)
+
+        return self._snapshots()
+
+    def _outside(self, box: np.ndarray) -> bool:
+        if self.image_size is None:
+            return False
+        w, h = self.image_size
+        x, y, bw, bh = box
+        return x + bw <= 0 or y + bh <= 0 or x >= w or y >= h
+
+    def _snapshots(self) -> list[Track]:
+        out: list[Track] = []
+        boxes = self._boxes()
+        for i, m in enumerate(self.meta):
+            b = boxes[i]
+            m.history.append((float(b[0] + b[2] / 2), float(b[1] + b[3] / 2)))
+            if m.state == TrackState.CONFIRMED and m.tsu == 0:
+                pass
+            elif m.state == TrackState.LOST and self.cfg.output_lost:
+                pass
+            else:
+                continue
+            out.append(Track(
+                id=m.tid, box=Box(float(b[0]), float(b[1]), float(b[2]), float(b[3])), state=m.state,
+                velocity=(float(self.x[i, 4]), float(self.x[i, 5])), hits=m.hits, age=m.age,
+                time_since_update=m.tsu, history=tuple(m.history), score=m.score,
+            ))
+        return out
+
+    @property
+    def active_count(self) -> int:
+        """Tracks currently held (any state)."""
+        return len(self.meta)

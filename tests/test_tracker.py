@@ -1,0 +1,122 @@
+"""Kalman maths, association and the tracker lifecycle on hand-built scenarios."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from motiontrack.config import TrackerConfig
+from motiontrack.track import kalman
+from motiontrack.track.association import INF_COST, assign, association_cost, iou_matrix
+from motiontrack.track.tracker import MultiObjectTracker
+from motiontrack.types import TrackState
+
+
+@pytest.mark.parametrize("a, b, iou", [
+    ((0, 0, 10, 10), (0, 0, 10, 10), 1.0),
+    ((0, 0, 10, 10), (5, 0, 10, 10), 50 / 150),
+    ((0, 0, 10, 10), (10, 10, 5, 5), 0.0),
+    ((0, 0, 10, 10), (2, 2, 5, 5), 25 / 100),
+])
+def test_iou(a, b, iou):
+    assert iou_matrix(np.array([a]), np.array([b]))[0, 0] == pytest.approx(iou)
+
+
+def test_iou_empty_shapes():
+    assert iou_matrix(np.zeros((0, 4)), np.zeros((2, 4))).shape == (0, 2)
+
+
+def test_kalman_constant_velocity_converges():
+    x, P = kalman.initiate(np.array([[0.0, 0.0, 10.0, 20.0]]), 0.05, 0.00625)
+    for t in range(1, 30):
+        Q = kalman.process_noise(x, 0.05, 0.00625)
+        x, P = kalman.predict(x, P, Q)
+        x, P = kalman.update(x, P, kalman.box_to_z(np.array([[3.0 * t, 1.0 * t, 10, 20]])), 0.05)
+    assert x[0, 4:6] == pytest.approx([3.0, 1.0], abs=0.05)
+    assert np.allclose(P[0], P[0].T)
+
+
+def test_kalman_batch_empty():
+    x, P = np.zeros((0, 8)), np.zeros((0, 8, 8))
+    x2, P2 = kalman.predict(x, P, np.zeros((0, 8, 8)))
+    assert x2.shape == (0, 8) and P2.shape == (0, 8, 8)
+    assert kalman.update(x, P, np.zeros((0, 4)), 0.05)[0].shape == (0, 8)
+
+
+def test_association_gates_and_fallback():
+    pred = np.array([[0, 0, 10, 10], [100, 100, 10, 10]], float)
+    det = np.array([[1, 0, 10, 10], [112, 100, 10, 10], [300, 300, 10, 10]], float)
+    cost = association_cost(pred, det, min_iou=0.1, max_distance=1.0)
+    assert cost[0, 0] == pytest.approx(1 - 90 / 110)
+    assert 1.0 < cost[1, 1] < 2.0             # no overlap, but centre within one diagonal
+    assert cost[0, 2] == INF_COST and cost[1, 2] == INF_COST
+    matches, un_t, un_d = assign(cost)
+    assert matches.tolist() == [[0, 0], [1, 1]]
+    assert un_t.tolist() == [] and un_d.tolist() == [2]
+
+
+def test_assign_empty():
+    m, ut, ud = assign(np.zeros((0, 3)))
+    assert m.shape == (0, 2) and ud.tolist() == [0, 1, 2]
+
+
+def walk(t, x0=10.0, vx=4.0, y=50.0):
+    return [x0 + vx * t, y, 20.0, 40.0]
+
+
+def test_lifecycle_tentative_confirmed_lost_deleted():
+    cfg = TrackerConfig(confirm_hits=3, max_lost=2)
+    trk = MultiObjectTracker(cfg, image_size=(640, 480))
+    # frames 0-1: seen, still tentative → nothing reported, no id spent
+    for t in range(2):
+        assert trk.update(np.array([walk(t)])) == []
+    # frame 2: third hit → confirmed with id 1
+    (tr,) = trk.update(np.array([walk(2)]))
+    assert (tr.id, tr.state) == (1, TrackState.CONFIRMED)
+    # frames 3-4: unseen → lost, not reported; the track coasts
+    assert trk.update(np.zeros((0, 4))) == []
+    assert trk.meta[0].state == TrackState.LOST
+    assert trk.update(np.zeros((0, 4))) == []
+    # frame 5: seen again where the constant-velocity prediction says → same id
+    (tr,) = trk.update(np.array([walk(5)]))
+    assert tr.id == 1 and tr.time_since_update == 0
+    # frames 6-8: unseen for more than max_lost = 2 frames → deleted
+    for _ in range(3):
+        trk.update(np.zeros((0, 4)))
+    assert trk.active_count == 0
+
+
+def test_tentative_deleted_on_miss_and_ids_not_wasted():
+    trk = MultiObjectTracker(TrackerConfig(confirm_hits=3), image_size=(640, 480))
+    trk.update(np.array([[300, 300, 10, 10]]))    # noise blob, one frame
+    for t in range(3):
+        out = trk.update(np.array([walk(t)]))
+    assert [t.id for t in out] == [1]            # the noise never consumed an id
+
+
+def test_two_crossing_tracks_keep_ids_with_velocity():
+    trk = MultiObjectTracker(TrackerConfig(confirm_hits=2), image_size=(640, 480))
+    for t in range(40):
+        a = walk(t, x0=50, vx=5, y=100)
+        b = walk(t, x0=250, vx=-5, y=110)
+        out = trk.update(np.array([a, b]))
+        if t == 39:
+            by_x = sorted(out, key=lambda tr: tr.box.x)
+            # person A ends on the right (moving right), keeps the id it got first
+            assert by_x[1].id == 1 and by_x[0].id == 2
+
+
+def test_history_is_bounded():
+    trk = MultiObjectTracker(TrackerConfig(confirm_hits=1, history=5), image_size=(640, 480))
+    for t in range(20):
+        (tr,) = trk.update(np.array([walk(t)]))
+    assert len(tr.history) == 5
+
+
+def test_track_leaving_image_is_deleted():
+    trk = MultiObjectTracker(TrackerConfig(confirm_hits=1, max_lost=100), image_size=(100, 100))
+    for t in range(5):
+        trk.update(np.array([[60 + 10 * t, 10, 10, 10]]))
+    for _ in range(10):
+        trk.update(np.zeros((0, 4)))
+    assert trk.active_count == 0
