@@ -24,6 +24,8 @@ from ..errors import InputError
 from ..types import Annotations
 from .atomic import atomic_open
 
+_INT_LIMIT = 2.0 ** 62
+
 __all__ = ["read_mot", "parse_mot", "write_mot", "format_mot_rows", "read_seqinfo"]
 
 
@@ -71,6 +73,9 @@ def parse_mot(text: str, kind: str = "results", name: str = "<string>") -> Annot
             raise InputError(f"{name}:{lineno}: non-numeric value in {line[:80]!r}") from None
         if not all(np.isfinite(vals)):
             raise InputError(f"{name}:{lineno}: non-finite value in {line[:80]!r}")
+        # frame, id and (9-column gt) class become int64: refuse values that cannot be one
+        if any(abs(v) >= _INT_LIMIT for v in (vals[0], vals[1], vals[7] if len(vals) > 7 else 0)):
+            raise InputError(f"{name}:{lineno}: frame, id or class out of range in {line[:80]!r}")
         if vals[0] < 1 or not float(vals[0]).is_integer():
             raise InputError(f"{name}:{lineno}: frame must be an integer >= 1, got {parts[0]!r}")
         if vals[4] <= 0 or vals[5] <= 0:

@@ -1,0 +1,363 @@
+"""Read and write annotation files in any supported format, detected by content.
+
+Formats (see ``docs/formats.md``):
+
+======== ============================== ==================================================
+name     detected by                    module
+======== ============================== ==================================================
+``mot``  numeric comma/space rows       :mod:`motiontrack.io.mot` (MOTChallenge CSV)
+``viper``XML root ``<viper>``           :mod:`motiontrack.io.viper` (ViPER ``.xgtf``/``.xml``)
+``cvml`` XML root ``<dataset>``         :mod:`motiontrack.io.cvml` (PETS CVML)
+``cvat`` XML root ``<annotations>``     :mod:`motiontrack.io.cvat` (CVAT for video 1.1)
+``json`` first character ``{``          :mod:`motiontrack.io.jsonfmt` (ours)
+======== ============================== ==================================================
+
+This module also holds the one safe XML parser that the CVML and CVAT readers share
+(:func:`parse_xml`): ``defusedxml``'s SAX reader (entity declarations and external references are
+refused, so "billion laughs" and XXE files raise :class:`InputError`) building a light tree whose
+nodes remember their line number, so that errors name the line *and* the element.
+"""
+
+from __future__ import annotations
+
+import io
+import logging
+import math
+import re
+import xml.sax
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from ..errors import ConfigError, InputError
+from ..types import Annotations
+
+__all__ = [
+    "FORMATS",
+    "XmlNode",
+    "parse_xml",
+    "xml_int",
+    "xml_float",
+    "detect_format",
+    "read_annotations",
+    "write_annotations",
+]
+
+log = logging.getLogger(__name__)
+
+FORMATS = ("mot", "viper", "cvml", "cvat", "json")
+_WRITE_FORMATS = ("mot", "mot-gt", "viper", "cvml", "cvat", "json")
+_XML_ROOTS = {"dataset": "cvml", "annotations": "cvat", "viper": "viper"}
+_SNIFF_BYTES = 65536
+
+
+# ---------------------------------------------------------------------------------------------
+# Safe XML with line numbers
+# ---------------------------------------------------------------------------------------------
+
+
+@dataclass(eq=False)
+class XmlNode:
+    """One XML element: qualified ``tag``, attributes, 1-based source ``line``, children, text."""
+
+    tag: str
+    attrib: dict[str, str]
+    line: int
+    children: list["XmlNode"] = field(default_factory=list)
+    text: str = ""
+
+    def find_all(self, tag: str) -> list["XmlNode"]:
+        return [c for c in self.children if c.tag == tag]
+
+    def find(self, tag: str) -> "XmlNode | None":
+        for c in self.children:
+            if c.tag == tag:
+                return c
+        return None
+
+    def where(self, name: str) -> str:
+        """``"file.xml:12: <box>"`` for error messages."""
+        return f"{name}:{self.line}: <{self.tag}>"
+
+
+class _TreeBuilder(xml.sax.handler.ContentHandler):
+    def __init__(self) -> None:
+        super().__init__()
+        self.root: XmlNode | None = None
+        self._stack: list[XmlNode] = []
+        self._text: list[list[str]] = []
+        self._locator = None
+
+    def setDocumentLocator(self, locator) -> None:  # noqa: N802 (SAX API)
+        self._locator = locator
+
+    def startElement(self, name, attrs) -> None:  # noqa: N802
+        line = self._locator.getLineNumber() if self._locator is not None else 0
+        node = XmlNode(name, {k: attrs.getValue(k) for k in attrs.getNames()}, int(line or 0))
+        if self._stack:
+            self._stack[-1].children.append(node)
+        else:
+            self.root = node
+        self._stack.append(node)
+        self._text.append([])
+
+    def endElement(self, name) -> None:  # noqa: N802
+        node = self._stack.pop()
+        node.text = "".join(self._text.pop()).strip()
+
+    def characters(self, content) -> None:
+        if self._text:
+            self._text[-1].append(content)
+
+
+def parse_xml(data: bytes, name: str = "<bytes>") -> XmlNode:
+    """Parse XML safely into a tree of :class:`XmlNode` (line numbers kept).
+
+    Entity declarations (internal or external) and external DTD/entity references are refused
+    (``defusedxml``), which blocks entity-expansion bombs and external-entity (XXE) reads.
+
+    Raises
+    ------
+    InputError
+        Not well-formed (message ``name:line:column: ...``) or unsafe XML.
+    """
+    import defusedxml
+    import defusedxml.sax
+
+    handler = _TreeBuilder()
+    try:
+        defusedxml.sax.parse(io.BytesIO(data), handler, forbid_dtd=False, forbid_entities=True,
+                             forbid_external=True)
+    except defusedxml.DefusedXmlException as exc:
+        raise InputError(f"{name}: refused unsafe XML ({type(exc).__name__}: {exc})") from None
+    except xml.sax.SAXParseException as exc:
+        raise InputError(f"{name}:{exc.getLineNumber()}:{exc.getColumnNumber()}: malformed XML: "
+                         f"{exc.getMessage()}") from None
+    except (xml.sax.SAXException, ValueError, LookupError) as exc:
+        # LookupError: an unknown encoding in the XML declaration
+        raise InputError(f"{name}: malformed XML: {exc}") from None
+    if handler.root is None:
+        raise InputError(f"{name}: empty XML document")
+    return handler.root
+
+
+_INT_LIMIT = 2**62  # frame numbers and ids must fit int64 with room to spare
+
+
+def xml_int(node: XmlNode, key: str, name: str, lo: int = -_INT_LIMIT) -> int:
+    """Attribute ``key`` of ``node`` as an integer in ``[lo, 2**62)``, or :class:`InputError`."""
+    raw = node.attrib.get(key)
+    if raw is None:
+        raise InputError(f"{node.where(name)}: missing attribute {key!r}")
+    try:
+        v = int(raw.strip())
+    except ValueError:
+        raise InputError(f"{node.where(name)}: attribute {key}={raw[:40]!r} is not an integer") \
+            from None
+    if not lo <= v < _INT_LIMIT:
+        raise InputError(f"{node.where(name)}: attribute {key}={v} out of range [{lo}, 2**62)")
+    return v
+
+
+def xml_float(node: XmlNode, key: str, name: str) -> float:
+    """Attribute ``key`` of ``node`` as a finite float, or :class:`InputError`."""
+    raw = node.attrib.get(key)
+    if raw is None:
+        raise InputError(f"{node.where(name)}: missing attribute {key!r}")
+    try:
+        v = float(raw.strip())
+    except ValueError:
+        raise InputError(f"{node.where(name)}: attribute {key}={raw[:40]!r} is not a number") \
+            from None
+    if not math.isfinite(v):
+        raise InputError(f"{node.where(name)}: attribute {key}={raw[:40]!r} is not finite")
+    return v
+
+
+def read_bytes(path: str | Path) -> bytes:
+    p = Path(path)
+    if not p.is_file():
+        raise InputError(f"annotation file not found: {p}")
+    return p.read_bytes()
+
+
+# ---------------------------------------------------------------------------------------------
+# Detection and dispatch
+# ---------------------------------------------------------------------------------------------
+
+_ROOT_RE = re.compile(rb"<\s*([A-Za-z_][\w.\-]*:)?([A-Za-z_][\w.\-]*)")
+_MOT_LINE_RE = re.compile(r"^\s*[-+]?\d+(\.\d*)?([eE][-+]?\d+)?\s*[,\s]")
+
+
+def _strip_prolog(head: bytes) -> bytes:
+    """Drop BOM, XML declaration, comments, processing instructions and DOCTYPE."""
+    head = head.lstrip(b"\xef\xbb\xbf").lstrip()
+    while True:
+        if head.startswith(b"<?"):
+            term = b"?>"
+        elif head.startswith(b"<!--"):
+            term = b"-->"
+        elif head.startswith(b"<!"):
+            bracket, close = head.find(b"["), head.find(b">")
+            term = b"]>" if 0 <= bracket < close else b">"  # DOCTYPE with an internal subset
+        else:
+            return head
+        end = head.find(term)
+        if end < 0:
+            return head
+        head = head[end + len(term):].lstrip()
+
+
+def detect_format(path: str | Path) -> str:
+    """The format of an annotation file by its content (not its name).
+
+    Returns one of :data:`FORMATS`. Raises :class:`InputError` when the content fits none.
+    """
+    p = Path(path)
+    if not p.is_file():
+        raise InputError(f"annotation file not found: {p}")
+    with open(p, "rb") as fh:
+        head = fh.read(_SNIFF_BYTES)
+    if not head.strip(b"\xef\xbb\xbf \t\r\n"):
+        raise InputError(f"{p}: empty annotation file")
+    body = _strip_prolog(head)
+    if body.startswith(b"{"):
+        return "json"
+    if body.startswith(b"<") or head.lstrip(b"\xef\xbb\xbf").lstrip().startswith(b"<"):
+        m = _ROOT_RE.match(body)
+        if not m:
+            raise InputError(f"{p}:1: XML without a recognisable root element")
+        root = m.group(2).decode("ascii", "replace")
+        fmt = _XML_ROOTS.get(root.lower())
+        if fmt is None:
+            raise InputError(f"{p}: unknown XML annotation format with root element <{root}> "
+                             f"(expected <viper>, <dataset> (PETS CVML) or <annotations> (CVAT))")
+        return fmt
+    try:
+        text = head.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        if exc.start < len(head) - 4:  # not just a multi-byte character cut by the sniff limit
+            raise InputError(f"{p}: not a text annotation file (undecodable byte at offset "
+                             f"{exc.start})") from None
+        text = head[: exc.start].decode("utf-8-sig")
+    for lineno, line in enumerate(text.splitlines(), start=1):
+        if not line.strip() or line.lstrip().startswith("#"):
+            continue
+        if _MOT_LINE_RE.match(line):
+            return "mot"
+        raise InputError(f"{p}:{lineno}: unknown annotation format (not MOTChallenge CSV, XML or "
+                         f"JSON): {line[:80]!r}")
+    raise InputError(f"{p}: no annotation rows found")
+
+
+def read_annotations(path: str | Path, kind: str = "auto", mot_kind: str = "auto") -> Annotations:
+    """Read ground truth, results or detections from any supported file.
+
+    Parameters
+    ----------
+    path : annotation file.
+    kind : the format: ``"auto"`` (detect by content, :func:`detect_format`) or one of
+        :data:`FORMATS`.
+    mot_kind : for MOTChallenge CSV only, passed to :func:`motiontrack.io.mot.read_mot`
+        (``"gt"``, ``"results"``, ``"det"`` or ``"auto"`` by file name).
+
+    Returns
+    -------
+    Annotations
+        Frames 1-based; ``meta["format"]`` names the format read.
+
+    Raises
+    ------
+    InputError
+        Missing, unknown or malformed file (the message names the file and the line/element).
+    ConfigError
+        Unknown ``kind``.
+    """
+    if kind != "auto" and kind not in FORMATS:
+        raise ConfigError(f"unknown annotation format {kind!r}; expected 'auto' or one of "
+                          f"{', '.join(FORMATS)}")
+    p = Path(path)
+    if not p.is_file():
+        raise InputError(f"annotation file not found: {p}")
+    fmt = detect_format(p) if kind == "auto" else kind
+    log.debug("reading %s as %s", p, fmt)
+    if fmt == "mot":
+        from .mot import read_mot
+
+        return read_mot(p, kind=mot_kind)
+    if fmt == "viper":
+        from .viper import read_viper  # another module; imported lazily
+
+        return read_viper(p)
+    if fmt == "cvml":
+        from .cvml import read_cvml
+
+        return read_cvml(p)
+    if fmt == "cvat":
+        from .cvat import read_cvat
+
+        return read_cvat(p)
+    from .jsonfmt import read_json
+
+    return read_json(p)
+
+
+_EXTENSIONS = {".txt": "mot", ".csv": "mot", ".json": "json", ".xgtf": "viper"}
+
+
+def write_annotations(ann: Annotations, path: str | Path, fmt: str | None = None) -> str:
+    """Write annotations (atomically) in the format given by ``fmt`` or the file extension.
+
+    Parameters
+    ----------
+    ann : the table to write.
+    path : output file.
+    fmt : ``"mot"`` (results layout), ``"mot-gt"`` (ground-truth layout with the consider flag),
+        ``"viper"``, ``"cvml"``, ``"cvat"`` or ``"json"``. ``None``: by extension — ``.txt``/``.csv``
+        → ``mot`` (``mot-gt`` when ``ann.meta["kind"] == "gt"``), ``.json`` → ``json``,
+        ``.xgtf`` → ``viper``; ``.xml`` → the format in ``ann.meta["format"]`` when that is an XML
+        format (so a file read from CVML writes back as CVML), otherwise ``fmt`` is required.
+
+    Returns
+    -------
+    str
+        The format written.
+    """
+    p = Path(path)
+    if fmt is None:
+        ext = p.suffix.lower()
+        if ext == ".xml" and ann.meta.get("format") in ("viper", "cvml", "cvat"):
+            fmt = str(ann.meta["format"])  # write back in the format it was read from
+        elif ext == ".xml":
+            raise ConfigError(f"{p}: .xml could be ViPER, PETS CVML or CVAT; choose the format "
+                              "explicitly (viper, cvml or cvat)")
+        elif ext not in _EXTENSIONS:
+            raise ConfigError(f"{p}: cannot tell the annotation format from the extension "
+                              f"{ext or '(none)'!r}; choose one of {', '.join(_WRITE_FORMATS)}")
+        else:
+            fmt = _EXTENSIONS[ext]
+        if fmt == "mot" and ann.meta.get("kind") == "gt":
+            fmt = "mot-gt"
+    if fmt not in _WRITE_FORMATS:
+        raise ConfigError(f"unknown annotation format {fmt!r}; expected one of "
+                          f"{', '.join(_WRITE_FORMATS)}")
+    if fmt in ("mot", "mot-gt"):
+        from .mot import write_mot
+
+        write_mot(ann, p, kind="gt" if fmt == "mot-gt" else "results")
+    elif fmt == "viper":
+        from .viper import write_viper
+
+        write_viper(ann, p)
+    elif fmt == "cvml":
+        from .cvml import write_cvml
+
+        write_cvml(ann, p)
+    elif fmt == "cvat":
+        from .cvat import write_cvat
+
+        write_cvat(ann, p)
+    else:
+        from .jsonfmt import write_json
+
+        write_json(ann, p)
+    return fmt
