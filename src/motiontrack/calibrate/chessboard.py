@@ -1,0 +1,327 @@
+"""OpenCV (Zhang 2000) calibration from chessboard photos, and the OpenCV pinhole camera.
+
+Steps (Zhang, "A flexible new technique for camera calibration", PAMI 2000; OpenCV
+``calib3d`` tutorial): find the inner corners of a ``cols × rows`` chessboard in each photo, refine
+them to sub-pixel accuracy (``cv2.cornerSubPix``), then ``cv2.calibrateCamera`` estimates the camera
+matrix ``K``, the distortion ``(k1, k2, p1, p2, k3)`` (Brown–Conrady) and one pose per view by
+minimising the reprojection error with Levenberg–Marquardt.
+
+The YAML written by :func:`write_opencv_yaml` is the layout of OpenCV's own ``calibration.cpp``
+sample (``camera_matrix``, ``distortion_coefficients``, ``avg_reprojection_error``,
+``per_view_reprojection_errors``, ``extrinsic_parameters``) so ``cv2.FileStorage`` reads it.
+"""
+
+from __future__ import annotations
+
+import functools
+import logging
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Sequence
+
+import cv2
+import numpy as np
+
+from ..errors import ConfigError, InputError
+from ..io.atomic import commit_temp, temp_path_for
+from .tsai import _as_pixels, _as_world, _intersect_plane
+
+log = logging.getLogger(__name__)
+
+__all__ = [
+    "OpenCVCamera",
+    "ChessboardResult",
+    "board_points",
+    "find_corners",
+    "calibrate_chessboard",
+    "write_opencv_yaml",
+    "read_opencv_yaml",
+    "parse_pattern",
+]
+
+
+@dataclass(frozen=True, eq=False)
+class OpenCVCamera:
+    """Pinhole camera with OpenCV distortion and, optionally, a pose of the ground plane.
+
+    Attributes
+    ----------
+    K : (3, 3) float64
+        Camera matrix (pixels).
+    dist : (k,) float64
+        Distortion coefficients ``(k1, k2, p1, p2[, k3, ...])``.
+    size : (int, int)
+        Image width, height (pixels).
+    rvec, tvec : (3,) float64 or None
+        World → camera pose (Rodrigues vector, translation in metres) of the ground plane ``Z = 0``;
+        without it the camera can undistort but not measure.
+    """
+
+    K: np.ndarray
+    dist: np.ndarray
+    size: tuple[int, int]
+    rvec: np.ndarray | None = None
+    tvec: np.ndarray | None = None
+    meta: dict = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        K = np.asarray(self.K, dtype=np.float64)
+        if K.shape != (3, 3) or not np.all(np.isfinite(K)) or K[0, 0] <= 0 or K[1, 1] <= 0:
+            raise ValueError(f"camera matrix must be a finite 3x3 with fx, fy > 0, got {K.tolist()}")
+        object.__setattr__(self, "K", K)
+        object.__setattr__(self, "dist", np.asarray(self.dist, dtype=np.float64).reshape(-1))
+        for n in ("rvec", "tvec"):
+            v = getattr(self, n)
+            if v is not None:
+                object.__setattr__(self, n, np.asarray(v, dtype=np.float64).reshape(3))
+
+    @property
+    def has_pose(self) -> bool:
+        return self.rvec is not None and self.tvec is not None
+
+    def _pose(self) -> tuple[np.ndarray, np.ndarray]:
+        if not self.has_pose:
+            raise ConfigError("this camera has intrinsics only (no ground-plane pose); "
+                              "add one with 'motiontrack calibrate ground --intrinsics CAMERA'")
+        R, _ = cv2.Rodrigues(self.rvec)
+        return R, self.tvec
+
+    @property
+    def center(self) -> np.ndarray:
+        R, t = self._pose()
+        return -R.T @ t
+
+    @property
+    def image_size(self) -> tuple[int, int]:
+        return int(self.size[0]), int(self.size[1])
+
+    def world_to_image(self, points: np.ndarray, distorted: bool = True) -> np.ndarray:
+        """World points (N, 2|3) metres → (N, 2) pixels; NaN behind the camera."""
+        P = _as_world(points)
+        if len(P) == 0:
+            return np.zeros((0, 2))
+        R, t = self._pose()
+        zc = P @ R[2] + t[2]
+        dist = self.dist if distorted else np.zeros(5)
+        px, _ = cv2.projectPoints(P.reshape(-1, 1, 3), self.rvec, self.tvec, self.K, dist)
+        px = px.reshape(-1, 2).astype(np.float64)
+        px[zc <= 0] = np.nan
+        return px
+
+    def rays(self, pixels: np.ndarray, distorted: bool = True) -> tuple[np.ndarray, np.ndarray]:
+        """Pixels → world rays ``(origins (N, 3) metres, unit directions (N, 3))``."""
+        px = _as_pixels(pixels)
+        R, _ = self._pose()
+        if len(px) == 0:
+            return np.zeros((0, 3)), np.zeros((0, 3))
+        dist = self.dist if distorted else np.zeros(5)
+        # many more than OpenCV's default 5 iterations, for exact world <-> image round trips
+        crit = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 200, 1e-15)
+        n = cv2.undistortPoints(px.reshape(-1, 1, 2), self.K, dist, None, None, None,
+                                crit).reshape(-1, 2)
+        dc = np.hstack([n, np.ones((len(n), 1))])
+        dw = dc @ R
+        dw /= np.linalg.norm(dw, axis=1, keepdims=True)
+        return np.broadcast_to(self.center, dw.shape).copy(), dw
+
+    def image_to_world(self, pixels: np.ndarray, z: float = 0.0, distorted: bool = True) -> np.ndarray:
+        """Pixels → (N, 2) world ``X, Y`` metres on ``Z = z``; NaN above the horizon."""
+        o, d = self.rays(pixels, distorted=distorted)
+        return _intersect_plane(o, d, z)
+
+    def undistort(self, image: np.ndarray) -> np.ndarray:
+        """Undistorted image with the same camera matrix ``K``."""
+        m1, m2 = _undistort_maps(self, image.shape[0], image.shape[1])
+        return cv2.remap(image, m1, m2, cv2.INTER_LINEAR)
+
+
+@functools.lru_cache(maxsize=8)
+def _undistort_maps(cam: OpenCVCamera, h: int, w: int) -> tuple[np.ndarray, np.ndarray]:
+    """Remap tables of ``cv2.undistort`` (cached per camera object and size)."""
+    return cv2.initUndistortRectifyMap(cam.K, cam.dist, None, cam.K, (w, h), cv2.CV_32FC1)
+
+
+def parse_pattern(text: str) -> tuple[int, int]:
+    """``"9x6"`` → ``(9, 6)`` inner corners per row and column."""
+    try:
+        c, r = (int(v) for v in text.lower().split("x"))
+    except ValueError:
+        raise ConfigError(f"pattern must look like 9x6 (inner corners), got {text!r}") from None
+    if c < 2 or r < 2:
+        raise ConfigError(f"pattern needs at least 2x2 inner corners, got {text!r}")
+    return c, r
+
+
+def board_points(pattern: tuple[int, int], square: float) -> np.ndarray:
+    """(cols*rows, 3) float32 corner positions on the board plane ``Z = 0`` (units of ``square``),
+    in the row-major order of ``cv2.findChessboardCorners``."""
+    cols, rows = pattern
+    g = np.mgrid[0:cols, 0:rows].T.reshape(-1, 2).astype(np.float32)
+    return np.hstack([g * np.float32(square), np.zeros((len(g), 1), np.float32)])
+
+
+def find_corners(gray: np.ndarray, pattern: tuple[int, int]) -> np.ndarray | None:
+    """Inner corners (cols*rows, 2) float32 refined to sub-pixel, or ``None`` if not found."""
+    flags = cv2.CALIB_CB_ADAPTIVE_THRESH | cv2.CALIB_CB_NORMALIZE_IMAGE
+    ok, corners = cv2.findChessboardCorners(gray, pattern, flags=flags)
+    if not ok:
+        return None
+    crit = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 50, 1e-4)
+    corners = cv2.cornerSubPix(gray, corners, (11, 11), (-1, -1), crit)
+    return corners.reshape(-1, 2)
+
+
+@dataclass(frozen=True, eq=False)
+class ChessboardResult:
+    """Outcome of :func:`calibrate_chessboard`.
+
+    Attributes
+    ----------
+    camera : OpenCVCamera
+    rms : float
+        Overall RMS reprojection error (pixels), as returned by ``cv2.calibrateCamera``.
+    per_view : (V,) float64
+        RMS reprojection error of each used view (pixels).
+    used : tuple of str
+        Names of the images in which the board was found (same order as ``per_view``).
+    skipped : tuple of str
+        Images without a detected board.
+    rvecs, tvecs : (V, 3) float64
+        Board pose in each view (metres when ``square`` is in metres).
+    """
+
+    camera: OpenCVCamera
+    rms: float
+    per_view: np.ndarray
+    used: tuple[str, ...]
+    skipped: tuple[str, ...]
+    rvecs: np.ndarray
+    tvecs: np.ndarray
+    pattern: tuple[int, int]
+    square: float
+    flags: int
+
+
+def calibrate_chessboard(images: Sequence[np.ndarray], pattern: tuple[int, int], square: float,
+                         names: Sequence[str] | None = None,
+                         flags: int = cv2.CALIB_FIX_ASPECT_RATIO) -> ChessboardResult:
+    """Calibrate from chessboard photos.
+
+    Parameters
+    ----------
+    images : sequence of (H, W[, 3]) uint8
+        All of the same size.
+    pattern : (cols, rows)
+        Inner corners per row and per column, e.g. ``(9, 6)``.
+    square : float
+        Side of one square (metres).
+    flags : int
+        ``cv2.calibrateCamera`` flags; the default fixes fx/fy to the initial aspect ratio 1, as
+        in OpenCV's reference calibration of the sample images.
+
+    Raises
+    ------
+    InputError
+        When fewer than one image contains the board, or image sizes differ.
+    """
+    if square <= 0 or not math.isfinite(square):
+        raise ConfigError(f"square size must be > 0, got {square}")
+    names = list(names) if names is not None else [f"image{i}" for i in range(len(images))]
+    obj = board_points(pattern, square)
+    obj_pts, img_pts, used, skipped = [], [], [], []
+    size = None
+    for img, name in zip(images, names):
+        gray = img if img.ndim == 2 else cv2.cvtColor(img, cv2.COLOR_BGR2GRAY)
+        s = (gray.shape[1], gray.shape[0])
+        if size is not None and s != size:
+            raise InputError(f"{name}: image size {s[0]}x{s[1]} differs from {size[0]}x{size[1]}")
+        size = s
+        c = find_corners(gray, pattern)
+        if c is None:
+            log.warning("%s: no %dx%d chessboard found, skipped", name, *pattern)
+            skipped.append(name)
+            continue
+        obj_pts.append(obj)
+        img_pts.append(c.reshape(-1, 1, 2).astype(np.float32))
+        used.append(name)
+    if not used:
+        raise InputError(f"no {pattern[0]}x{pattern[1]} chessboard found in any of the "
+                         f"{len(names)} image(s); check --pattern (inner corners, e.g. 9x6)")
+    K0 = np.eye(3)
+    rms, K, dist, rvecs, tvecs = cv2.calibrateCamera(obj_pts, img_pts, size, K0, None, flags=flags)
+    per_view = []
+    for o, i, r, t in zip(obj_pts, img_pts, rvecs, tvecs):
+        p, _ = cv2.projectPoints(o, r, t, K, dist)
+        per_view.append(float(np.sqrt(np.mean(np.sum((p.reshape(-1, 2) - i.reshape(-1, 2)) ** 2,
+                                                      axis=1)))))
+    cam = OpenCVCamera(K=K, dist=dist.reshape(-1), size=size)
+    return ChessboardResult(
+        camera=cam, rms=float(rms), per_view=np.asarray(per_view), used=tuple(used),
+        skipped=tuple(skipped), rvecs=np.asarray(rvecs, dtype=np.float64).reshape(-1, 3),
+        tvecs=np.asarray(tvecs, dtype=np.float64).reshape(-1, 3), pattern=pattern,
+        square=float(square), flags=int(flags),
+    )
+
+
+def write_opencv_yaml(path: str | Path, camera: OpenCVCamera,
+                      result: ChessboardResult | None = None) -> None:
+    """Write an OpenCV ``FileStorage`` YAML (atomically)."""
+    path = Path(path)
+    tmp = temp_path_for(path)
+    try:
+        fs = cv2.FileStorage(str(tmp), cv2.FILE_STORAGE_WRITE | cv2.FILE_STORAGE_FORMAT_YAML)
+        fs.write("image_width", int(camera.size[0]))
+        fs.write("image_height", int(camera.size[1]))
+        if result is not None:
+            fs.write("nframes", len(result.used))
+            fs.write("board_width", int(result.pattern[0]))
+            fs.write("board_height", int(result.pattern[1]))
+            fs.write("square_size", float(result.square))
+            fs.write("flags", int(result.flags))
+        fs.write("camera_matrix", camera.K)
+        fs.write("distortion_coefficients", camera.dist.reshape(-1, 1))
+        if result is not None:
+            fs.write("avg_reprojection_error", float(result.rms))
+            fs.write("per_view_reprojection_errors", result.per_view.reshape(-1, 1))
+            fs.write("extrinsic_parameters", np.hstack([result.rvecs, result.tvecs]))
+        if camera.has_pose:
+            fs.write("ground_rvec", camera.rvec.reshape(3, 1))
+            fs.write("ground_tvec", camera.tvec.reshape(3, 1))
+        fs.release()
+        commit_temp(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+
+
+def read_opencv_yaml(path: str | Path) -> OpenCVCamera:
+    """Read ``camera_matrix``, ``distortion_coefficients``, image size and optional ground pose."""
+    p = Path(path)
+    if not p.is_file():
+        raise InputError(f"camera file not found: {p}")
+    try:
+        fs = cv2.FileStorage(str(p), cv2.FILE_STORAGE_READ)
+    except (cv2.error, SystemError) as exc:
+        cause = exc.__cause__ or exc.__context__ or exc
+        msg = str(cause).strip().splitlines()[-1] if str(cause).strip() else "parse error"
+        raise InputError(f"malformed OpenCV camera YAML {p}: {msg}") from None
+    try:
+        if not fs.isOpened():
+            raise InputError(f"malformed OpenCV camera YAML {p}: cannot open")
+        K = fs.getNode("camera_matrix").mat()
+        dist = fs.getNode("distortion_coefficients").mat()
+        if K is None or dist is None:
+            raise InputError(f"{p}: needs camera_matrix and distortion_coefficients matrices")
+        w = fs.getNode("image_width").real()
+        h = fs.getNode("image_height").real()
+        rv = fs.getNode("ground_rvec").mat()
+        tv = fs.getNode("ground_tvec").mat()
+    finally:
+        fs.release()
+    try:
+        return OpenCVCamera(K=K, dist=dist.reshape(-1), size=(int(w), int(h)),
+                            rvec=None if rv is None else rv.reshape(3),
+                            tvec=None if tv is None else tv.reshape(3))
+    except ValueError as exc:
+        raise InputError(f"invalid camera in {p}: {exc}") from None
