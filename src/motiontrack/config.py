@@ -89,7 +89,7 @@ class SourceConfig(_Section):
 
 @dataclass(frozen=True)
 class PreprocessConfig(_Section):
-    grayscale: bool = param(True, doc="detect motion on the gray image")
+    grayscale: bool = param(False, doc="detect motion on the gray image (colour keeps clothing contrast)")
     blur: str = param("gaussian", choices=("none", "gaussian", "median"))
     blur_kernel: int = param(5, lo=0, hi=51, odd=True)
     scale: float = param(0.5, lo=0.05, hi=1.0,
@@ -99,7 +99,8 @@ class PreprocessConfig(_Section):
 
 @dataclass(frozen=True)
 class FrameDiffParams(_Section):
-    threshold: int = param(25, lo=1, hi=255, doc="absolute gray-level difference that counts as motion")
+    threshold: int = param(25, lo=1, hi=255, doc="absolute difference (largest channel) that counts as motion")
+    gap: int = param(2, lo=1, hi=100, doc="difference with the frame this many frames back")
 
 
 @dataclass(frozen=True)
@@ -145,10 +146,16 @@ class GSOCParams(_Section):
 
 
 @dataclass(frozen=True)
+class GMGParams(_Section):
+    initialization_frames: int = param(20, lo=1)
+    decision_threshold: float = param(0.8, lo=0.0, hi=1.0)
+
+
+@dataclass(frozen=True)
 class FarnebackParams(_Section):
     """Dense optical flow (Farnebäck); flow magnitude above ``threshold`` px/frame is motion."""
 
-    threshold: float = param(1.0, lo=0.0)
+    threshold: float = param(0.7, lo=0.0, doc="flow magnitude (px/frame at processing scale)")
     pyr_scale: float = param(0.5, lo=0.1, hi=0.9)
     levels: int = param(3, lo=1, hi=10)
     winsize: int = param(15, lo=3, hi=101)
@@ -167,6 +174,7 @@ class MotionConfig(_Section):
     median: MedianParams = field(default_factory=MedianParams)
     cnt: CNTParams = field(default_factory=CNTParams)
     gsoc: GSOCParams = field(default_factory=GSOCParams)
+    gmg: GMGParams = field(default_factory=GMGParams)
     farneback: FarnebackParams = field(default_factory=FarnebackParams)
 
     def params_for(self, method: str | None = None) -> dict[str, Any]:

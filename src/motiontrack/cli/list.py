@@ -17,10 +17,9 @@ def cmd_list(args) -> int:
     groups = [("motion detectors (--set motion.method=NAME)", DETECTORS.describe()),
               ("trackers (--set tracker.method=NAME)", TRACKERS.describe())]
     try:
-        from ..synth import SCENES, make_scene
+        from ..synth import scene_summaries
 
-        groups.append(("synthetic scenes (SOURCE = synth:NAME)",
-                       {n: str(make_scene(n).describe().get("summary", "")) for n in SCENES}))
+        groups.append(("synthetic scenes (SOURCE = synth:NAME)", dict(scene_summaries())))
     except ImportError:  # pragma: no cover
         pass
     for title, items in groups:

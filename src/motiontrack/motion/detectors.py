@@ -15,6 +15,12 @@ def _to_gray(image: np.ndarray) -> np.ndarray:
     return cv2.cvtColor(image, cv2.COLOR_BGR2GRAY) if image.ndim == 3 else image
 
 
+def _absdiff_max(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Per-pixel absolute difference, the largest over colour channels: (h, w) uint8."""
+    d = cv2.absdiff(a, b)
+    return d.max(axis=2) if d.ndim == 3 else d
+
+
 def _binary(fg: np.ndarray) -> np.ndarray:
     """Subtractor output → 0/255 with shadows (127) and soft values dropped."""
     _, out = cv2.threshold(fg, 200, 255, cv2.THRESH_BINARY)
@@ -23,24 +29,30 @@ def _binary(fg: np.ndarray) -> np.ndarray:
 
 @DETECTORS.register("frame_diff")
 class FrameDiff(MotionDetector):
-    """Frame differencing: |frame_t − frame_{t−1}| > threshold."""
+    """Frame differencing: max over channels of |frame_t − frame_{t−gap}| > threshold.
 
-    def __init__(self, threshold: int = 25) -> None:
+    A ``gap`` of a few frames makes slow objects show their whole body rather than two thin edges.
+    """
+
+    def __init__(self, threshold: int = 25, gap: int = 2) -> None:
         self.threshold = int(threshold)
-        self._prev: np.ndarray | None = None
+        self.gap = int(gap)
+        self._ring: list[np.ndarray] = []
 
     def apply(self, image: np.ndarray) -> np.ndarray:
-        gray = _to_gray(image)
-        if self._prev is None or self._prev.shape != gray.shape:
-            self._prev = gray.copy()
-            return np.zeros(gray.shape, np.uint8)
-        diff = cv2.absdiff(gray, self._prev)
-        self._prev = gray.copy()
+        if self._ring and self._ring[0].shape != image.shape:
+            self._ring = []
+        self._ring.append(image.copy())
+        if len(self._ring) > self.gap + 1:
+            self._ring.pop(0)
+        if len(self._ring) == 1:
+            return np.zeros(image.shape[:2], np.uint8)
+        diff = _absdiff_max(image, self._ring[0])
         _, mask = cv2.threshold(diff, self.threshold, 255, cv2.THRESH_BINARY)
         return mask
 
     def background(self) -> np.ndarray | None:
-        return self._prev
+        return self._ring[0] if self._ring else None
 
 
 class _OpenCVSubtractor(MotionDetector):
@@ -120,8 +132,9 @@ class MOG(_OpenCVSubtractor):
 class GMG(_OpenCVSubtractor):
     """Bayesian per-pixel background (Godbehere, Matsukawa & Goldberg 2012) from bgsegm."""
 
-    def __init__(self) -> None:
-        super().__init__(cv2.bgsegm.createBackgroundSubtractorGMG())
+    def __init__(self, initialization_frames: int = 20, decision_threshold: float = 0.8) -> None:
+        super().__init__(cv2.bgsegm.createBackgroundSubtractorGMG(int(initialization_frames),
+                                                                 float(decision_threshold)))
 
 
 @DETECTORS.register("lsbp")
@@ -151,23 +164,22 @@ class TemporalMedian(MotionDetector):
         self._frames = 0
         self._bg: np.ndarray | None = None
 
-    def _add(self, gray: np.ndarray) -> None:
-        if self._ring is None or self._ring.shape[1:] != gray.shape:
-            self._ring = np.empty((self.history,) + gray.shape, np.uint8)
+    def _add(self, img: np.ndarray) -> None:
+        if self._ring is None or self._ring.shape[1:] != img.shape:
+            self._ring = np.empty((self.history,) + img.shape, np.uint8)
             self._count = 0
-        self._ring[self._count % self.history] = gray
+        self._ring[self._count % self.history] = img
         self._count += 1
         n = min(self._count, self.history)
         if n >= 3 or self._bg is None:
             # np.partition is O(n) per pixel; the median is recomputed only when a sample arrives.
-            self._bg = np.median(self._ring[:n], axis=0).astype(np.uint8) if n >= 3 else gray.copy()
+            self._bg = np.median(self._ring[:n], axis=0).astype(np.uint8) if n >= 3 else img.copy()
 
     def apply(self, image: np.ndarray) -> np.ndarray:
-        gray = _to_gray(image)
         if self._frames % self.update_every == 0:
-            self._add(gray)
+            self._add(image)
         self._frames += 1
-        diff = cv2.absdiff(gray, self._bg)
+        diff = _absdiff_max(image, self._bg)
         # threshold in [0, 1] of the 8-bit range; "> t" as the RPT's DETECT_DIFF_THRESH
         _, mask = cv2.threshold(diff, self.threshold * 255.0, 255, cv2.THRESH_BINARY)
         return mask
@@ -182,13 +194,15 @@ class FarnebackMotion(MotionDetector):
     (pixels per frame at processing scale) are foreground. Useful with a slowly panning camera
     when combined with a high threshold. ``last_flow`` keeps the latest (h, w, 2) flow field."""
 
-    def __init__(self, threshold: float = 1.0, pyr_scale: float = 0.5, levels: int = 3,
+    def __init__(self, threshold: float = 0.7, pyr_scale: float = 0.5, levels: int = 3,
                  winsize: int = 15, iterations: int = 3, poly_n: int = 5, poly_sigma: float = 1.1) -> None:
         self.threshold = float(threshold)
         self.args = (float(pyr_scale), int(levels), int(winsize), int(iterations), int(poly_n),
                      float(poly_sigma), 0)
         self._prev: np.ndarray | None = None
         self.last_flow: np.ndarray | None = None
+        r = int(winsize) // 2
+        self._erode = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1)) if r else None
 
     def apply(self, image: np.ndarray) -> np.ndarray:
         gray = _to_gray(image)
@@ -200,4 +214,8 @@ class FarnebackMotion(MotionDetector):
         self._prev = gray.copy()
         self.last_flow = flow
         mag = cv2.magnitude(flow[..., 0], flow[..., 1])
-        return np.where(mag > self.threshold, 255, 0).astype(np.uint8)
+        mask = np.where(mag > self.threshold, 255, 0).astype(np.uint8)
+        # The flow is smoothed over the averaging window, so moving areas bleed about half a
+        # window beyond the object: erode that margin away.
+        k = self._erode
+        return cv2.erode(mask, k) if k is not None else mask
