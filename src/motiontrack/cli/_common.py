@@ -43,11 +43,7 @@ def sigterm_as_interrupt() -> Iterator[None]:
 
 
 def read_gt(path: str):
-    """Read a ground-truth file in any supported annotation format."""
-    try:
-        from ..io.annotations import read_annotations
-    except ImportError:  # pragma: no cover - the format dispatcher is optional during bring-up
-        from ..io.mot import read_mot
+    """Read a ground-truth file in any supported annotation format (MOT CSV read as gt)."""
+    from ..io.annotations import read_annotations
 
-        return read_mot(path, kind="gt")
-    return read_annotations(path, kind="gt")
+    return read_annotations(path, mot_kind="gt")

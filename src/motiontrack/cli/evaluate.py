@@ -1,0 +1,213 @@
+"""``motiontrack evaluate``: score tracker output against ground truth.
+
+CLEAR-MOT / Identity / HOTA (identical to TrackEval, :mod:`motiontrack.evaluate.mot`) and the
+ViPER-style framewise metrics (:mod:`motiontrack.evaluate.framewise`). ``--pred`` may be one file
+or a folder holding one result file per tracker; a folder gives one comparison table.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import io
+import json
+import logging
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import ConfigError, InputError
+from ..io.atomic import atomic_write_text
+from ..types import Annotations
+from ._common import frame_range
+
+log = logging.getLogger(__name__)
+
+TRACKING = ("clear", "identity", "hota")
+ALL_METRICS = TRACKING + ("framewise",)
+#: columns of the printed table, in order (those present are shown)
+TABLE_KEYS = ("HOTA", "DetA", "AssA", "LocA", "MOTA", "MOTP", "IDF1", "IDP", "IDR", "IDSW", "Frag",
+              "MT", "PT", "ML", "TP", "FP", "FN", "pixel_precision", "pixel_recall",
+              "object_area_precision", "object_area_recall", "fragmentation",
+              "localized_object_precision", "localized_object_recall")
+_SHORT = {"pixel_precision": "pixP", "pixel_recall": "pixR", "object_area_precision": "objAP",
+          "object_area_recall": "objAR", "fragmentation": "frag",
+          "localized_object_precision": "locP", "localized_object_recall": "locR"}
+_RESULT_SUFFIXES = {".txt", ".csv", ".xml", ".xgtf", ".json"}
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser(
+        "evaluate",
+        help="score tracker output against ground truth (CLEAR-MOT, Identity, HOTA, framewise)",
+        description="Score tracker output against ground truth. CLEAR-MOT, Identity and HOTA follow "
+                    "TrackEval and the MOTChallenge conventions (IoU >= 0.5; distractor classes and "
+                    "zero-marked gt rows are ignored); framewise metrics follow ViPER-PE.",
+    )
+    p.add_argument("--gt", required=True, help="ground-truth file (MOT CSV, ViPER, CVML, CVAT, JSON)")
+    p.add_argument("--pred", required=True,
+                   help="tracker result file, or a folder with one result file per tracker")
+    p.add_argument("--frames", type=frame_range, metavar="A:B",
+                   help="evaluate only frames A..B (inclusive, 1-based)")
+    p.add_argument("--metrics", default=None,
+                   help="comma-separated subset of clear,identity,hota,framewise "
+                        "(default: all that are available)")
+    p.add_argument("--xi", type=float, default=0.75,
+                   help="localization threshold of the framewise metrics (default 0.75)")
+    p.add_argument("--json", type=Path, metavar="OUT.json",
+                   help="write the metrics as JSON (one flat object; a folder --pred gives "
+                        "{tracker: object})")
+    p.add_argument("--per-frame", type=Path, metavar="OUT.csv",
+                   help="write per-frame counts (and framewise metrics) as CSV")
+    p.set_defaults(func=run)
+
+
+def _parse_metrics(text: str | None) -> tuple[str, ...]:
+    if text is None:
+        return TRACKING + ("framewise",)
+    ms = tuple(dict.fromkeys(m.strip().lower() for m in text.split(",") if m.strip()))
+    bad = [m for m in ms if m not in ALL_METRICS]
+    if bad or not ms:
+        raise ConfigError(f"unknown metric {bad[0] if bad else text!r}; choose from "
+                          f"{', '.join(ALL_METRICS)}")
+    return ms
+
+
+def _read(path: Path, role: str) -> Annotations:
+    """Read an annotation file; an empty *result* file is a valid "found nothing"."""
+    if not path.is_file():
+        raise InputError(f"{role} file not found: {path}")
+    if role == "result" and not path.read_bytes().strip():
+        return Annotations.empty()
+    mot_kind = "gt" if role == "ground-truth" else "results"
+    from ..io.annotations import read_annotations
+
+    return read_annotations(path, mot_kind=mot_kind)
+
+
+def _pred_files(pred: Path) -> list[tuple[str, Path]]:
+    if pred.is_dir():
+        files = sorted(p for p in pred.iterdir()
+                       if p.is_file() and p.suffix.lower() in _RESULT_SUFFIXES
+                       and not p.name.startswith("."))
+        if not files:
+            raise InputError(f"no result files (.txt/.csv/.xml/.xgtf/.json) in folder {pred}")
+        return [(p.stem, p) for p in files]
+    if not pred.exists():
+        raise InputError(f"result file not found: {pred}")
+    return [(pred.stem, pred)]
+
+
+def _clip_frames(ann: Annotations, frames: tuple[int, int | None] | None) -> Annotations:
+    if frames is None or len(ann) == 0:
+        return ann
+    lo, hi = frames
+    keep = ann.frames >= lo
+    if hi is not None:
+        keep &= ann.frames <= hi
+    return ann.select(keep)
+
+
+def evaluate_one(gt: Annotations, pred: Annotations, metrics: tuple[str, ...], xi: float,
+                 frames: tuple[int, int | None] | None = None) -> tuple[dict, list[dict]]:
+    """Flat metrics and per-frame rows for one tracker (the command's work, without I/O)."""
+    from ..evaluate import mot
+
+    gt, pred = _clip_frames(gt, frames), _clip_frames(pred, frames)
+    flat: dict = {}
+    rows: dict[int, dict] = {}
+    tracking = tuple(m for m in metrics if m in TRACKING)
+    if tracking:
+        data = mot.preprocess(gt, pred)
+        res = {}
+        if "clear" in tracking:
+            per: list[dict] = []
+            res["clear"] = mot.clear_metrics(data, per_frame=per)
+            for r in per:
+                rows.setdefault(r["frame"], {"frame": r["frame"]}).update(r)
+        if "identity" in tracking:
+            res["identity"] = mot.identity_metrics(data)
+        if "hota" in tracking:
+            res["hota"] = mot.hota_metrics(data)
+        flat.update(mot.flatten(res))
+    if "framewise" in metrics:
+        from ..evaluate.framewise import evaluate_framewise
+
+        rng = None
+        if frames is not None:
+            last = max([int(a.frames.max()) for a in (gt, pred) if len(a)] or [frames[0]])
+            rng = (frames[0], frames[1] if frames[1] is not None else last)
+        overall, per_frame = evaluate_framewise(gt, pred, xi, frames=rng)
+        flat.update(overall)
+        for r in per_frame:
+            f = int(r["frame"])
+            rows.setdefault(f, {"frame": f}).update({k: v for k, v in r.items() if k != "frame"})
+    return flat, [rows[f] for f in sorted(rows)]
+
+
+def _fmt(v) -> str:
+    if isinstance(v, (int, np.integer)):
+        return str(int(v))
+    if v is None or (isinstance(v, float) and math.isnan(v)):
+        return "-"
+    return f"{100 * v:.2f}" if abs(v) <= 1.5 else f"{v:.4g}"
+
+
+def format_table(results: dict[str, dict]) -> str:
+    """A plain-text table: one row per tracker, one column per metric (ratios in percent)."""
+    keys = [k for k in TABLE_KEYS if any(k in r for r in results.values())]
+    head = ["tracker"] + [_SHORT.get(k, k) for k in keys]
+    body = [[name] + [_fmt(r.get(k)) for k in keys] for name, r in results.items()]
+    widths = [max(len(row[i]) for row in [head] + body) for i in range(len(head))]
+    lines = ["  ".join(c.rjust(w) if i else c.ljust(w) for i, (c, w) in enumerate(zip(row, widths)))
+             for row in [head] + body]
+    return "\n".join(lines[:1] + ["-" * len(lines[0])] + lines[1:]) + "\n"
+
+
+def _jsonable(v):
+    if isinstance(v, (np.integer,)):
+        return int(v)
+    if isinstance(v, (float, np.floating)):
+        v = float(v)
+        return None if math.isnan(v) else v
+    return v
+
+
+def run(args: argparse.Namespace) -> int:
+    metrics = _parse_metrics(args.metrics)
+    if not 0.0 <= args.xi <= 1.0:
+        raise ConfigError(f"--xi must be in [0, 1], got {args.xi}")
+    gt = _read(Path(args.gt), "ground-truth")
+    if len(gt) == 0:
+        raise InputError(f"ground-truth file has no annotations: {args.gt}")
+    results: dict[str, dict] = {}
+    per_rows: list[dict] = []
+    files = _pred_files(Path(args.pred))
+    for name, path in files:
+        pred = _read(path, "result")
+        log.info("evaluating %s (%d boxes) against %s (%d boxes)", path, len(pred), args.gt, len(gt))
+        try:
+            flat, rows = evaluate_one(gt, pred, metrics, args.xi, args.frames)
+        except InputError as exc:  # name the file: a folder may hold many
+            raise InputError(f"{path}: {exc}") from None
+        results[name] = flat
+        per_rows += [{"tracker": name, **r} for r in rows]
+    sys.stdout.write(format_table(results))
+    if args.json:
+        obj = ({k: _jsonable(v) for k, v in next(iter(results.values())).items()}
+               if len(results) == 1 and not Path(args.pred).is_dir()
+               else {n: {k: _jsonable(v) for k, v in r.items()} for n, r in results.items()})
+        atomic_write_text(args.json, json.dumps(obj, indent=2, sort_keys=True) + "\n")
+        log.info("wrote %s", args.json)
+    if args.per_frame:
+        cols = list(dict.fromkeys(k for r in per_rows for k in r))
+        buf = io.StringIO()
+        w = csv.DictWriter(buf, fieldnames=cols, restval="", lineterminator="\n")
+        w.writeheader()
+        for r in per_rows:
+            w.writerow({k: _jsonable(v) for k, v in r.items()})
+        atomic_write_text(args.per_frame, buf.getvalue())
+        log.info("wrote %s", args.per_frame)
+    return 0
