@@ -332,3 +332,19 @@ def test_evaluate_tracking_with_framewise_and_unknown_metric():
     assert "HOTA" not in res
     with pytest.raises(ConfigError, match="unknown metric 'mota'"):
         flat(PERFECT[0], PERFECT[1], metrics=("mota",))
+
+
+@pytest.mark.parametrize("ignore, expected", [
+    # TrackEval (MOTChallenge): the zero-marked gt row is dropped, the box on it stays a false positive
+    (False, {"TP": 1, "FP": 1, "FN": 0, "MOTA": (1 - 0 - 1) / 1}),
+    # ignore regions (PETS "consider = 0"): the box on the zero-marked row is removed as well
+    (True, {"TP": 1, "FP": 0, "FN": 0, "MOTA": 1.0}),
+])
+def test_zero_marked_rows_as_ignore_regions(ignore, expected):
+    gt = [(1, 1, 0, 0, 10, 10, 1, -1),     # frame 1: a person that counts
+          (1, 2, 50, 0, 10, 10, 0, -1)]    # frame 1: a person outside the tracking area
+    pred = [(1, 5, 0, 0, 10, 10),          # on person 1: a hit
+            (1, 6, 51, 0, 10, 10)]         # on the zero-marked person (IoU 90 / 110 >= 0.5)
+    res = flat(gt, pred, ignore_zero_marked=ignore)
+    for key, value in expected.items():
+        assert res[key] == pytest.approx(value), key

@@ -56,6 +56,10 @@ def register(subparsers) -> None:
                         "(default: all that are available)")
     p.add_argument("--xi", type=float, default=0.75,
                    help="localization threshold of the framewise metrics (default 0.75)")
+    p.add_argument("--ignore-zero-marked", action="store_true",
+                   help="treat gt rows with consider = 0 as ignore regions: boxes on them are not "
+                        "false positives (PETS/MOT15 convention; TrackEval's default only drops the "
+                        "gt rows)")
     p.add_argument("--json", type=Path, metavar="OUT.json",
                    help="write the metrics as JSON (one flat object; a folder --pred gives "
                         "{tracker: object})")
@@ -111,7 +115,8 @@ def _clip_frames(ann: Annotations, frames: tuple[int, int | None] | None) -> Ann
 
 
 def evaluate_one(gt: Annotations, pred: Annotations, metrics: tuple[str, ...], xi: float,
-                 frames: tuple[int, int | None] | None = None) -> tuple[dict, list[dict]]:
+                 frames: tuple[int, int | None] | None = None,
+                 ignore_zero_marked: bool = False) -> tuple[dict, list[dict]]:
     """Flat metrics and per-frame rows for one tracker (the command's work, without I/O)."""
     from ..evaluate import mot
 
@@ -120,7 +125,7 @@ def evaluate_one(gt: Annotations, pred: Annotations, metrics: tuple[str, ...], x
     rows: dict[int, dict] = {}
     tracking = tuple(m for m in metrics if m in TRACKING)
     if tracking:
-        data = mot.preprocess(gt, pred)
+        data = mot.preprocess(gt, pred, ignore_zero_marked=ignore_zero_marked)
         res = {}
         if "clear" in tracking:
             per: list[dict] = []
@@ -189,7 +194,8 @@ def run(args: argparse.Namespace) -> int:
         pred = _read(path, "result")
         log.info("evaluating %s (%d boxes) against %s (%d boxes)", path, len(pred), args.gt, len(gt))
         try:
-            flat, rows = evaluate_one(gt, pred, metrics, args.xi, args.frames)
+            flat, rows = evaluate_one(gt, pred, metrics, args.xi, args.frames,
+                                      args.ignore_zero_marked)
         except InputError as exc:  # name the file: a folder may hold many
             raise InputError(f"{path}: {exc}") from None
         results[name] = flat

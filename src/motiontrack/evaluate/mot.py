@@ -278,10 +278,16 @@ def _sorted(ann: Annotations) -> Annotations:
     return ann.select(np.argsort(ann.frames, kind="stable"))
 
 
-def _distractor_removal(gt: Annotations, pred: Annotations, distractors: Sequence[int]) -> np.ndarray:
-    """Boolean keep-mask over ``pred`` (both sorted by frame): steps 1-2 of the preprocessing."""
+def _distractor_removal(gt: Annotations, pred: Annotations, distractors: Sequence[int],
+                        also: np.ndarray | None = None) -> np.ndarray:
+    """Boolean keep-mask over ``pred`` (both sorted by frame): steps 1-2 of the preprocessing.
+
+    Tracker boxes matched (Hungarian, IoU >= 0.5) to gt rows of a distractor class are removed;
+    ``also`` marks further gt rows treated the same way (ignore regions)."""
     keep = np.ones(len(pred), dtype=bool)
     is_dis = np.isin(gt.classes, np.asarray(distractors, dtype=np.int64))
+    if also is not None:
+        is_dis = is_dis | also
     if not is_dis.any() or len(pred) == 0:
         return keep
     t = pair_table(gt.frames, gt.boxes, pred.frames, pred.boxes)
@@ -302,6 +308,7 @@ def preprocess(
     num_timesteps: int | None = None,
     distractor_classes: Sequence[int] = DISTRACTOR_CLASSES,
     do_preproc: bool = True,
+    ignore_zero_marked: bool = False,
 ) -> SequenceData:
     """MOTChallenge preprocessing and pairwise IoU (see the module docstring).
 
@@ -316,6 +323,11 @@ def preprocess(
     do_preproc : bool
         ``False`` skips distractor removal and class filtering (TrackEval ``DO_PREPROC``); gt rows with
         ``consider`` false are always dropped.
+    ignore_zero_marked : bool
+        ``True`` treats gt rows with ``consider`` false as *ignore regions*: tracker boxes matched
+        to them are removed too, so they count neither as hits nor as false positives (the
+        convention for PETS/MOT15 "consider = 0" rows and for occluded synthetic people).
+        ``False`` (TrackEval's MOTChallenge behaviour) only drops those gt rows.
 
     Returns
     -------
@@ -332,10 +344,13 @@ def preprocess(
     _check_unique(pred.frames, pred.ids, "tracker output")
     gt_s, pred_s = _sorted(gt), _sorted(pred)
     classes_known = len(gt_s) > 0 and bool((gt_s.classes >= 0).any())
-    if do_preproc and classes_known:
-        pred_keep = _distractor_removal(gt_s, pred_s, distractor_classes)
+    zero = ~gt_s.consider if ignore_zero_marked else None
+    if (do_preproc and classes_known) or ignore_zero_marked:
+        dis = distractor_classes if do_preproc and classes_known else ()
+        pred_keep = _distractor_removal(gt_s, pred_s, dis, zero)
         if not pred_keep.all():
             pred_s = pred_s.select(pred_keep)
+    if do_preproc and classes_known:
         gt_keep = gt_s.consider & (gt_s.classes == PEDESTRIAN)
     else:
         gt_keep = gt_s.consider
@@ -696,13 +711,14 @@ def evaluate_sequence(
     num_timesteps: int | None = None,
     distractor_classes: Sequence[int] = DISTRACTOR_CLASSES,
     do_preproc: bool = True,
+    ignore_zero_marked: bool = False,
 ) -> dict[str, dict]:
     """All requested metric families for one sequence: ``{"clear": {...}, "identity": ..., "hota": ...}``
     with TrackEval's field names."""
     ms = _check_metrics(metrics)
     if not 0.0 < threshold <= 1.0:
         raise ConfigError(f"threshold must be in (0, 1], got {threshold}")
-    data = preprocess(gt, pred, num_timesteps, distractor_classes, do_preproc)
+    data = preprocess(gt, pred, num_timesteps, distractor_classes, do_preproc, ignore_zero_marked)
     out: dict[str, dict] = {}
     if "clear" in ms:
         out["clear"] = clear_metrics(data, threshold)
@@ -763,17 +779,19 @@ def evaluate_tracking(
     threshold: float = 0.5,
     num_timesteps: int | None = None,
     xi: float = 0.75,
+    ignore_zero_marked: bool = False,
 ) -> dict[str, float]:
     """Score one run against ground truth: a flat dict (keys as :func:`flatten`).
 
     Used by the pipeline to score a run on the fly and by ``motiontrack evaluate``. ``metrics`` may
     also name ``"framewise"``: the ViPER framewise metrics
     (:func:`motiontrack.evaluate.framewise.evaluate_framewise` with localization threshold ``xi``)
-    are then merged in under their own keys.
+    are then merged in under their own keys. ``ignore_zero_marked``: see :func:`preprocess`.
     """
     ms = [m.strip().lower() for m in metrics]
     out = flatten(evaluate_sequence(gt, pred, [m for m in ms if m != "framewise"], threshold,
-                                    num_timesteps)) if any(m != "framewise" for m in ms) else {}
+                                    num_timesteps, ignore_zero_marked=ignore_zero_marked)
+                  ) if any(m != "framewise" for m in ms) else {}
     if "framewise" in ms:
         from .framewise import evaluate_framewise  # sibling module, only when asked for
 
