@@ -115,3 +115,28 @@ def test_find_regions_drops_specks_then_merges():
     (r,) = find_regions(m, cfg, scale=1.0, image_size=(100, 100))
     assert r.box == Box(40, 10, 10, 37)
     assert r.area == 10 * 20 + 10 * 15
+
+
+def test_contour_and_labelled_components_agree():
+    # two L-shapes whose boxes overlap (the contour path must not count the other's pixels),
+    # a ring (hole) and scattered blobs; compared with full labelling
+    from motiontrack.regions import _components_labelled
+
+    m = np.zeros((60, 80), np.uint8)
+    m[5:30, 5:10] = 255
+    m[25:30, 5:30] = 255                    # L one
+    m[10:15, 12:35] = 255
+    m[10:40, 30:35] = 255                   # L two, box overlaps L one's box
+    m[40:55, 50:70] = 255
+    m[45:50, 55:65] = 0                     # ring with a hole
+    rng = np.random.default_rng(3)
+    for _ in range(10):
+        y, x = rng.integers(0, 55), rng.integers(40, 75)
+        m[y:y + 3, x:x + 4] = 255
+    def key(rs):
+        return sorted((r.box.as_array().tolist(), r.area, r.centroid) for r in rs)
+    for scale in (1.0, 0.5):
+        a, b = key(components(m, 8, scale)), key(_components_labelled(m, 8, scale, 1))
+        assert [x[0] for x in a] == [x[0] for x in b]
+        assert np.allclose([x[1] for x in a], [x[1] for x in b])
+        assert np.allclose([x[2] for x in a], [x[2] for x in b])

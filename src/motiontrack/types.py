@@ -12,6 +12,7 @@ Conventions
 from __future__ import annotations
 
 import enum
+import math
 from dataclasses import dataclass, field
 from typing import Mapping
 
@@ -39,9 +40,8 @@ class Box:
     h: float
 
     def __post_init__(self) -> None:
-        for name in ("x", "y", "w", "h"):
-            v = getattr(self, name)
-            if not np.isfinite(v):
+        for name, v in (("x", self.x), ("y", self.y), ("w", self.w), ("h", self.h)):
+            if not math.isfinite(v):
                 raise ValueError(f"box {name} must be finite, got {name}={v!r}")
         if self.w <= 0 or self.h <= 0:
             raise ValueError(f"box must have w > 0 and h > 0, got w={self.w}, h={self.h}")

@@ -12,7 +12,9 @@ from __future__ import annotations
 import glob
 import logging
 import os
+import queue
 import re
+import threading
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -86,6 +88,51 @@ class Source:
         self.close()
 
 
+def prefetch(frames: Iterator[Frame], size: int = 4) -> Iterator[Frame]:
+    """Decode ahead in a background thread (OpenCV releases the GIL while decoding), so decoding
+    overlaps with processing on a second core. Exceptions are re-raised in the consumer; closing
+    the returned generator stops the reader thread."""
+    q: queue.Queue = queue.Queue(maxsize=size)
+    stop = threading.Event()
+    done = object()
+
+    def reader() -> None:
+        try:
+            for item in frames:
+                while not stop.is_set():
+                    try:
+                        q.put(item, timeout=0.1)
+                        break
+                    except queue.Full:
+                        continue
+                if stop.is_set():
+                    break
+            q.put(done)
+        except BaseException as exc:  # handed to the consumer
+            q.put(exc)
+
+    thread = threading.Thread(target=reader, name="motiontrack-decode", daemon=True)
+    thread.start()
+    try:
+        while True:
+            item = q.get()
+            if item is done:
+                return
+            if isinstance(item, BaseException):
+                raise item
+            yield item
+    finally:
+        stop.set()
+        while thread.is_alive():
+            try:
+                q.get_nowait()
+            except queue.Empty:
+                thread.join(timeout=0.05)
+        close = getattr(frames, "close", None)
+        if close is not None:
+            close()
+
+
 def _open_capture(target: Any, what: str) -> cv2.VideoCapture:
     cap = cv2.VideoCapture(target)
     if not cap.isOpened():
@@ -121,6 +168,9 @@ class VideoFileSource(Source):
         )
 
     def __iter__(self) -> Iterator[Frame]:
+        return prefetch(self._frames())
+
+    def _frames(self) -> Iterator[Frame]:
         cap = _open_capture(str(self.path), f"{self.path} as a video")
         fps = self.info.fps or 25.0
         try:
@@ -267,6 +317,9 @@ class ImageSequenceSource(Source):
                                fps=fps, frame_count=len(self.files))
 
     def __iter__(self) -> Iterator[Frame]:
+        return prefetch(self._frames())
+
+    def _frames(self) -> Iterator[Frame]:
         fps = self.info.fps or 25.0
         end = len(self.files) if not self.max_frames else min(len(self.files), self.start + self.max_frames)
         for index in range(self.start, end):

@@ -69,7 +69,11 @@ def assign(cost: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         return np.zeros((0, 2), np.int64), np.arange(n), np.arange(m)
     rows, cols = linear_sum_assignment(cost)
     keep = cost[rows, cols] < INF_COST
-    matches = np.column_stack([rows[keep], cols[keep]]).astype(np.int64)
-    un_r = np.setdiff1d(np.arange(n), matches[:, 0])
-    un_c = np.setdiff1d(np.arange(m), matches[:, 1])
-    return matches, un_r, un_c
+    rows, cols = rows[keep], cols[keep]
+    free_r = np.ones(n, bool)
+    free_r[rows] = False
+    free_c = np.ones(m, bool)
+    free_c[cols] = False
+    matches = np.empty((len(rows), 2), np.int64)
+    matches[:, 0], matches[:, 1] = rows, cols
+    return matches, np.flatnonzero(free_r), np.flatnonzero(free_c)

@@ -43,20 +43,29 @@ def initiate(boxes: np.ndarray, pos_std: float, vel_std: float) -> tuple[np.ndar
     return x, P
 
 
+_DIAG = np.arange(2 * NDIM)
+
+
 def process_noise(x: np.ndarray, pos_std: float, vel_std: float) -> np.ndarray:
-    """Diagonal process noise ``Q`` (N, 8, 8) scaled by each box height."""
-    h = np.maximum(x[:, 3:4], 1.0)
-    std = np.hstack([pos_std * h] * NDIM + [vel_std * h] * NDIM)
-    Q = np.zeros((len(x), 2 * NDIM, 2 * NDIM))
-    idx = np.arange(2 * NDIM)
-    Q[:, idx, idx] = std ** 2
-    return Q
+    """Diagonal of the process noise ``Q``, (N, 8), scaled by each box height."""
+    h2 = np.maximum(x[:, 3:4], 1.0) ** 2
+    return h2 * _QW(pos_std, vel_std)
+
+
+def _QW(pos_std: float, vel_std: float) -> np.ndarray:
+    return np.array([pos_std ** 2] * NDIM + [vel_std ** 2] * NDIM)
 
 
 def predict(x: np.ndarray, P: np.ndarray, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Kalman prediction ``x' = F x``, ``P' = F P Fᵀ + Q`` for a batch."""
+    """Kalman prediction ``x' = F x``, ``P' = F P Fᵀ + Q`` for a batch.
+
+    ``Q`` is (N, 8, 8), or (N, 8) for a diagonal process noise (cheaper)."""
     x2 = x @ F.T
-    P2 = F @ P @ F.T + Q
+    P2 = F @ P @ F.T
+    if Q.ndim == 2:
+        P2[:, _DIAG, _DIAG] += Q
+    else:
+        P2 += Q
     return x2, P2
 
 
