@@ -203,9 +203,9 @@ class RegionsConfig(_Section):
     """
 
     connectivity: int = param(8, choices=(4, 8))
-    min_area: float = param(150.0, lo=0.0, doc="minimum region area in pixels")
+    min_area: float = param(100.0, lo=0.0, doc="minimum region area in pixels")
     max_area: float = param(0.0, lo=0.0, doc="maximum region area in pixels (0 = none)")
-    min_size: float = param(0.0, lo=0.0, hi=1.0, doc="MIN_REGION_SIZE, fraction of image area")
+    min_size: float = param(0.001, lo=0.0, hi=1.0, doc="MIN_REGION_SIZE, fraction of image area")
     max_size: float = param(0.25, lo=0.0, hi=1.0, doc="MAX_REGION_SIZE, fraction of image area (0 = none)")
     min_hw_ratio: float = param(0.0, lo=0.0, doc="minimum height/width (0 = none)")
     max_hw_ratio: float = param(0.0, lo=0.0, doc="maximum height/width (0 = none)")
@@ -220,14 +220,21 @@ class TrackerConfig(_Section):
     min_iou: float = param(0.1, lo=0.0, hi=1.0, doc="gate: IoU below this never matches (cost=iou)")
     max_distance: float = param(1.0, lo=0.0,
                                 doc="gate: centre distance / predicted box diagonal above this never matches")
-    confirm_hits: int = param(3, lo=1, hi=100, doc="hits needed to turn tentative into confirmed")
-    max_lost: int = param(15, lo=0, hi=10000, doc="frames a confirmed track may coast unseen before deletion")
+    confirm_hits: int = param(5, lo=1, hi=100, doc="hits needed to turn tentative into confirmed")
+    max_lost: int = param(50, lo=0, hi=10000, doc="frames a confirmed track may coast unseen before deletion")
     position_noise: float = param(0.05, lo=1e-6, hi=10.0,
                                   doc="Kalman process noise std of position/size, fraction of box height")
     velocity_noise: float = param(0.00625, lo=1e-6, hi=10.0,
                                   doc="Kalman process noise std of velocity, fraction of box height per frame")
     measurement_noise: float = param(0.05, lo=1e-6, hi=10.0,
                                      doc="Kalman measurement noise std, fraction of box height")
+    partial_ratio: float = param(0.6, lo=0.0, hi=1.0,
+                                 doc="a match smaller than this fraction of the prediction's area is a "
+                                     "partial view: keep the predicted size, anchor the visible edges (0 = off)")
+    search_growth: float = param(0.05, lo=0.0, hi=10.0,
+                                 doc="re-detection window growth per unseen frame (fraction of max_distance)")
+    split_merged: bool = param(True, doc="split a blob holding several tracks' predictions into "
+                                      "one synthetic measurement per track (people crossing)")
     history: int = param(64, lo=0, hi=100000, doc="trajectory points kept per track (bounded)")
     output_lost: bool = param(False, doc="report coasting (lost) tracks in tracks.txt")
 

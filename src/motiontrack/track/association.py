@@ -36,19 +36,20 @@ def center_distance_matrix(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return d / np.maximum(diag, 1e-9)
 
 
-def association_cost(pred: np.ndarray, det: np.ndarray, min_iou: float, max_distance: float,
-                     mode: str = "iou") -> np.ndarray:
+def association_cost(pred: np.ndarray, det: np.ndarray, min_iou: float,
+                     max_distance: float | np.ndarray, mode: str = "iou") -> np.ndarray:
     """Cost of matching predicted boxes (N, 4) to detections (M, 4).
 
     ``mode="iou"``: cost ``1 − IoU`` for pairs with IoU ≥ ``min_iou``; pairs below the IoU gate but
     with normalised centre distance < ``max_distance`` get ``1 + distance`` (always worse than an
     IoU match — this rescues small or fast objects whose boxes do not overlap the prediction);
     everything else is forbidden. ``mode="center"``: normalised centre distance, gated by
-    ``max_distance``.
+    ``max_distance``. ``max_distance`` may be a scalar or one value per prediction (N,).
     """
     n, m = len(pred), len(det)
     if n == 0 or m == 0:
         return np.zeros((n, m))
+    max_distance = np.broadcast_to(np.asarray(max_distance, np.float64).reshape(-1, 1), (n, 1))
     dist = center_distance_matrix(pred, det)
     if mode == "center":
         return np.where(dist < max_distance, dist, INF_COST)

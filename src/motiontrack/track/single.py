@@ -33,7 +33,7 @@ from __future__ import annotations
 
 import logging
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any, Callable, Iterator
 
 import cv2
 import numpy as np
@@ -45,7 +45,8 @@ from ..types import Box
 log = logging.getLogger(__name__)
 
 __all__ = ["SingleTracker", "SINGLE_TRACKERS", "OpenCVTracker", "HistogramTracker",
-           "MeanShiftTracker", "CamShiftTracker", "clip_box", "parse_box", "create_single_tracker"]
+           "MeanShiftTracker", "CamShiftTracker", "clip_box", "parse_box", "create_single_tracker",
+           "follow", "follow_accuracy", "hue_mask", "background_weights"]
 
 
 def parse_box(text: str) -> Box:
@@ -389,3 +390,78 @@ def create_single_tracker(name: str, **params: Any) -> SingleTracker:
         return factory(**params)
     except TypeError as exc:
         raise ConfigError(f"bad parameters for single-object tracker {name!r}: {exc}") from None
+
+
+def follow(frames: Any, tracker: SingleTracker, box: Box
+           ) -> Iterator[tuple[int, np.ndarray, bool, Box | None, float]]:
+    """Initialise ``tracker`` on the first frame with ``box``, then update it on every other frame.
+
+    Parameters
+    ----------
+    frames : iterable of :class:`~motiontrack.types.Frame` (or bare images, numbered from 0).
+    tracker : a fresh single-object tracker.
+    box : the object's box in the first frame, px.
+
+    Yields
+    ------
+    (index, image, ok, box, score) per frame; the first frame yields the (clipped) initial box
+    with ``ok=True`` and score 1. A tracker that loses the object keeps being updated (some
+    recover), yielding ``ok=False, box=None`` meanwhile.
+    """
+    first = True
+    for k, item in enumerate(frames):
+        index = int(getattr(item, "index", k))
+        image = getattr(item, "image", item)
+        if first:
+            tracker.init(image, box)
+            h, w = image.shape[:2]
+            yield index, image, True, clip_box(box, w, h), 1.0
+            first = False
+            continue
+        ok, b, score = tracker.update(image)
+        yield index, image, ok, b, score
+
+
+def follow_accuracy(gt: Any, pred: Any, gt_id: int | None = None) -> dict[str, float]:
+    """Per-frame IoU of a single followed object against one ground-truth object.
+
+    Parameters
+    ----------
+    gt : Annotations, ground truth (1-based frames).
+    pred : Annotations, the followed object (one row per frame where the tracker reported a box).
+    gt_id : the ground-truth object followed; ``None`` = the gt object with the highest IoU with
+        the first predicted box.
+
+    Returns
+    -------
+    dict with ``gt_id``, ``frames`` (frames where the gt object exists, from the first predicted
+    frame to the last processed one, i.e. ``pred.meta["last_frame"]`` or the last predicted frame),
+    ``mean_iou`` (a missing prediction counts as IoU 0), ``iou50`` (fraction of those frames with
+    IoU ≥ 0.5) and ``lost`` (frames without a prediction).
+    """
+    from .association import iou_matrix
+
+    if len(pred) == 0:
+        return {"gt_id": -1.0, "frames": 0.0, "mean_iou": 0.0, "iou50": 0.0, "lost": 0.0}
+    f0 = int(pred.frames.min())
+    f1 = int(pred.meta.get("last_frame", pred.frames.max()))
+    if gt_id is None:
+        g0 = gt.at(f0)
+        if len(g0) == 0:
+            return {"gt_id": -1.0, "frames": 0.0, "mean_iou": 0.0, "iou50": 0.0, "lost": 0.0}
+        first = pred.boxes[pred.frames == f0][:1]
+        gt_id = int(g0.ids[int(np.argmax(iou_matrix(first, g0.boxes)[0]))])
+    g = gt.select((gt.ids == gt_id) & (gt.frames >= f0) & (gt.frames <= f1))
+    by_frame = {int(f): b for f, b in zip(pred.frames, pred.boxes)}
+    ious = np.zeros(len(g))
+    lost = 0
+    for k, (f, b) in enumerate(zip(g.frames, g.boxes)):
+        p = by_frame.get(int(f))
+        if p is None:
+            lost += 1
+            continue
+        ious[k] = iou_matrix(p, b)[0, 0]
+    n = len(g)
+    return {"gt_id": float(gt_id), "frames": float(n),
+            "mean_iou": float(ious.mean()) if n else 0.0,
+            "iou50": float((ious >= 0.5).mean()) if n else 0.0, "lost": float(lost)}

@@ -25,17 +25,24 @@ from ..config import TrackerConfig
 from ..registry import Registry
 from ..types import Box, Region, Track, TrackState
 from . import kalman
-from .association import assign, association_cost
+from .association import INF_COST, assign, association_cost
+from .merge import anchor_partial, split_merged
 
 __all__ = ["TRACKERS", "MultiObjectTracker"]
 
 TRACKERS: Registry["MultiObjectTracker"] = Registry("tracker")
 
+#: consecutive partial views after which the measured (smaller) size is believed
+MAX_PARTIAL_FRAMES = 8
+#: running-average rate of a track's reference size
+REF_RATE = 0.2
+
 
 class _TrackState:
-    __slots__ = ("tid", "state", "hits", "age", "tsu", "history", "score")
+    __slots__ = ("tid", "state", "hits", "age", "tsu", "history", "score", "partials", "ref")
 
-    def __init__(self, history: int) -> None:
+    def __init__(self, history: int, size: np.ndarray) -> None:
+        self.ref = np.asarray(size, np.float64).copy()  # reference (unoccluded) w, h
         self.tid = 0
         self.state = TrackState.TENTATIVE
         self.hits = 1
@@ -43,6 +50,7 @@ class _TrackState:
         self.tsu = 0
         self.history: deque = deque(maxlen=max(history, 1))
         self.score = 1.0
+        self.partials = 0
 
 
 @TRACKERS.register("kalman")
@@ -94,12 +102,37 @@ class MultiObjectTracker:
         self.frame_count += 1
 
         pred = self.predict()
-        cost = association_cost(pred, det, c.min_iou, c.max_distance, c.cost)
+        if c.split_merged and len(det):
+            established = np.array([m.state != TrackState.TENTATIVE for m in self.meta], bool)
+            det, origin, owner = split_merged(pred, established, det)
+            det_scores = det_scores[origin]
+        else:
+            owner = np.full(len(det), -1, np.int64)
+        # the search window around an unseen track's prediction grows with the time it is unseen
+        tsu = np.array([m.tsu for m in self.meta], np.float64)
+        cost = association_cost(pred, det, c.min_iou, c.max_distance * (1.0 + c.search_growth * tsu),
+                                c.cost)
+        # a synthetic measurement belongs to the track it was made for
+        synth = np.flatnonzero(owner >= 0)
+        if len(synth):
+            cost[:, synth] = INF_COST
+            cost[owner[synth], synth] = 0.0
         matches, un_tracks, un_dets = assign(cost)
 
         if len(matches):
             ti, di = matches[:, 0], matches[:, 1]
-            z = kalman.box_to_z(det[di])
+            ref = np.array([self.meta[t].ref for t in ti]).reshape(-1, 2)
+            boxes, partial = anchor_partial(pred[ti], det[di], ref, c.partial_ratio)
+            for k, t in enumerate(ti):
+                m = self.meta[t]
+                m.partials = m.partials + 1 if partial[k] else 0
+                if m.partials > MAX_PARTIAL_FRAMES:
+                    # a view that stays "partial" for long is the object's real size: accept it
+                    boxes[k] = det[di[k]]
+                    partial[k] = False
+                if not partial[k] and owner[di[k]] < 0:
+                    m.ref = m.ref + REF_RATE * (det[di[k], 2:4] - m.ref)
+            z = kalman.box_to_z(boxes)
             self.x[ti], self.P[ti] = kalman.update(self.x[ti], self.P[ti], z, c.measurement_noise)
             for t, d in zip(ti, di):
                 m = self.meta[t]
@@ -122,6 +155,9 @@ class MultiObjectTracker:
                 keep[t] = False
             else:
                 m.state = TrackState.LOST
+                # coast on position only: the size keeps its reference value
+                self.x[t, 2:4] = m.ref
+                self.x[t, 6:8] = 0.0
                 if m.tsu > c.max_lost or self._outside(boxes[t]):
                     keep[t] = False
         for m in self.meta:
@@ -133,7 +169,7 @@ class MultiObjectTracker:
             self.x = np.concatenate([self.x, x0])
             self.P = np.concatenate([self.P, P0])
             for d in un_dets:
-                m = _TrackState(c.history)
+                m = _TrackState(c.history, det[d, 2:4])
                 m.score = float(det_scores[d])
                 if c.confirm_hits <= 1:
                     m.state = TrackState.CONFIRMED

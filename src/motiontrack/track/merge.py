@@ -1,0 +1,138 @@
+"""Region-tracker semantics for merged blobs (the Reading People Tracker's region splitting).
+
+When the predictions of two or more established tracks fall inside one measured region that is
+clearly larger than each of them — people walking together or crossing — the single blob cannot be
+matched to all of them. Following the Reading People Tracker, the predictions are treated as one
+merged prediction that matches the blob, and the blob is split again into one *synthetic
+measurement* per track: the track's predicted box moved (not resized) to lie inside the blob. Each
+identity therefore survives the crossing with its own velocity.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["split_merged", "anchor_partial"]
+
+
+def split_merged(pred: np.ndarray, established: np.ndarray, det: np.ndarray,
+                 max_share: float = 0.7) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Split detections that contain several established tracks' predictions.
+
+    Parameters
+    ----------
+    pred : (N, 4) float64
+        Predicted track boxes ``x, y, w, h``.
+    established : (N,) bool
+        Tracks that may claim a share of a merged blob (confirmed or lost, not tentative).
+    det : (M, 4) float64
+        Measured boxes.
+    max_share : float
+        A prediction claims a blob only if its area is at most this fraction of the blob's.
+
+    Returns
+    -------
+    boxes : (K, 4) float64
+        Detections after splitting (unsplit ones first, in their original order, then the
+        synthetic measurements).
+    origin : (K,) int64
+        Index into ``det`` each output box comes from.
+    owner : (K,) int64
+        For synthetic measurements the track index they were made for, else -1.
+    """
+    pred = np.asarray(pred, np.float64).reshape(-1, 4)
+    det = np.asarray(det, np.float64).reshape(-1, 4)
+    m = len(det)
+    if m == 0 or len(pred) == 0 or not np.any(established):
+        return det.copy(), np.arange(m), np.full(m, -1, np.int64)
+    cx = pred[:, 0] + pred[:, 2] / 2
+    cy = pred[:, 1] + pred[:, 3] / 2
+    inside = ((cx[:, None] >= det[None, :, 0]) & (cx[:, None] <= det[None, :, 0] + det[None, :, 2])
+              & (cy[:, None] >= det[None, :, 1]) & (cy[:, None] <= det[None, :, 1] + det[None, :, 3]))
+    small = (pred[:, 2] * pred[:, 3])[:, None] <= max_share * (det[:, 2] * det[:, 3])[None, :]
+    claim = inside & small & np.asarray(established, bool)[:, None]
+    # a track claims at most one blob: the one whose centre is nearest its prediction
+    if claim.any():
+        dcx = det[:, 0] + det[:, 2] / 2
+        dcy = det[:, 1] + det[:, 3] / 2
+        dist = np.hypot(cx[:, None] - dcx[None, :], cy[:, None] - dcy[None, :])
+        dist[~claim] = np.inf
+        best = np.argmin(dist, axis=1)
+        claim = claim & (np.arange(m)[None, :] == best[:, None])
+    split = claim.sum(axis=0) >= 2
+    keep = np.flatnonzero(~split)
+    boxes = [det[keep]]
+    origin = [keep]
+    owner = [np.full(len(keep), -1, np.int64)]
+    for j in np.flatnonzero(split):
+        tracks = np.flatnonzero(claim[:, j])
+        b = pred[tracks].copy()
+        # move each predicted box inside the blob (sizes kept unless larger than the blob)
+        b[:, 2] = np.minimum(b[:, 2], det[j, 2])
+        b[:, 3] = np.minimum(b[:, 3], det[j, 3])
+        b[:, 0] = np.clip(b[:, 0], det[j, 0], det[j, 0] + det[j, 2] - b[:, 2])
+        b[:, 1] = np.clip(b[:, 1], det[j, 1], det[j, 1] + det[j, 3] - b[:, 3])
+        boxes.append(b)
+        origin.append(np.full(len(tracks), j, np.int64))
+        owner.append(tracks.astype(np.int64))
+    return np.concatenate(boxes), np.concatenate(origin), np.concatenate(owner)
+
+
+def anchor_partial(pred: np.ndarray, det: np.ndarray, ref_size: np.ndarray, min_ratio: float,
+                   edge_tolerance: float = 0.2) -> tuple[np.ndarray, np.ndarray]:
+    """Measurements of partly occluded objects, anchored on their visible edges.
+
+    Each track remembers its reference size (a running average of its unoccluded sizes). When a
+    matched measurement is much smaller than that (area below ``min_ratio``) *and* it is cut on one
+    side only — on some axis one measured edge agrees with the predicted edge (within
+    ``edge_tolerance`` of the reference size) while the other lies inside — the object is probably
+    partly hidden (behind a column, at the image border). Using the box as is would shrink the
+    track and drag its centre and velocity towards the occluder; instead the reference size is
+    placed against the edges that agree.
+
+    Parameters
+    ----------
+    pred, det : (K, 4) float64
+        Predicted and measured boxes of matched pairs, ``x, y, w, h``.
+    ref_size : (K, 2) float64
+        Reference ``w, h`` of each track.
+    min_ratio : float
+        Measured/reference area below which a measurement may be partial (0 disables).
+    edge_tolerance : float
+        How closely (fraction of the reference size) the visible edge must agree.
+
+    Returns
+    -------
+    boxes : (K, 4) float64 measurements to use.
+    partial : (K,) bool, which were anchored.
+    """
+    pred = np.asarray(pred, np.float64).reshape(-1, 4)
+    ref = np.asarray(ref_size, np.float64).reshape(-1, 2)
+    out = np.asarray(det, np.float64).reshape(-1, 4).copy()
+    partial = np.zeros(len(out), bool)
+    if min_ratio <= 0 or len(out) == 0:
+        return out, partial
+    small = out[:, 2] * out[:, 3] < min_ratio * ref[:, 0] * ref[:, 1]
+    for i in np.flatnonzero(small):
+        d = out[i]
+        anchored = d.copy()
+        cut = False
+        for a in (0, 1):  # x then y
+            size = ref[i, a]
+            centre = pred[i, a] + pred[i, a + 2] / 2
+            p_lo, p_hi = centre - size / 2, centre + size / 2
+            lo_err = abs(d[a] - p_lo)
+            hi_err = abs(d[a] + d[a + 2] - p_hi)
+            tol = edge_tolerance * size
+            if d[a + 2] >= size - tol:      # not cut along this axis
+                continue
+            if lo_err <= tol < hi_err:       # far edge hidden: keep the near one
+                anchored[a], anchored[a + 2] = d[a], size
+                cut = True
+            elif hi_err <= tol < lo_err:     # near edge hidden: keep the far one
+                anchored[a], anchored[a + 2] = d[a] + d[a + 2] - size, size
+                cut = True
+        if cut:
+            out[i] = anchored
+            partial[i] = True
+    return out, partial
