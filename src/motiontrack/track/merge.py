@@ -16,7 +16,7 @@ __all__ = ["split_merged", "anchor_partial"]
 
 
 def split_merged(pred: np.ndarray, established: np.ndarray, det: np.ndarray,
-                 max_share: float = 0.7) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                 max_share: float = 0.85) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Split detections that contain several established tracks' predictions.
 
     Parameters
