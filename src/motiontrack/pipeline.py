@@ -20,6 +20,7 @@ from typing import Any, Callable, Iterator
 import numpy as np
 
 from .annotate import annotate_frame
+from .errors import SourceError
 from .config import PipelineConfig, load_config, save_config, to_dict
 from .io.atomic import atomic_open, atomic_write_text, check_writable
 from .io.mot import format_mot_rows
@@ -202,11 +203,21 @@ class TrackJob:
         if self.gt is not None:
             self.paths["gt"] = self.out / "gt.txt"
         check_writable(list(self.paths.values()), force)
+        # build every stage now: a bad plug-in name or ROI fails before anything is written
+        self.pipe = Pipeline(cfg, (self.src.info.width, self.src.info.height), detections)
 
     def expected_frames(self) -> int | None:
         return self.src.expected_frames()
 
-    def run(self, progress: Callable[[int], None] | None = None) -> JobSummary:
+    def run(self, progress: Callable[[int], None] | None = None,
+            should_stop: Callable[[], bool] | None = None) -> JobSummary:
+        """Process the source and write the outputs.
+
+        ``should_stop`` is polled after each complete frame (the CLI's signal handlers set it), so
+        an interruption never splits a frame between the outputs. A ``KeyboardInterrupt`` raised
+        mid-frame is handled too. Either way the outputs are finalised, ``summary.json`` records
+        ``"interrupted": true``, and ``KeyboardInterrupt`` is re-raised.
+        """
         cfg, info = self.cfg, self.src.info
         self.out.mkdir(parents=True, exist_ok=True)
         save_config(cfg, self.paths["config"])
@@ -220,8 +231,7 @@ class TrackJob:
         rows_id: list[int] = []
         rows_box: list[np.ndarray] = []
         t0 = time.perf_counter()
-        pipe = Pipeline(cfg, (info.width, info.height), self.detections)
-        from .errors import SourceError
+        pipe = self.pipe
 
         with atomic_open(self.paths["tracks"]) as tracks_fh:
             try:
@@ -252,6 +262,8 @@ class TrackJob:
                     summary.frames += 1
                     if progress is not None:
                         progress(1)
+                    if should_stop is not None and should_stop():
+                        raise KeyboardInterrupt
             except KeyboardInterrupt:
                 summary.interrupted = True
                 summary.status = "interrupted"

@@ -5,7 +5,6 @@ from __future__ import annotations
 import signal
 from contextlib import contextmanager
 from typing import Iterator
-
 from ..errors import ConfigError
 
 
@@ -24,9 +23,49 @@ def frame_range(text: str) -> tuple[int, int | None]:
     return lo, hi
 
 
+class GracefulStop:
+    """SIGINT/SIGTERM handlers that ask the running job to stop after the current frame.
+
+    ``stop()`` tells whether a stop was requested. A second signal raises ``KeyboardInterrupt``
+    at once, for a user who really wants out.
+    """
+
+    def __init__(self) -> None:
+        self.requested = False
+        self._old: dict[int, object] = {}
+
+    def _handler(self, signum, frame):  # pragma: no cover - exercised in subprocess tests
+        if self.requested:
+            raise KeyboardInterrupt
+        self.requested = True
+
+    def stop(self) -> bool:
+        return self.requested
+
+    def __enter__(self) -> "GracefulStop":
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            try:
+                self._old[sig] = signal.signal(sig, self._handler)
+            except ValueError:  # not in the main thread: keep the defaults
+                pass
+        return self
+
+    def __exit__(self, *exc) -> None:
+        for sig, old in self._old.items():
+            signal.signal(sig, old)
+
+
+def read_gt(path: str):
+    """Read a ground-truth file in any supported annotation format (MOT CSV read as gt)."""
+    from ..io.annotations import read_annotations
+
+    return read_annotations(path, mot_kind="gt")
+
+
 @contextmanager
 def sigterm_as_interrupt() -> Iterator[None]:
-    """Treat SIGTERM like Ctrl-C so that outputs are finalised the same way."""
+    """Treat SIGTERM like Ctrl-C (``KeyboardInterrupt``), for commands that finalise their
+    outputs in a ``KeyboardInterrupt`` handler."""
 
     def handler(signum, frame):  # pragma: no cover - exercised in subprocess tests
         raise KeyboardInterrupt
@@ -40,10 +79,3 @@ def sigterm_as_interrupt() -> Iterator[None]:
         yield
     finally:
         signal.signal(signal.SIGTERM, old)
-
-
-def read_gt(path: str):
-    """Read a ground-truth file in any supported annotation format (MOT CSV read as gt)."""
-    from ..io.annotations import read_annotations
-
-    return read_annotations(path, mot_kind="gt")

@@ -88,7 +88,7 @@ def cmd_track(args) -> int:
 
     from ..io.mot import read_mot
     from ..pipeline import TrackJob
-    from ._common import read_gt, sigterm_as_interrupt
+    from ._common import GracefulStop, read_gt
 
     cfg = _build_config(args)
     gt = read_gt(args.gt) if args.gt else None
@@ -100,9 +100,9 @@ def cmd_track(args) -> int:
     job = TrackJob(args.source, cfg, args.out, force=args.force, gt=gt, detections=det,
                    show=_viewer() if args.show else None)
     log.info("source %s", job.src.info.describe())
-    with sigterm_as_interrupt(), tqdm(total=job.expected_frames(), unit="frame", disable=None,
+    with GracefulStop() as stop, tqdm(total=job.expected_frames(), unit="frame", disable=None,
                                       file=sys.stderr, dynamic_ncols=True) as bar:
-        summary = job.run(progress=bar.update)
+        summary = job.run(progress=bar.update, should_stop=stop.stop)
     _print_summary(summary)
     return 0
 

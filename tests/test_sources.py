@@ -1,0 +1,165 @@
+"""Sources: files, truncated files, image folders/globs, synthetic scenes, live reconnection."""
+
+from __future__ import annotations
+
+import itertools
+
+import cv2
+import numpy as np
+import pytest
+
+from motiontrack.errors import SourceError
+from motiontrack.io.sources import (ArraySource, ImageSequenceSource, LiveSource, SyntheticSource,
+                                    VideoFileSource, open_source, prefetch)
+
+
+@pytest.mark.parametrize("content, message", [
+    (None, "not found"),
+    (b"", "empty"),
+    (b"this is not a video\n" * 50, "cannot open|no frames"),
+])
+def test_bad_video_files(tmp_path, content, message):
+    p = tmp_path / "v.avi"
+    if content is not None:
+        p.write_bytes(content)
+    with pytest.raises(SourceError, match=message):
+        open_source(str(p))
+
+
+def _write_video(path, n=12, size=(64, 48)):
+    w = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), 10, size)
+    for i in range(n):
+        w.write(np.full((size[1], size[0], 3), i * 10, np.uint8))
+    w.release()
+
+
+def test_video_file_info_start_and_max_frames(tmp_path):
+    p = tmp_path / "v.avi"
+    _write_video(p)
+    src = open_source(str(p), start=3, max_frames=4)
+    assert isinstance(src, VideoFileSource)
+    assert (src.info.width, src.info.height, src.info.fps, src.info.frame_count) == (64, 48, 10.0, 12)
+    frames = list(src)
+    assert [f.index for f in frames] == [3, 4, 5, 6]
+    assert frames[0].timestamp == pytest.approx(0.3)
+    assert src.expected_frames() == 4 and not src.truncated
+
+
+@pytest.mark.data
+def test_truncated_pets_clip_keeps_what_decodes(data, tmp_path, caplog):
+    video = data("pets09-s2l1", "video.avi")
+    cut = tmp_path / "cut.avi"
+    cut.write_bytes(video.read_bytes()[: 400_000])   # about the first tenth of the file
+    src = open_source(str(cut))
+    with caplog.at_level("WARNING"):
+        frames = list(src)
+    assert 5 < len(frames) < 300
+    assert src.truncated
+    assert "truncated" in caplog.text
+
+
+def test_image_folder_and_glob(tmp_path):
+    for i in (1, 2, 10):   # natural order: 1, 2, 10 (not 1, 10, 2)
+        cv2.imwrite(str(tmp_path / f"in{i}.png"), np.full((8, 9, 3), i, np.uint8))
+    (tmp_path / "notes.txt").write_text("x")
+    for spec in (str(tmp_path), str(tmp_path / "in*.png")):
+        src = open_source(spec)
+        assert isinstance(src, ImageSequenceSource)
+        assert [int(f.image[0, 0, 0]) for f in src] == [1, 2, 10]
+
+
+def test_image_folder_errors(tmp_path):
+    with pytest.raises(SourceError, match="no images"):
+        open_source(str(tmp_path / "*.jpg"))
+    cv2.imwrite(str(tmp_path / "a1.png"), np.zeros((8, 8, 3), np.uint8))
+    cv2.imwrite(str(tmp_path / "a2.png"), np.zeros((9, 8, 3), np.uint8))
+    with pytest.raises(SourceError, match="expected 8x8"):
+        list(open_source(str(tmp_path)))
+
+
+def test_synthetic_source_has_ground_truth():
+    src = open_source("synth:walker?n_frames=30")
+    assert isinstance(src, SyntheticSource)
+    assert src.info.frame_count == 30 and src.info.fps == 25.0
+    assert len(list(src)) == 30
+    assert src.ground_truth().frames.max() <= 30
+
+
+class FakeCapture:
+    """A camera that delivers ``frames`` images per connection, then drops."""
+
+    def __init__(self, log, opens_ok, frames):
+        self.log, self.frames = log, frames
+        self.ok = next(opens_ok)
+        self.n = 0
+
+    def isOpened(self):
+        return self.ok
+
+    def read(self):
+        if self.n >= self.frames:
+            return False, None
+        self.n += 1
+        return True, np.zeros((4, 4, 3), np.uint8)
+
+    def get(self, prop):
+        return 0.0
+
+    def release(self):
+        self.log.append("release")
+
+
+def test_live_source_reconnects_with_bounded_backoff():
+    log, sleeps = [], []
+    # first connection works (3 frames), then two failed reopen attempts, then success (3 frames),
+    # then every attempt fails
+    opens = iter([True, False, False, True] + [False] * 10)
+    src = LiveSource(0, reconnect_attempts=3, backoff=0.5, backoff_max=1.0,
+                     opener=lambda t: FakeCapture(log, opens, 3), sleep=sleeps.append,
+                     clock=itertools.count().__next__)
+    got = []
+    with pytest.raises(SourceError, match="failed after 6 frames and 3 reconnection attempts"):
+        for f in src:
+            got.append(f)
+    assert len(got) == 6
+    assert src.reconnects == 1
+    assert sleeps == [0.5, 1.0, 1.0, 0.5, 1.0, 1.0]          # doubling, capped, reset on success
+    assert [f.timestamp for f in got] == sorted(f.timestamp for f in got)   # wall-clock stamps
+
+
+def test_live_source_that_never_opens():
+    opens = iter([False])
+    with pytest.raises(SourceError, match="cannot open camera 0"):
+        LiveSource(0, opener=lambda t: FakeCapture([], opens, 0))
+
+
+def test_prefetch_passes_exceptions_and_stops_early():
+    def gen():
+        yield 1
+        yield 2
+        raise SourceError("boom")
+
+    it = prefetch(gen())
+    assert next(it) == 1 and next(it) == 2
+    with pytest.raises(SourceError, match="boom"):
+        next(it)
+    closed = []
+
+    def endless():
+        try:
+            for i in itertools.count():
+                yield i
+        finally:
+            closed.append(True)
+
+    it = prefetch(endless(), size=2)
+    assert [next(it) for _ in range(3)] == [0, 1, 2]
+    it.close()
+    assert closed == [True]
+
+
+def test_array_source_and_bad_arguments():
+    src = ArraySource([np.zeros((4, 4, 3), np.uint8)] * 5, max_frames=2)
+    assert len(list(src)) == 2
+    with pytest.raises(SourceError, match="start must be >= 0"):
+        ArraySource([np.zeros((4, 4), np.uint8)], start=-1)
