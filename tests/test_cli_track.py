@@ -115,3 +115,18 @@ def test_interrupt_keeps_everything_processed(tmp_path):
     cap = cv2.VideoCapture(str(out / "annotated.avi"))
     assert int(cap.get(cv2.CAP_PROP_FRAME_COUNT)) == summary["frames"]
     assert "Traceback" not in err.decode()
+
+
+def test_camera_adds_world_positions_and_measurements(tmp_path, data):
+    video = data("pets09-s2l1", "video.avi")
+    out = tmp_path / "o"
+    code = main(["track", str(video), "--max-frames", "40", "--no-video", "-o", str(out),
+                 "--camera", str(data("pets09-s2l1", "View_001.xml"))])
+    assert code == 0
+    tracks = read_mot(out / "tracks.txt")
+    assert len(tracks) > 0
+    # the PETS ground plane spans roughly -15..5 m (x) and -15..0 m (y) in view 1
+    assert (tracks.world[:, 0] > -30).all() and (tracks.world[:, 0] < 20).all()
+    assert (tracks.world[:, 1] > -30).all() and (tracks.world[:, 1] < 10).all()
+    m = json.loads((out / "summary.json").read_text())["measurements"]
+    assert m and all(1.0 < v["height_m"] < 2.2 for v in m.values() if v["height_m"] is not None)

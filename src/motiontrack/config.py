@@ -38,6 +38,7 @@ __all__ = [
     "RegionsConfig",
     "TrackerConfig",
     "OutputConfig",
+    "MeasureConfig",
     "PipelineConfig",
     "load_config",
     "save_config",
@@ -249,6 +250,13 @@ class OutputConfig(_Section):
 
 
 @dataclass(frozen=True)
+class MeasureConfig(_Section):
+    """Measurements in metres from a calibrated camera (see docs/calibration.md)."""
+
+    camera: str = param("", doc="camera file (PETS/Tsai XML, OpenCV YAML, TOML); empty = pixels only")
+
+
+@dataclass(frozen=True)
 class PipelineConfig(_Section):
     source: SourceConfig = field(default_factory=SourceConfig)
     preprocess: PreprocessConfig = field(default_factory=PreprocessConfig)
@@ -257,6 +265,7 @@ class PipelineConfig(_Section):
     regions: RegionsConfig = field(default_factory=RegionsConfig)
     tracker: TrackerConfig = field(default_factory=TrackerConfig)
     output: OutputConfig = field(default_factory=OutputConfig)
+    measure: MeasureConfig = field(default_factory=MeasureConfig)
 
 
 # ------------------------------------------------------------------------------- (de)serialise

@@ -203,6 +203,11 @@ class TrackJob:
         if self.gt is not None:
             self.paths["gt"] = self.out / "gt.txt"
         check_writable(list(self.paths.values()), force)
+        self.camera = None
+        if cfg.measure.camera:
+            from .calibrate import load_camera
+
+            self.camera = load_camera(cfg.measure.camera)
         # build every stage now: a bad plug-in name or ROI fails before anything is written
         self.pipe = Pipeline(cfg, (self.src.info.width, self.src.info.height), detections)
 
@@ -242,9 +247,15 @@ class TrackJob:
                         boxes = np.array([t.box.as_array() for t in ts])
                         f = [res.index + 1] * len(ts)
                         tid = [t.id for t in ts]
-                        tracks_fh.write(format_mot_rows(f, tid, boxes, [t.score for t in ts]))
+                        world = None
+                        if self.camera is not None:
+                            from .calibrate import world_positions
+
+                            world = np.column_stack([world_positions(boxes, self.camera),
+                                                     np.zeros(len(boxes))])
+                        tracks_fh.write(format_mot_rows(f, tid, boxes, [t.score for t in ts], world))
                         ids.update(tid)
-                        if self.gt is not None:
+                        if self.gt is not None or self.camera is not None:
                             rows_f += f
                             rows_id += tid
                             rows_box.append(boxes)
@@ -281,9 +292,15 @@ class TrackJob:
         summary.tracks = len(ids)
         summary.outputs = {k: str(v) for k, v in self.paths.items()
                            if v.exists() or k == "summary"}
+        all_boxes = np.concatenate(rows_box) if rows_box else np.zeros((0, 4))
+        if self.camera is not None:
+            from .calibrate import track_measurements
+
+            summary.extra["measurements"] = {
+                str(k): v for k, v in track_measurements(rows_f, rows_id, all_boxes, self.camera,
+                                                         fps).items()}
         if self.gt is not None:
-            pred = Annotations.from_columns(
-                rows_f, rows_id, np.concatenate(rows_box) if rows_box else np.zeros((0, 4)))
+            pred = Annotations.from_columns(rows_f, rows_id, all_boxes)
             summary.accuracy = score_run(self.gt, pred, summary.frames, self.src)
             from .io.mot import write_mot
 

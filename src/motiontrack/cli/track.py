@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import json
 import logging
 import sys
 
@@ -30,6 +31,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                                         "detecting motion")
     p.add_argument("--min-score", type=float, default=None,
                    help="with --detections: drop detections below this confidence")
+    p.add_argument("--camera", help="calibrated camera (PETS/Tsai XML, OpenCV YAML, TOML): world "
+                                    "positions in tracks.txt columns 8-9 (metres), per-track speed and "
+                                    "height in summary.json")
     p.add_argument("--show", action="store_true", help="live window (q quits, space pauses)")
     p.add_argument("--force", action="store_true", help="overwrite existing outputs")
     p.set_defaults(func=cmd_track)
@@ -47,6 +51,8 @@ def _build_config(args):
         overrides.append("output.video=false")
     if args.mask_video:
         overrides.append("output.mask_video=true")
+    if args.camera:
+        overrides.append(f"measure.camera={json.dumps(args.camera)}")
     if args.codec:
         overrides.append(f'output.codec="{args.codec}"')
     return load_config(args.config, overrides)
