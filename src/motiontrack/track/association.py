@@ -50,13 +50,17 @@ def association_cost(pred: np.ndarray, det: np.ndarray, min_iou: float,
     if n == 0 or m == 0:
         return np.zeros((n, m))
     max_distance = np.broadcast_to(np.asarray(max_distance, np.float64).reshape(-1, 1), (n, 1))
-    dist = center_distance_matrix(pred, det)
     if mode == "center":
+        dist = center_distance_matrix(pred, det)
         return np.where(dist < max_distance, dist, INF_COST)
     iou = iou_matrix(pred, det)
-    cost = np.where(iou >= max(min_iou, 1e-12), 1.0 - iou, INF_COST)
-    fallback = (cost >= INF_COST) & (dist < max_distance)
-    cost[fallback] = 1.0 + dist[fallback]
+    gated = iou < max(min_iou, 1e-12)
+    cost = 1.0 - iou
+    cost[gated] = INF_COST
+    if gated.any():
+        dist = center_distance_matrix(pred, det)
+        fallback = gated & (dist < max_distance)
+        cost[fallback] = 1.0 + dist[fallback]
     return cost
 
 

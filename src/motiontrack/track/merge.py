@@ -49,8 +49,11 @@ def split_merged(pred: np.ndarray, established: np.ndarray, det: np.ndarray,
     cy = pred[:, 1] + pred[:, 3] / 2
     inside = ((cx[:, None] >= det[None, :, 0]) & (cx[:, None] <= det[None, :, 0] + det[None, :, 2])
               & (cy[:, None] >= det[None, :, 1]) & (cy[:, None] <= det[None, :, 1] + det[None, :, 3]))
+    inside &= np.asarray(established, bool)[:, None]
+    if not (inside.sum(axis=0) >= 2).any():  # the common case: nothing to split
+        return det.copy(), np.arange(m), np.full(m, -1, np.int64)
     small = (pred[:, 2] * pred[:, 3])[:, None] <= max_share * (det[:, 2] * det[:, 3])[None, :]
-    claim = inside & small & np.asarray(established, bool)[:, None]
+    claim = inside & small
     # a track claims at most one blob: the one whose centre is nearest its prediction
     if claim.any():
         dcx = det[:, 0] + det[:, 2] / 2
