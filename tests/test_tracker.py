@@ -120,3 +120,19 @@ def test_track_leaving_image_is_deleted():
     for _ in range(10):
         trk.update(np.zeros((0, 4)))
     assert trk.active_count == 0
+
+
+def test_gap_moves_predictions_on_by_the_elapsed_time():
+    # a walker seen every frame, then a 10-frame gap (camera dropped): at the next frame it is
+    # 10 steps further and must still be matched to the same track
+    trk = MultiObjectTracker(TrackerConfig(confirm_hits=2, max_distance=0.3), image_size=(640, 480))
+    for t in range(10):
+        out = trk.update(np.array([walk(t, vx=6.0)]))
+    (tr,) = out
+    (after,) = trk.update(np.array([walk(20, vx=6.0)]), dt=11)
+    assert after.id == tr.id and after.age == tr.age + 11
+    # without the gap information the same detection is too far from the one-step prediction
+    trk2 = MultiObjectTracker(TrackerConfig(confirm_hits=2, max_distance=0.3), image_size=(640, 480))
+    for t in range(10):
+        trk2.update(np.array([walk(t, vx=6.0)]))
+    assert trk2.update(np.array([walk(20, vx=6.0)])) == []

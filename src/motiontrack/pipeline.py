@@ -23,7 +23,7 @@ from .annotate import annotate_frame
 from .errors import SourceError
 from .config import PipelineConfig, load_config, save_config, to_dict
 from .io.atomic import atomic_open, atomic_write_text, check_writable
-from .io.mot import format_mot_rows
+from .io.mot import format_mot_rows, read_mot, write_mot
 from .io.sources import Source, open_source
 from .io.video import VideoSink, extension_for
 from .motion import create_detector
@@ -72,8 +72,10 @@ class Pipeline:
     """
 
     def __init__(self, cfg: PipelineConfig, image_size: tuple[int, int],
-                 detections: Annotations | None = None) -> None:
+                 detections: Annotations | None = None, fps: float | None = None) -> None:
         self.cfg = cfg
+        self.fps = fps or 25.0
+        self._last_ts: float | None = None
         self.image_size = image_size
         self.scale = cfg.preprocess.scale
         self.detections = detections
@@ -89,6 +91,14 @@ class Pipeline:
         self.roi = load_roi(pre.roi, pw, ph) if pre.roi else None
         self.tracker = TRACKERS.get(cfg.tracker.method)(cfg.tracker, image_size)
         self.frames_seen = 0
+
+    def _frame_gap(self, frame: Frame) -> int:
+        """Frame periods since the previous frame, from the timestamps (wall-clock for live
+        sources), so the tracker sees gaps such as a camera that dropped and reconnected."""
+        last, self._last_ts = self._last_ts, frame.timestamp
+        if last is None:
+            return 1
+        return max(1, int(round((frame.timestamp - last) * self.fps)))
 
     def process(self, frame: Frame) -> FrameResult:
         cfg = self.cfg
@@ -107,7 +117,7 @@ class Pipeline:
                 regions = []
             else:
                 regions = find_regions(mask, cfg.regions, self.scale, self.image_size)
-        tracks = self.tracker.update(regions)
+        tracks = self.tracker.update(regions, dt=self._frame_gap(frame))
         self.frames_seen += 1
         return FrameResult(index=frame.index, timestamp=frame.timestamp, frame=frame.image,
                            mask=mask, regions=tuple(regions), tracks=tuple(tracks), extras=extras)
@@ -118,7 +128,7 @@ def run(source: Any, config: PipelineConfig | str | Path | None = None,
     """Yield a :class:`FrameResult` for every frame of ``source`` (see :func:`open_source`)."""
     cfg = resolve_config(config)
     src = open_configured_source(source, cfg)
-    pipe = Pipeline(cfg, (src.info.width, src.info.height), detections)
+    pipe = Pipeline(cfg, (src.info.width, src.info.height), detections, src.info.fps)
     try:
         for frame in src:
             yield pipe.process(frame)
@@ -209,7 +219,8 @@ class TrackJob:
 
             self.camera = load_camera(cfg.measure.camera)
         # build every stage now: a bad plug-in name or ROI fails before anything is written
-        self.pipe = Pipeline(cfg, (self.src.info.width, self.src.info.height), detections)
+        self.pipe = Pipeline(cfg, (self.src.info.width, self.src.info.height), detections,
+                             self.src.info.fps)
 
     def expected_frames(self) -> int | None:
         return self.src.expected_frames()
@@ -232,9 +243,6 @@ class TrackJob:
         mask_video = (VideoSink(self.paths["mask_video"], fps, cfg.output.codec)
                       if "mask_video" in self.paths else None)
         ids: set[int] = set()
-        rows_f: list[int] = []
-        rows_id: list[int] = []
-        rows_box: list[np.ndarray] = []
         t0 = time.perf_counter()
         pipe = self.pipe
 
@@ -255,10 +263,6 @@ class TrackJob:
                                                      np.zeros(len(boxes))])
                         tracks_fh.write(format_mot_rows(f, tid, boxes, [t.score for t in ts], world))
                         ids.update(tid)
-                        if self.gt is not None or self.camera is not None:
-                            rows_f += f
-                            rows_id += tid
-                            rows_box.append(boxes)
                     if video is not None or self.show is not None:
                         img = annotate_frame(res.frame, res.tracks, res.regions, res.mask,
                                              cfg.output.trail, cfg.output.mask_inset,
@@ -292,20 +296,19 @@ class TrackJob:
         summary.tracks = len(ids)
         summary.outputs = {k: str(v) for k, v in self.paths.items()
                            if v.exists() or k == "summary"}
-        all_boxes = np.concatenate(rows_box) if rows_box else np.zeros((0, 4))
-        if self.camera is not None:
-            from .calibrate import track_measurements
+        if self.camera is not None or self.gt is not None:
+            # read the run back from its tracks file: nothing accumulates in memory per frame
+            pred = read_mot(self.paths["tracks"], kind="results")
+            if self.camera is not None:
+                from .calibrate import track_measurements
 
-            summary.extra["measurements"] = {
-                str(k): v for k, v in track_measurements(rows_f, rows_id, all_boxes, self.camera,
-                                                         fps).items()}
-        if self.gt is not None:
-            pred = Annotations.from_columns(rows_f, rows_id, all_boxes)
-            summary.accuracy = score_run(self.gt, pred, summary.frames, self.src)
-            from .io.mot import write_mot
-
-            write_mot(self.gt, self.paths["gt"], kind="gt")
-            summary.outputs["gt"] = str(self.paths["gt"])
+                summary.extra["measurements"] = {
+                    str(k): v for k, v in track_measurements(pred.frames, pred.ids, pred.boxes,
+                                                             self.camera, fps).items()}
+            if self.gt is not None:
+                summary.accuracy = score_run(self.gt, pred, summary.frames, self.src)
+                write_mot(self.gt, self.paths["gt"], kind="gt")
+                summary.outputs["gt"] = str(self.paths["gt"])
         atomic_write_text(self.paths["summary"], json.dumps(summary.as_dict(), indent=2) + "\n")
         if summary.interrupted:
             raise KeyboardInterrupt

@@ -56,12 +56,23 @@ def _QW(pos_std: float, vel_std: float) -> np.ndarray:
     return np.array([pos_std ** 2] * NDIM + [vel_std ** 2] * NDIM)
 
 
-def predict(x: np.ndarray, P: np.ndarray, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Kalman prediction ``x' = F x``, ``P' = F P Fᵀ + Q`` for a batch.
+def transition(dt: float = 1.0) -> np.ndarray:
+    """The constant-velocity transition matrix for a step of ``dt`` frames."""
+    if dt == 1.0:
+        return F
+    Fd = np.eye(2 * NDIM)
+    Fd[:NDIM, NDIM:] = dt * np.eye(NDIM)
+    return Fd
 
-    ``Q`` is (N, 8, 8), or (N, 8) for a diagonal process noise (cheaper)."""
-    x2 = x @ F.T
-    P2 = F @ P @ F.T
+
+def predict(x: np.ndarray, P: np.ndarray, Q: np.ndarray, dt: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+    """Kalman prediction ``x' = F x``, ``P' = F P Fᵀ + Q`` for a batch, over ``dt`` frames.
+
+    ``Q`` is (N, 8, 8), or (N, 8) for a diagonal process noise (cheaper); it is the noise of the
+    whole step (scale it by ``dt`` for longer steps)."""
+    Fd = transition(dt)
+    x2 = x @ Fd.T
+    P2 = Fd @ P @ Fd.T
     if Q.ndim == 2:
         P2[:, _DIAG, _DIAG] += Q
     else:

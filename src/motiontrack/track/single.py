@@ -430,7 +430,7 @@ def follow_accuracy(gt: Any, pred: Any, gt_id: int | None = None) -> dict[str, f
     gt : Annotations, ground truth (1-based frames).
     pred : Annotations, the followed object (one row per frame where the tracker reported a box).
     gt_id : the ground-truth object followed; ``None`` = the gt object with the highest IoU with
-        the first predicted box.
+        the first predicted box (none when it overlaps no gt box: ``gt_id`` -1, 0 frames).
 
     Returns
     -------
@@ -450,7 +450,10 @@ def follow_accuracy(gt: Any, pred: Any, gt_id: int | None = None) -> dict[str, f
         if len(g0) == 0:
             return {"gt_id": -1.0, "frames": 0.0, "mean_iou": 0.0, "iou50": 0.0, "lost": 0.0}
         first = pred.boxes[pred.frames == f0][:1]
-        gt_id = int(g0.ids[int(np.argmax(iou_matrix(first, g0.boxes)[0]))])
+        overlap = iou_matrix(first, g0.boxes)[0]
+        if overlap.max() <= 0:  # the box given covers no ground-truth object
+            return {"gt_id": -1.0, "frames": 0.0, "mean_iou": 0.0, "iou50": 0.0, "lost": 0.0}
+        gt_id = int(g0.ids[int(np.argmax(overlap))])
     g = gt.select((gt.ids == gt_id) & (gt.frames >= f0) & (gt.frames <= f1))
     by_frame = {int(f): b for f, b in zip(pred.frames, pred.boxes)}
     ious = np.zeros(len(g))

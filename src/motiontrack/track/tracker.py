@@ -74,24 +74,29 @@ class MultiObjectTracker:
         self.x, self.P = self.x[keep], self.P[keep]
         self.meta = [m for m, k in zip(self.meta, keep) if k]
 
-    def predict(self) -> np.ndarray:
-        """Advance every track one frame; returns the predicted boxes (N, 4)."""
+    def predict(self, dt: float = 1.0) -> np.ndarray:
+        """Advance every track ``dt`` frames; returns the predicted boxes (N, 4)."""
         if len(self.x):
             c = self.cfg
-            Q = kalman.process_noise(self.x, c.position_noise, c.velocity_noise)
-            self.x, self.P = kalman.predict(self.x, self.P, Q)
+            Q = kalman.process_noise(self.x, c.position_noise, c.velocity_noise) * dt
+            self.x, self.P = kalman.predict(self.x, self.P, Q, dt)
             # keep sizes positive when a shrinking velocity overshoots
             self.x[:, 2:4] = np.maximum(self.x[:, 2:4], 1.0)
         return self._boxes()
 
     # ------------------------------------------------------------------------------- update
     def update(self, detections: Sequence[Region] | np.ndarray,
-               scores: np.ndarray | None = None) -> list[Track]:
+               scores: np.ndarray | None = None, dt: int = 1) -> list[Track]:
         """One tracking step with this frame's detections (regions or an (M, 4) box array).
+
+        ``dt`` is the number of frame periods since the previous update: more than 1 after a gap
+        (dropped frames, a live source that reconnected), so predictions move on by the elapsed
+        time and tracks age accordingly.
 
         Returns the snapshots of the tracks to report this frame: confirmed tracks matched in this
         frame (plus coasting lost tracks when ``output_lost``).
         """
+        dt = max(1, int(dt))
         c = self.cfg
         if isinstance(detections, np.ndarray):
             det = np.asarray(detections, np.float64).reshape(-1, 4)
@@ -101,7 +106,7 @@ class MultiObjectTracker:
             det_scores = np.array([r.score for r in detections], np.float64)
         self.frame_count += 1
 
-        pred = self.predict()
+        pred = self.predict(dt)
         if c.split_merged and len(det):
             established = np.array([m.state != TrackState.TENTATIVE for m in self.meta], bool)
             det, origin, owner = split_merged(pred, established, det)
@@ -150,7 +155,7 @@ class MultiObjectTracker:
         boxes = self._boxes()
         for t in un_tracks:
             m = self.meta[t]
-            m.tsu += 1
+            m.tsu += dt
             if m.state == TrackState.TENTATIVE:
                 keep[t] = False
             else:
@@ -161,7 +166,7 @@ class MultiObjectTracker:
                 if m.tsu > c.max_lost or self._outside(boxes[t]):
                     keep[t] = False
         for m in self.meta:
-            m.age += 1
+            m.age += dt
         self._keep(keep)
 
         if len(un_dets):
