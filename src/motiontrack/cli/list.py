@@ -12,10 +12,13 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def cmd_list(args) -> int:
     from ..motion import DETECTORS
+    from ..track.single import SINGLE_TRACKERS
     from ..track.tracker import TRACKERS
 
     groups = [("motion detectors (--set motion.method=NAME)", DETECTORS.describe()),
-              ("trackers (--set tracker.method=NAME)", TRACKERS.describe())]
+              ("trackers (--set tracker.method=NAME)", TRACKERS.describe()),
+              ("single-object trackers (motiontrack follow --tracker NAME)",
+               SINGLE_TRACKERS.describe())]
     try:
         from ..synth import scene_summaries
 
