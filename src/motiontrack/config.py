@@ -236,6 +236,9 @@ class TrackerConfig(_Section):
                                  doc="re-detection window growth per unseen frame (fraction of max_distance)")
     split_merged: bool = param(True, doc="split a blob holding several tracks' predictions into "
                                       "one synthetic measurement per track (people crossing)")
+    bridge: str = param("none", doc="single-object tracker (kcf, csrt, mil, mosse, medianflow, ...) "
+                                    "that carries a confirmed track through motion-detection misses; none = off")
+    bridge_frames: int = param(50, lo=1, hi=100000, doc="longest bridge, frames")
     history: int = param(64, lo=0, hi=100000, doc="trajectory points kept per track (bounded)")
     output_lost: bool = param(False, doc="report coasting (lost) tracks in tracks.txt")
 

@@ -90,6 +90,11 @@ class Pipeline:
         pw, ph = scaled_size(image_size[0], image_size[1], self.scale)
         self.roi = load_roi(pre.roi, pw, ph) if pre.roi else None
         self.tracker = TRACKERS.get(cfg.tracker.method)(cfg.tracker, image_size)
+        self.bridge = None
+        if cfg.tracker.bridge != "none":
+            from .track.bridge import Bridge
+
+            self.bridge = Bridge(cfg.tracker.bridge, cfg.tracker.bridge_frames)
         self.frames_seen = 0
 
     def _frame_gap(self, frame: Frame) -> int:
@@ -117,7 +122,10 @@ class Pipeline:
                 regions = []
             else:
                 regions = find_regions(mask, cfg.regions, self.scale, self.image_size)
-        tracks = self.tracker.update(regions, dt=self._frame_gap(frame))
+        owned = self.bridge.measurements(self.tracker, frame.image) if self.bridge else None
+        tracks = self.tracker.update(regions, dt=self._frame_gap(frame), owned=owned)
+        if self.bridge is not None:
+            self.bridge.remember(frame.image, tracks)
         self.frames_seen += 1
         return FrameResult(index=frame.index, timestamp=frame.timestamp, frame=frame.image,
                            mask=mask, regions=tuple(regions), tracks=tuple(tracks), extras=extras)

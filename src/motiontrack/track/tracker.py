@@ -39,7 +39,8 @@ REF_RATE = 0.2
 
 
 class _TrackState:
-    __slots__ = ("tid", "state", "hits", "age", "tsu", "history", "score", "partials", "ref")
+    __slots__ = ("tid", "state", "hits", "age", "tsu", "history", "score", "partials", "ref",
+                 "origin", "moved", "bridged")
 
     def __init__(self, history: int, size: np.ndarray) -> None:
         self.ref = np.asarray(size, np.float64).copy()  # reference (unoccluded) w, h
@@ -51,6 +52,9 @@ class _TrackState:
         self.history: deque = deque(maxlen=max(history, 1))
         self.score = 1.0
         self.partials = 0
+        self.origin: np.ndarray | None = None   # centre where it was first matched
+        self.moved = False                        # has travelled at least one body height
+        self.bridged = False                      # last matched to a bridge measurement
 
 
 @TRACKERS.register("kalman")
@@ -86,12 +90,16 @@ class MultiObjectTracker:
 
     # ------------------------------------------------------------------------------- update
     def update(self, detections: Sequence[Region] | np.ndarray,
-               scores: np.ndarray | None = None, dt: int = 1) -> list[Track]:
+               scores: np.ndarray | None = None, dt: int = 1,
+               owned: dict[int, np.ndarray] | None = None) -> list[Track]:
         """One tracking step with this frame's detections (regions or an (M, 4) box array).
 
         ``dt`` is the number of frame periods since the previous update: more than 1 after a gap
         (dropped frames, a live source that reconnected), so predictions move on by the elapsed
-        time and tracks age accordingly.
+        time and tracks age accordingly. ``owned`` maps a track index (in :attr:`meta`) to a
+        measurement that can only belong to that track (e.g. from a single-object tracker
+        bridging a detection miss, see :mod:`motiontrack.track.bridge`); it is used only when no
+        detection matches the track.
 
         Returns the snapshots of the tracks to report this frame: confirmed tracks matched in this
         frame (plus coasting lost tracks when ``output_lost``).
@@ -113,6 +121,12 @@ class MultiObjectTracker:
             det_scores = det_scores[origin]
         else:
             owner = np.full(len(det), -1, np.int64)
+        n_real = len(det)
+        if owned:
+            idx = np.fromiter(owned.keys(), np.int64, len(owned))
+            det = np.concatenate([det, np.array([owned[i] for i in idx]).reshape(-1, 4)])
+            det_scores = np.concatenate([det_scores, np.full(len(idx), 0.5)])
+            owner = np.concatenate([owner, idx])
         # the search window around an unseen track's prediction grows with the time it is unseen
         tsu = np.array([m.tsu for m in self.meta], np.float64)
         cost = association_cost(pred, det, c.min_iou, c.max_distance * (1.0 + c.search_growth * tsu),
@@ -121,7 +135,9 @@ class MultiObjectTracker:
         synth = np.flatnonzero(owner >= 0)
         if len(synth):
             cost[:, synth] = INF_COST
-            cost[owner[synth], synth] = 0.0
+            # split measurements are certain (cost 0); a bridge is a fallback (cost 2, above any
+            # detection match)
+            cost[owner[synth], synth] = np.where(synth >= n_real, 2.0, 0.0)
         matches, un_tracks, un_dets = assign(cost)
 
         if len(matches):
@@ -143,6 +159,13 @@ class MultiObjectTracker:
                 m = self.meta[t]
                 m.hits += 1
                 m.tsu = 0
+                m.bridged = bool(d >= n_real)
+                if not m.moved:
+                    centre = self.x[t, :2]
+                    if m.origin is None:
+                        m.origin = centre.copy()
+                    elif np.hypot(*(centre - m.origin)) > m.ref[1]:
+                        m.moved = True
                 m.score = float(det_scores[d])
                 if m.state == TrackState.TENTATIVE and m.hits >= c.confirm_hits:
                     m.state = TrackState.CONFIRMED
