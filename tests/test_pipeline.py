@@ -131,3 +131,34 @@ def test_single_object_tracker_bridges_detection_misses():
         reported[bridge] = hits
     assert reported["none"] == 0
     assert reported["kcf"] >= 7     # KCF keeps a fixed box while the stride changes the width
+
+
+def _walk_then_stop(n_walk=40, n_stop=160):
+    """A textured 40x90 'person' crosses a noisy background, then stands still."""
+    rng = np.random.default_rng(0)
+    bg = rng.integers(60, 120, (240, 320, 3), dtype=np.uint8)
+    person = rng.integers(150, 255, (90, 40, 3), dtype=np.uint8)
+    frames = []
+    for t in range(20 + n_walk + n_stop):
+        img = bg.copy()
+        if t >= 20:
+            x = 10 + 4 * min(t - 20, n_walk)
+            img[100:190, x:x + 40] = person
+        noise = rng.normal(0, 3, img.shape)
+        frames.append(np.clip(img + noise, 0, 255).astype(np.uint8))
+    return frames
+
+
+@pytest.mark.parametrize("protect, still_tracked", [(True, True), (False, False)])
+def test_selective_update_keeps_a_person_who_stops(protect, still_tracked):
+    # the temporal-median background absorbs a standing person after about half its history
+    # (25 samples x 5 frames); with selective update the tracked person is never learnt
+    from motiontrack.io.sources import ArraySource
+
+    cfg = load_config(None, ["motion.method=median", f"motion.median.protect={str(protect).lower()}",
+                             "preprocess.scale=1.0", "regions.max_size=0.5"])
+    results = list(run(ArraySource(_walk_then_stop()), cfg))
+    last = results[-1]
+    assert bool(last.tracks) is still_tracked
+    if still_tracked:
+        assert last.tracks[0].box.x == pytest.approx(10 + 4 * 40, abs=6)

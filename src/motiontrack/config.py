@@ -110,6 +110,11 @@ class MOG2Params(_Section):
     var_threshold: float = param(16.0, lo=0.0)
     detect_shadows: bool = param(True)
     learning_rate: float = param(-1.0, lo=-1.0, hi=1.0, doc="-1 = automatic (1/history)")
+    protect: bool = param(False, doc="selective update: pixels of tracked objects that have moved are not "
+                                     "learnt, so people who stop stay foreground")
+    protect_threshold: int = param(30, lo=1, hi=255,
+                                   doc="inside tracked objects (not learnt): difference from the "
+                                       "background that counts as foreground")
 
 
 @dataclass(frozen=True)
@@ -118,6 +123,11 @@ class KNNParams(_Section):
     dist2_threshold: float = param(400.0, lo=0.0)
     detect_shadows: bool = param(True)
     learning_rate: float = param(-1.0, lo=-1.0, hi=1.0)
+    protect: bool = param(False, doc="selective update: pixels of tracked objects that have moved are not "
+                                     "learnt, so people who stop stay foreground")
+    protect_threshold: int = param(30, lo=1, hi=255,
+                                   doc="inside tracked objects (not learnt): difference from the "
+                                       "background that counts as foreground")
 
 
 @dataclass(frozen=True)
@@ -128,6 +138,8 @@ class MedianParams(_Section):
                              doc="DETECT_DIFF_THRESH: |frame - background| / 255 above this is motion")
     history: int = param(25, lo=3, hi=255, doc="frames kept for the median")
     update_every: int = param(5, lo=1, doc="sample a frame into the history every N frames")
+    protect: bool = param(True, doc="selective update: pixels of tracked objects that have moved are not "
+                                     "learnt, so people who stop stay foreground")
 
 
 @dataclass(frozen=True)

@@ -105,6 +105,22 @@ class Pipeline:
             return 1
         return max(1, int(round((frame.timestamp - last) * self.fps)))
 
+    def _protect_mask(self, shape: tuple[int, int]) -> np.ndarray | None:
+        """Pixels (processing scale) where moving tracks are expected: not learnt as background."""
+        if not self.detector.protect:
+            return None
+        boxes = self.tracker.moving_boxes()
+        if not len(boxes):
+            return None
+        h, w = shape
+        mask = np.zeros((h, w), bool)
+        for x, y, bw, bh in boxes * self.scale:
+            x1, y1 = max(0, int(x)), max(0, int(y))
+            x2, y2 = min(w, int(np.ceil(x + bw))), min(h, int(np.ceil(y + bh)))
+            if x2 > x1 and y2 > y1:
+                mask[y1:y2, x1:x2] = True
+        return mask
+
     def process(self, frame: Frame) -> FrameResult:
         cfg = self.cfg
         mask = None
@@ -113,7 +129,7 @@ class Pipeline:
             regions = _regions_from_detections(self.detections, self._det_index.get(frame.index + 1))
         else:
             small = preprocess(frame.image, self.pre_cfg)
-            raw = self.detector.apply(small)
+            raw = self.detector.apply(small, self._protect_mask(small.shape[:2]))
             if self.roi is not None:
                 raw = np.bitwise_and(raw, self.roi)
             mask = clean_mask(raw, cfg.cleanup)

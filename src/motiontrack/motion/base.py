@@ -16,8 +16,17 @@ class MotionDetector:
 
     #: whether the detector wants colour input (e.g. GSOC); the pipeline then skips grayscale
     wants_color = False
+    #: whether ``apply`` wants a ``protect`` mask (selective background update switched on)
+    protect = False
 
-    def apply(self, image: np.ndarray) -> np.ndarray:  # pragma: no cover - abstract
+    def apply(self, image: np.ndarray, protect: np.ndarray | None = None) -> np.ndarray:  # pragma: no cover
+        """Foreground mask of ``image``.
+
+        ``protect`` (optional, (h, w) bool) marks pixels covered by tracked objects: detectors
+        that support it do not learn them into the background there, so a
+        person who stops walking does not fade away (selective update, as in the Reading People
+        Tracker's background maintenance). The pipeline passes it when ``self.protect`` is true.
+        """
         raise NotImplementedError
 
     def background(self) -> np.ndarray | None:

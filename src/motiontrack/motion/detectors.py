@@ -39,7 +39,7 @@ class FrameDiff(MotionDetector):
         self.gap = int(gap)
         self._ring: list[np.ndarray] = []
 
-    def apply(self, image: np.ndarray) -> np.ndarray:
+    def apply(self, image: np.ndarray, protect: np.ndarray | None = None) -> np.ndarray:
         if self._ring and self._ring[0].shape != image.shape:
             self._ring = []
         self._ring.append(image.copy())
@@ -62,8 +62,46 @@ class _OpenCVSubtractor(MotionDetector):
         self.sub = subtractor
         self.learning_rate = float(learning_rate)
 
-    def apply(self, image: np.ndarray) -> np.ndarray:
+    def apply(self, image: np.ndarray, protect: np.ndarray | None = None) -> np.ndarray:
         return _binary(self.sub.apply(image, learningRate=self.learning_rate))
+
+
+class _SelectiveSubtractor(_OpenCVSubtractor):
+    """An OpenCV subtractor with selective update.
+
+    Protected pixels (tracked objects) are fed to the model with its own background values, so
+    the model does not learn them; there, foreground is decided by the difference from the
+    background image instead (largest channel difference above ``protect_threshold``). The
+    background image is refreshed every ``BG_REFRESH`` frames (it changes slowly and costs about
+    half a subtractor update to compute).
+    """
+
+    BG_REFRESH = 10
+
+    def __init__(self, subtractor, learning_rate: float = -1.0, protect: bool = False,
+                 protect_threshold: int = 30) -> None:
+        super().__init__(subtractor, learning_rate)
+        self.protect = bool(protect)
+        self.protect_threshold = int(protect_threshold)
+        self._bg: np.ndarray | None = None
+        self._frames = 0
+
+    def apply(self, image: np.ndarray, protect: np.ndarray | None = None) -> np.ndarray:
+        self._frames += 1
+        if protect is None or self._frames < 3 or not protect.any():
+            if self._frames % self.BG_REFRESH == 0:
+                self._bg = None
+            return _binary(self.sub.apply(image, learningRate=self.learning_rate))
+        if self._bg is None or self._frames % self.BG_REFRESH == 0 or self._bg.shape != image.shape:
+            self._bg = self.sub.getBackgroundImage()
+            if self._bg.shape != image.shape:  # gray model on colour input or vice versa
+                return _binary(self.sub.apply(image, learningRate=self.learning_rate))
+        fed = image.copy()
+        fed[protect] = self._bg[protect]
+        fg = _binary(self.sub.apply(fed, learningRate=self.learning_rate))
+        diff = _absdiff_max(image, self._bg)
+        fg[protect] = np.where(diff[protect] > self.protect_threshold, 255, 0)
+        return fg
 
     def background(self) -> np.ndarray | None:
         try:
@@ -73,23 +111,25 @@ class _OpenCVSubtractor(MotionDetector):
 
 
 @DETECTORS.register("mog2")
-class MOG2(_OpenCVSubtractor):
+class MOG2(_SelectiveSubtractor):
     """Gaussian-mixture background (Zivkovic 2004/2006), OpenCV's MOG2; shadows are not foreground."""
 
     def __init__(self, history: int = 500, var_threshold: float = 16.0, detect_shadows: bool = True,
-                 learning_rate: float = -1.0) -> None:
+                 learning_rate: float = -1.0, protect: bool = False, protect_threshold: int = 30) -> None:
         super().__init__(cv2.createBackgroundSubtractorMOG2(int(history), float(var_threshold),
-                                                            bool(detect_shadows)), learning_rate)
+                                                            bool(detect_shadows)), learning_rate,
+                         protect, protect_threshold)
 
 
 @DETECTORS.register("knn")
-class KNN(_OpenCVSubtractor):
+class KNN(_SelectiveSubtractor):
     """K-nearest-neighbours background (Zivkovic & van der Heijden 2006), OpenCV's KNN."""
 
     def __init__(self, history: int = 500, dist2_threshold: float = 400.0, detect_shadows: bool = True,
-                 learning_rate: float = -1.0) -> None:
+                 learning_rate: float = -1.0, protect: bool = False, protect_threshold: int = 30) -> None:
         super().__init__(cv2.createBackgroundSubtractorKNN(int(history), float(dist2_threshold),
-                                                           bool(detect_shadows)), learning_rate)
+                                                           bool(detect_shadows)), learning_rate,
+                         protect, protect_threshold)
 
 
 @DETECTORS.register("cnt")
@@ -114,7 +154,7 @@ class GSOC(_OpenCVSubtractor):
             nSamples=int(n_samples), replaceRate=float(replace_rate),
             propagationRate=float(propagation_rate), hitsThreshold=int(hits_threshold)))
 
-    def apply(self, image: np.ndarray) -> np.ndarray:
+    def apply(self, image: np.ndarray, protect: np.ndarray | None = None) -> np.ndarray:
         if image.ndim == 2:
             image = cv2.cvtColor(image, cv2.COLOR_GRAY2BGR)
         return _binary(self.sub.apply(image))
@@ -155,7 +195,9 @@ class TemporalMedian(MotionDetector):
     holds 3 samples the first frame is the background.
     """
 
-    def __init__(self, threshold: float = 0.1, history: int = 25, update_every: int = 5) -> None:
+    def __init__(self, threshold: float = 0.1, history: int = 25, update_every: int = 5,
+                 protect: bool = True) -> None:
+        self.protect = bool(protect)
         self.threshold = float(threshold)
         self.history = int(history)
         self.update_every = int(update_every)
@@ -175,9 +217,16 @@ class TemporalMedian(MotionDetector):
             # np.partition is O(n) per pixel; the median is recomputed only when a sample arrives.
             self._bg = np.median(self._ring[:n], axis=0).astype(np.uint8) if n >= 3 else img.copy()
 
-    def apply(self, image: np.ndarray) -> np.ndarray:
+    def apply(self, image: np.ndarray, protect: np.ndarray | None = None) -> np.ndarray:
         if self._frames % self.update_every == 0:
-            self._add(image)
+            if protect is not None and self._bg is not None and protect.any() \
+                    and self._bg.shape == image.shape:
+                # selective update: tracked objects keep the current background in the sample
+                sample = image.copy()
+                sample[protect] = self._bg[protect]
+                self._add(sample)
+            else:
+                self._add(image)
         self._frames += 1
         diff = _absdiff_max(image, self._bg)
         # threshold in [0, 1] of the 8-bit range; "> t" as the RPT's DETECT_DIFF_THRESH
@@ -204,7 +253,7 @@ class FarnebackMotion(MotionDetector):
         r = int(winsize) // 2
         self._erode = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1)) if r else None
 
-    def apply(self, image: np.ndarray) -> np.ndarray:
+    def apply(self, image: np.ndarray, protect: np.ndarray | None = None) -> np.ndarray:
         gray = _to_gray(image)
         if self._prev is None or self._prev.shape != gray.shape:
             self._prev = gray.copy()

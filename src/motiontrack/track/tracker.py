@@ -233,6 +233,19 @@ class MultiObjectTracker:
             ))
         return out
 
+    def moving_boxes(self, margin: float = 0.1) -> np.ndarray:
+        """Boxes (N, 4) where established tracks that have travelled at least one body height are
+        expected next frame (current box moved by one step of velocity, grown by ``margin`` of its
+        size on each side). Used to protect them from being learnt into the background."""
+        keep = [i for i, m in enumerate(self.meta) if m.moved and m.state != TrackState.TENTATIVE
+                and m.tsu <= 2]
+        if not keep:
+            return np.zeros((0, 4))
+        x = self.x[keep]
+        b = kalman.z_to_box(x[:, :4] + x[:, 4:8])
+        grow = margin * b[:, 2:4]
+        return np.column_stack([b[:, :2] - grow, b[:, 2:4] + 2 * grow])
+
     @property
     def active_count(self) -> int:
         """Tracks currently held (any state)."""
