@@ -15,7 +15,7 @@ import logging
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Iterator
+from typing import Any, Callable, Iterable, Iterator
 
 import numpy as np
 
@@ -24,7 +24,7 @@ from .errors import SourceError
 from .config import PipelineConfig, load_config, save_config, to_dict
 from .io.atomic import atomic_open, atomic_write_text, check_writable
 from .io.mot import format_mot_rows, read_mot, write_mot
-from .io.sources import Source, open_source
+from .io.sources import Source, open_source, prefetch
 from .io.video import VideoSink, extension_for
 from .motion import create_detector
 from .motion.cleanup import clean_mask
@@ -121,23 +121,25 @@ class Pipeline:
                 mask[y1:y2, x1:x2] = True
         return mask
 
-    def process(self, frame: Frame) -> FrameResult:
+    def detect(self, frame: Frame, index: int) -> tuple[np.ndarray | None, list[Region], dict[str, Any]]:
+        """Motion stage of one frame: ``(mask, regions, extras)``. ``index`` counts frames from
+        the start of this run (for the warm-up)."""
         cfg = self.cfg
-        mask = None
-        extras: dict[str, Any] = {}
         if self._det_index is not None:
-            regions = _regions_from_detections(self.detections, self._det_index.get(frame.index + 1))
-        else:
-            small = preprocess(frame.image, self.pre_cfg)
-            raw = self.detector.apply(small, self._protect_mask(small.shape[:2]))
-            if self.roi is not None:
-                raw = np.bitwise_and(raw, self.roi)
-            mask = clean_mask(raw, cfg.cleanup)
-            extras["raw_mask"] = raw
-            if self.frames_seen < cfg.motion.warmup:
-                regions = []
-            else:
-                regions = find_regions(mask, cfg.regions, self.scale, self.image_size)
+            return None, _regions_from_detections(self.detections,
+                                                  self._det_index.get(frame.index + 1)), {}
+        small = preprocess(frame.image, self.pre_cfg)
+        raw = self.detector.apply(small, self._protect_mask(small.shape[:2]))
+        if self.roi is not None:
+            raw = np.bitwise_and(raw, self.roi)
+        mask = clean_mask(raw, cfg.cleanup)
+        regions = ([] if index < cfg.motion.warmup
+                   else find_regions(mask, cfg.regions, self.scale, self.image_size))
+        return mask, regions, {"raw_mask": raw}
+
+    def track(self, frame: Frame, mask: np.ndarray | None, regions: list[Region],
+              extras: dict[str, Any]) -> FrameResult:
+        """Tracking stage of one frame, after :meth:`detect`."""
         owned = self.bridge.measurements(self.tracker, frame.image) if self.bridge else None
         tracks = self.tracker.update(regions, dt=self._frame_gap(frame), owned=owned)
         if self.bridge is not None:
@@ -145,6 +147,25 @@ class Pipeline:
         self.frames_seen += 1
         return FrameResult(index=frame.index, timestamp=frame.timestamp, frame=frame.image,
                            mask=mask, regions=tuple(regions), tracks=tuple(tracks), extras=extras)
+
+    def process(self, frame: Frame) -> FrameResult:
+        """Both stages of one frame."""
+        return self.track(frame, *self.detect(frame, self.frames_seen))
+
+    def results(self, frames: Iterable[Frame]) -> Iterator[FrameResult]:
+        """:meth:`process` over ``frames``. When detection does not depend on the tracks (no
+        selective update), detection of the next frame runs in a worker thread while this thread
+        tracks the current one: OpenCV releases the GIL, so the two overlap on two cores."""
+        if self.detector is not None and self.detector.protect:
+            for frame in frames:
+                yield self.process(frame)
+            return
+        detected = prefetch((f, self.detect(f, k)) for k, f in enumerate(frames))
+        try:
+            for frame, (mask, regions, extras) in detected:
+                yield self.track(frame, mask, regions, extras)
+        finally:
+            detected.close()
 
 
 def run(source: Any, config: PipelineConfig | str | Path | None = None,
@@ -154,8 +175,7 @@ def run(source: Any, config: PipelineConfig | str | Path | None = None,
     src = open_configured_source(source, cfg)
     pipe = Pipeline(cfg, (src.info.width, src.info.height), detections, src.info.fps)
     try:
-        for frame in src:
-            yield pipe.process(frame)
+        yield from pipe.results(src)
     finally:
         src.close()
 
@@ -272,8 +292,7 @@ class TrackJob:
 
         with atomic_open(self.paths["tracks"]) as tracks_fh:
             try:
-                for frame in self.src:
-                    res = pipe.process(frame)
+                for res in pipe.results(self.src):
                     ts = [t for t in res.tracks]
                     if ts:
                         boxes = np.array([t.box.as_array() for t in ts])
