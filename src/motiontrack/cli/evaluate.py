@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ConfigError, InputError
-from ..io.atomic import atomic_write_text
+from ..io.atomic import atomic_write_text, check_writable
 from ..types import Annotations
 from ._common import frame_range
 
@@ -65,6 +65,7 @@ def register(subparsers) -> None:
                         "{tracker: object})")
     p.add_argument("--per-frame", type=Path, metavar="OUT.csv",
                    help="write per-frame counts (and framewise metrics) as CSV")
+    p.add_argument("--force", action="store_true", help="overwrite existing --json/--per-frame files")
     p.set_defaults(func=run)
 
 
@@ -182,6 +183,7 @@ def _jsonable(v):
 
 def run(args: argparse.Namespace) -> int:
     metrics = _parse_metrics(args.metrics)
+    check_writable([p for p in (args.json, args.per_frame) if p is not None], args.force)
     if not 0.0 <= args.xi <= 1.0:
         raise ConfigError(f"--xi must be in [0, 1], got {args.xi}")
     gt = _read(Path(args.gt), "ground-truth")

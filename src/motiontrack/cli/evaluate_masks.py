@@ -31,6 +31,7 @@ def register(subparsers) -> None:
     p.add_argument("--pred-prefix", default=None,
                    help="only prediction files whose name starts with this (e.g. bin)")
     p.add_argument("--json", type=Path, default=None, help="write counts and metrics as JSON")
+    p.add_argument("--force", action="store_true", help="overwrite an existing --json file")
     p.set_defaults(func=run)
 
 
@@ -64,8 +65,10 @@ def format_table(result) -> str:
 
 def run(args: argparse.Namespace) -> int:
     from ..evaluate.masks import evaluate_mask_folders
-    from ..io.atomic import atomic_write_text
+    from ..io.atomic import atomic_write_text, check_writable
 
+    if args.json is not None:
+        check_writable([args.json], args.force)
     result = evaluate_mask_folders(args.gt, args.pred, roi=args.roi,
                                    temporal_roi=args.temporal_roi, frames=_frames(args.frames),
                                    pred_prefix=args.pred_prefix)

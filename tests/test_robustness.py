@@ -1,0 +1,124 @@
+"""Bad input to every command: one clear line on stderr, a non-zero exit, never a traceback;
+interrupted commands keep what they finished; outputs are never overwritten without --force."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from motiontrack.cli import main
+
+
+@pytest.fixture
+def files(tmp_path):
+    """Small broken inputs of every kind."""
+    f = {}
+    f["empty"] = tmp_path / "empty.txt"
+    f["empty"].write_text("")
+    f["text"] = tmp_path / "notes.avi"
+    f["text"].write_text("this is not a video\n" * 100)
+    f["csv_bad"] = tmp_path / "bad.txt"
+    f["csv_bad"].write_text("1,1,10,10,5,5,1\n2,1,ten,10,5,5,1\n")
+    f["csv_ok"] = tmp_path / "ok.txt"
+    f["csv_ok"].write_text("1,1,10,10,5,5,1,-1,-1,-1\n2,1,11,10,5,5,1,-1,-1,-1\n")
+    f["xml_bad"] = tmp_path / "bad.xml"
+    f["xml_bad"].write_text("<dataset><frame number='0'><objectlist><object id='1'><box xc='1'/>")
+    f["xxe"] = tmp_path / "xxe.xml"
+    f["xxe"].write_text('<?xml version="1.0"?><!DOCTYPE d [<!ENTITY x SYSTEM "file:///etc/passwd">]>'
+                        "<dataset>&x;</dataset>")
+    f["json_bad"] = tmp_path / "bad.json"
+    f["json_bad"].write_text('{"format": "motiontrack", "version": 1, "tracks": [')
+    f["missing"] = tmp_path / "missing.avi"
+    f["out"] = tmp_path / "out"
+    return f
+
+
+CASES = [
+    # (command line with {placeholders}, expected words in the message)
+    ("track {missing}", "not found"),
+    ("track {empty}", "empty"),
+    ("track {text}", "video"),
+    ("track synth:walker?n_frames=5 --set motion.method=nope", "unknown motion detector"),
+    ("track synth:walker?n_frames=5 --set preprocess.scale=0", "must be in"),
+    ("track synth:walker?n_frames=5 --set tracker.min_iou=2", "must be in"),
+    ("track synth:walker?n_frames=5 --gt {csv_bad}", "non-numeric"),
+    ("track synth:walker?n_frames=5 --config {csv_ok}", "config"),
+    ("evaluate --gt {missing} --pred {csv_ok}", "not found"),
+    ("evaluate --gt {csv_bad} --pred {csv_ok}", "non-numeric"),
+    ("evaluate --gt {xml_bad} --pred {csv_ok}", "xml"),
+    ("evaluate --gt {xxe} --pred {csv_ok}", "unsafe"),
+    ("evaluate --gt {json_bad} --pred {csv_ok}", "json"),
+    ("evaluate --gt {csv_ok} --pred {csv_ok} --metrics nope", "unknown metric"),
+    ("evaluate --gt {csv_ok} --pred {csv_ok} --xi 3", "--xi"),
+    ("evaluate-masks --gt {missing} --pred {out}", "not"),
+    ("world --camera {missing} {csv_ok} -o {out}/w.txt", "not found"),
+    ("world --camera {xml_bad} {csv_ok} -o {out}/w.txt", ""),
+    ("calibrate chessboard {text} --pattern 9x6 --square 0.025 -o {out}/c.yml", ""),
+    ("follow {missing} --box 1,2,3,4", "not found"),
+    ("follow synth:walker?n_frames=5 --box 1,2,-3,4", "box"),
+    ("follow synth:walker?n_frames=5 --box 1,2,3,4 --tracker nope", "nope"),
+    ("flow {missing}", "not found"),
+]
+
+
+@pytest.mark.parametrize("line, words", CASES)
+def test_bad_input_gives_one_line_and_nonzero_exit(files, capsys, line, words):
+    args = line.format(**{k: str(v) for k, v in files.items()}).split()
+    code = main(args + (["-o", str(files["out"])] if args[0] in ("track", "follow", "flow")
+                        and "-o" not in args else []))
+    err = [ln for ln in capsys.readouterr().err.splitlines() if ln.strip()]
+    errors = [ln for ln in err if "error" in ln]
+    assert code not in (0, None), line
+    assert "Traceback" not in "\n".join(err)
+    assert len(errors) == 1, err
+    assert words.lower() in errors[0].lower(), errors[0]
+
+
+def test_debug_shows_the_traceback(files, capsys):
+    code = main(["--debug", "evaluate", "--gt", str(files["csv_bad"]), "--pred", str(files["csv_ok"])])
+    assert code != 0
+    assert "Traceback" in capsys.readouterr().err
+
+
+def test_evaluate_interrupted_writes_nothing_half_done(files, monkeypatch, capsys):
+    import motiontrack.cli.evaluate as ev
+
+    def boom(*a, **k):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(ev, "evaluate_one", boom)
+    out = files["out"].with_suffix(".json")
+    code = main(["evaluate", "--gt", str(files["csv_ok"]), "--pred", str(files["csv_ok"]),
+                 "--json", str(out)])
+    assert code == 130
+    assert not out.exists()
+    assert "interrupted" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("flag", ["--json"])
+def test_evaluate_keeps_existing_outputs_without_force(files, capsys, flag):
+    out = Path(str(files["out"]) + ".json")
+    out.write_text("keep me")
+    base = ["evaluate", "--gt", str(files["csv_ok"]), "--pred", str(files["csv_ok"]), flag, str(out)]
+    assert main(base) == 2
+    assert out.read_text() == "keep me"
+    assert main(base + ["--force"]) == 0
+    assert json.loads(out.read_text())["MOTA"] == 1.0
+
+
+def test_truncated_video_finishes_cleanly_with_what_decoded(data, tmp_path, capsys):
+    video = data("pets09-s2l1", "video.avi")
+    cut = tmp_path / "cut.avi"
+    cut.write_bytes(video.read_bytes()[:400_000])
+    out = tmp_path / "o"
+    assert main(["track", str(cut), "-o", str(out), "--codec", "mjpg"]) == 0
+    assert "truncated" in capsys.readouterr().err
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["truncated"] is True and summary["interrupted"] is False
+    assert 5 < summary["frames"] < 300
+    import cv2
+
+    cap = cv2.VideoCapture(str(out / "annotated.avi"))
+    assert int(cap.get(cv2.CAP_PROP_FRAME_COUNT)) == summary["frames"]
