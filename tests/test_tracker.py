@@ -136,3 +136,47 @@ def test_gap_moves_predictions_on_by_the_elapsed_time():
     for t in range(10):
         trk2.update(np.array([walk(t, vx=6.0)]))
     assert trk2.update(np.array([walk(20, vx=6.0)])) == []
+
+
+def _scene_image(objects, shape=(120, 200)):
+    """A gray image with filled coloured boxes ``[(x, y, w, h, bgr), ...]`` and their mask."""
+    img = np.full(shape + (3,), 90, np.uint8)
+    mask = np.zeros(shape, np.uint8)
+    for x, y, w, h, bgr in objects:
+        img[y:y + h, x:x + w] = bgr
+        mask[y:y + h, x:x + w] = 255
+    return img, mask
+
+
+@pytest.mark.parametrize("weight, same_id", [(0.0, True), (1.0, False)])
+def test_appearance_guards_reidentification(weight, same_id):
+    # a red walker is tracked, vanishes for 3 frames, and a BLUE walker appears where the red one
+    # was predicted to be: without appearance it inherits the red id, with it it does not
+    cfg = TrackerConfig(confirm_hits=2, appearance_weight=weight, appearance_gate=0.6)
+    trk = MultiObjectTracker(cfg, image_size=(200, 120))
+    red, blue = (0, 0, 200), (200, 0, 0)
+    for t in range(6):
+        box = (10 + 4 * t, 30, 16, 40)
+        img, mask = _scene_image([box + (red,)])
+        out = trk.update(np.array([box], float), image=img, mask=mask)
+    (first,) = out
+    for t in range(6, 9):
+        img, mask = _scene_image([])
+        trk.update(np.zeros((0, 4)), image=img, mask=mask)
+    box = (10 + 4 * 9, 30, 16, 40)
+    img, mask = _scene_image([box + (blue,)])
+    out = trk.update(np.array([box], float), image=img, mask=mask)
+    assert bool(out and out[0].id == first.id) is same_id
+
+
+def test_histograms_and_distance():
+    from motiontrack.track.appearance import bhattacharyya, histograms
+
+    img, mask = _scene_image([(10, 10, 20, 20, (0, 0, 200)), (50, 10, 20, 20, (200, 0, 0))])
+    h = histograms(img, np.array([[10, 10, 20, 20], [50, 10, 20, 20], [100, 80, 10, 10]]), mask)
+    assert h[0].sum() == pytest.approx(1.0) and h[1].sum() == pytest.approx(1.0)
+    assert not h[2].any()                        # no foreground: no appearance
+    d = bhattacharyya(h, h)
+    assert d[0, 0] == pytest.approx(0.0, abs=1e-6) and d[0, 1] == pytest.approx(1.0)
+    assert d[2, 0] == 0.0                        # empty histograms give no evidence
+    assert histograms(img, np.zeros((0, 4))).shape == (0, 64)

@@ -248,6 +248,11 @@ class TrackerConfig(_Section):
                                  doc="re-detection window growth per unseen frame (fraction of max_distance)")
     split_merged: bool = param(True, doc="split a blob holding several tracks' predictions into "
                                       "one synthetic measurement per track (people crossing)")
+    appearance_weight: float = param(0.0, lo=0.0, hi=10.0,
+                                     doc="weight of the colour-histogram (Bhattacharyya) distance in the "
+                                         "association cost (0 = no appearance model)")
+    appearance_gate: float = param(0.6, lo=0.0, hi=1.0,
+                                   doc="an unseen track is re-identified only below this appearance distance")
     bridge: str = param("none", doc="single-object tracker (kcf, csrt, mil, mosse, medianflow, ...) "
                                     "that carries a confirmed track through motion-detection misses; none = off")
     bridge_frames: int = param(50, lo=1, hi=100000, doc="longest bridge, frames")

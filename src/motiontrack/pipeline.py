@@ -135,13 +135,14 @@ class Pipeline:
         mask = clean_mask(raw, cfg.cleanup)
         regions = ([] if index < cfg.motion.warmup
                    else find_regions(mask, cfg.regions, self.scale, self.image_size))
-        return mask, regions, {"raw_mask": raw}
+        return mask, regions, {"raw_mask": raw, "small": small}
 
     def track(self, frame: Frame, mask: np.ndarray | None, regions: list[Region],
               extras: dict[str, Any]) -> FrameResult:
         """Tracking stage of one frame, after :meth:`detect`."""
         owned = self.bridge.measurements(self.tracker, frame.image) if self.bridge else None
-        tracks = self.tracker.update(regions, dt=self._frame_gap(frame), owned=owned)
+        tracks = self.tracker.update(regions, dt=self._frame_gap(frame), owned=owned,
+                                     image=extras.get("small"), mask=mask, scale=self.scale)
         if self.bridge is not None:
             self.bridge.remember(frame.image, tracks)
         self.frames_seen += 1

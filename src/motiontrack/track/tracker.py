@@ -25,7 +25,8 @@ from ..config import TrackerConfig
 from ..registry import Registry
 from ..types import Box, Region, Track, TrackState
 from . import kalman
-from .association import INF_COST, assign, association_cost
+from .appearance import bhattacharyya, histograms
+from .association import INF_COST, assign, association_cost, iou_matrix
 from .merge import anchor_partial, split_merged
 
 __all__ = ["TRACKERS", "MultiObjectTracker"]
@@ -36,11 +37,13 @@ TRACKERS: Registry["MultiObjectTracker"] = Registry("tracker")
 MAX_PARTIAL_FRAMES = 8
 #: running-average rate of a track's reference size
 REF_RATE = 0.2
+#: running-average rate of a track's appearance histogram
+APPEARANCE_RATE = 0.1
 
 
 class _TrackState:
     __slots__ = ("tid", "state", "hits", "age", "tsu", "history", "score", "partials", "ref",
-                 "origin", "moved", "bridged")
+                 "origin", "moved", "bridged", "hist")
 
     def __init__(self, history: int, size: np.ndarray) -> None:
         self.ref = np.asarray(size, np.float64).copy()  # reference (unoccluded) w, h
@@ -55,6 +58,7 @@ class _TrackState:
         self.origin: np.ndarray | None = None   # centre where it was first matched
         self.moved = False                        # has travelled at least one body height
         self.bridged = False                      # last matched to a bridge measurement
+        self.hist: np.ndarray | None = None       # appearance (colour histogram), running average
 
 
 @TRACKERS.register("kalman")
@@ -91,7 +95,8 @@ class MultiObjectTracker:
     # ------------------------------------------------------------------------------- update
     def update(self, detections: Sequence[Region] | np.ndarray,
                scores: np.ndarray | None = None, dt: int = 1,
-               owned: dict[int, np.ndarray] | None = None) -> list[Track]:
+               owned: dict[int, np.ndarray] | None = None, image: np.ndarray | None = None,
+               mask: np.ndarray | None = None, scale: float = 1.0) -> list[Track]:
         """One tracking step with this frame's detections (regions or an (M, 4) box array).
 
         ``dt`` is the number of frame periods since the previous update: more than 1 after a gap
@@ -99,7 +104,8 @@ class MultiObjectTracker:
         time and tracks age accordingly. ``owned`` maps a track index (in :attr:`meta`) to a
         measurement that can only belong to that track (e.g. from a single-object tracker
         bridging a detection miss, see :mod:`motiontrack.track.bridge`); it is used only when no
-        detection matches the track.
+        detection matches the track. ``image`` and ``mask`` (processing scale ``scale``) feed the
+        appearance model (:mod:`motiontrack.track.appearance`) when ``appearance_weight`` > 0.
 
         Returns the snapshots of the tracks to report this frame: confirmed tracks matched in this
         frame (plus coasting lost tracks when ``output_lost``).
@@ -131,6 +137,19 @@ class MultiObjectTracker:
         tsu = np.array([m.tsu for m in self.meta], np.float64)
         cost = association_cost(pred, det, c.min_iou, c.max_distance * (1.0 + c.search_growth * tsu),
                                 c.cost)
+        det_hist = None
+        if c.appearance_weight > 0 and image is not None and len(det) and len(self.meta):
+            det_hist = histograms(image, det, mask, scale)
+            have = [i for i, m in enumerate(self.meta) if m.hist is not None]
+            if have:
+                d_app = bhattacharyya(np.array([self.meta[i].hist for i in have]), det_hist)
+                sub = cost[have]
+                ok = sub < INF_COST
+                sub[ok] += c.appearance_weight * d_app[ok]
+                # re-identification of an unseen track needs a similar appearance
+                lost = (tsu[have] > 0)[:, None]
+                sub[lost & (d_app > c.appearance_gate)] = INF_COST
+                cost[have] = sub
         # a synthetic measurement belongs to the track it was made for
         synth = np.flatnonzero(owner >= 0)
         if len(synth):
@@ -142,6 +161,11 @@ class MultiObjectTracker:
 
         if len(matches):
             ti, di = matches[:, 0], matches[:, 1]
+            if det_hist is not None:
+                # learn appearance only from detections that overlap no other detection
+                overlap = iou_matrix(det, det) > 0
+                np.fill_diagonal(overlap, False)
+                isolated = ~overlap.any(axis=1)
             ref = np.array([self.meta[t].ref for t in ti]).reshape(-1, 2)
             boxes, partial = anchor_partial(pred[ti], det[di], ref, c.partial_ratio)
             for k, t in enumerate(ti):
@@ -153,6 +177,9 @@ class MultiObjectTracker:
                     partial[k] = False
                 if not partial[k] and owner[di[k]] < 0:
                     m.ref = m.ref + REF_RATE * (det[di[k], 2:4] - m.ref)
+                    if det_hist is not None and det_hist[di[k]].any() and isolated[di[k]]:
+                        m.hist = (det_hist[di[k]].copy() if m.hist is None
+                                  else m.hist + APPEARANCE_RATE * (det_hist[di[k]] - m.hist))
             z = kalman.box_to_z(boxes)
             self.x[ti], self.P[ti] = kalman.update(self.x[ti], self.P[ti], z, c.measurement_noise)
             for t, d in zip(ti, di):
@@ -192,6 +219,7 @@ class MultiObjectTracker:
             m.age += dt
         self._keep(keep)
 
+        un_dets = un_dets[owner[un_dets] < 0]
         if len(un_dets):
             x0, P0 = kalman.initiate(det[un_dets], c.position_noise, c.velocity_noise)
             self.x = np.concatenate([self.x, x0])
@@ -199,6 +227,8 @@ class MultiObjectTracker:
             for d in un_dets:
                 m = _TrackState(c.history, det[d, 2:4])
                 m.score = float(det_scores[d])
+                if det_hist is not None and det_hist[d].any():
+                    m.hist = det_hist[d].copy()
                 if c.confirm_hits <= 1:
                     m.state = TrackState.CONFIRMED
                     m.tid = self.next_id
