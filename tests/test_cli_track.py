@@ -130,3 +130,19 @@ def test_camera_adds_world_positions_and_measurements(tmp_path, data):
     assert (tracks.world[:, 1] > -30).all() and (tracks.world[:, 1] < 10).all()
     m = json.loads((out / "summary.json").read_text())["measurements"]
     assert m and all(1.0 < v["height_m"] < 2.2 for v in m.values() if v["height_m"] is not None)
+
+
+def test_save_intermediate_movies(tmp_path):
+    out = tmp_path / "o"
+    assert main(["track", "synth:walker?n_frames=30", "-o", str(out), "--no-video", "--codec", "mjpg",
+                 "--save", "background,difference,motion"]) == 0
+    for stream in ("background", "difference", "motion"):
+        cap = cv2.VideoCapture(str(out / f"{stream}.avi"))
+        assert int(cap.get(cv2.CAP_PROP_FRAME_COUNT)) == 30, stream
+    summary = json.loads((out / "summary.json").read_text())
+    assert {"background", "difference", "motion"} <= set(summary["outputs"])
+
+
+def test_save_unknown_stream_is_an_error(tmp_path, capsys):
+    assert main(["track", SCENE, "-o", str(tmp_path / "o"), "--save", "nope"]) == 2
+    assert "unknown --save stream" in capsys.readouterr().err

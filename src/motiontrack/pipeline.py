@@ -25,6 +25,7 @@ from .config import PipelineConfig, load_config, save_config, to_dict
 from .io.atomic import atomic_open, atomic_write_text, check_writable
 from .io.mot import format_mot_rows, read_mot, write_mot
 from .io.sources import Source, open_source, prefetch
+from .intermediate import IntermediateWriter, parse_streams
 from .io.video import VideoSink, extension_for
 from .motion import create_detector
 from .motion.cleanup import clean_mask
@@ -96,6 +97,9 @@ class Pipeline:
 
             self.bridge = Bridge(cfg.tracker.bridge, cfg.tracker.bridge_frames)
         self.frames_seen = 0
+        #: run detection and tracking in one thread (needed when a later stage reads the
+        #: detector's state, e.g. its background image, for the same frame)
+        self.sequential = False
 
     def _frame_gap(self, frame: Frame) -> int:
         """Frame periods since the previous frame, from the timestamps (wall-clock for live
@@ -157,7 +161,7 @@ class Pipeline:
         """:meth:`process` over ``frames``. When detection does not depend on the tracks (no
         selective update), detection of the next frame runs in a worker thread while this thread
         tracks the current one: OpenCV releases the GIL, so the two overlap on two cores."""
-        if self.detector is not None and self.detector.protect:
+        if self.sequential or (self.detector is not None and self.detector.protect):
             for frame in frames:
                 yield self.process(frame)
             return
@@ -237,7 +241,7 @@ class TrackJob:
 
     def __init__(self, source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: bool = False,
                  gt: Annotations | None = None, detections: Annotations | None = None,
-                 show: Callable[[np.ndarray], bool] | None = None) -> None:
+                 show: Callable[[np.ndarray], bool] | None = None, save: Iterable[str] = ()) -> None:
         self.cfg = cfg
         self.out = Path(out_dir)
         self.src = open_configured_source(source, cfg)
@@ -257,6 +261,9 @@ class TrackJob:
             self.paths["mask_video"] = self.out / f"mask{extension_for(cfg.output.codec)}"
         if self.gt is not None:
             self.paths["gt"] = self.out / "gt.txt"
+        self.save = parse_streams(save)
+        for stream in self.save:
+            self.paths[stream] = self.out / f"{stream}{extension_for(cfg.output.codec)}"
         check_writable(list(self.paths.values()), force)
         self.camera = None
         if cfg.measure.camera:
@@ -266,6 +273,7 @@ class TrackJob:
         # build every stage now: a bad plug-in name or ROI fails before anything is written
         self.pipe = Pipeline(cfg, (self.src.info.width, self.src.info.height), detections,
                              self.src.info.fps)
+        self.pipe.sequential = "background" in self.save
 
     def expected_frames(self) -> int | None:
         return self.src.expected_frames()
@@ -287,6 +295,7 @@ class TrackJob:
         video = VideoSink(self.paths["video"], fps, cfg.output.codec) if "video" in self.paths else None
         mask_video = (VideoSink(self.paths["mask_video"], fps, cfg.output.codec)
                       if "mask_video" in self.paths else None)
+        inter = IntermediateWriter(self.out, self.save, fps, cfg.output.codec) if self.save else None
         ids: set[int] = set()
         t0 = time.perf_counter()
         pipe = self.pipe
@@ -318,6 +327,8 @@ class TrackJob:
                             break
                     if mask_video is not None and res.mask is not None:
                         mask_video.write(res.mask)
+                    if inter is not None:
+                        inter.write(res, pipe.detector)
                     summary.frames += 1
                     if progress is not None:
                         progress(1)
@@ -333,7 +344,7 @@ class TrackJob:
                 log.error("%s; writing what was processed", exc)
             finally:
                 summary.seconds = time.perf_counter() - t0
-                for sink in (video, mask_video):
+                for sink in (video, mask_video, inter):
                     if sink is not None:
                         sink.close()
         summary.truncated = summary.truncated or self.src.truncated

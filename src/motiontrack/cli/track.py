@@ -25,6 +25,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--max-frames", type=int, help="process at most this many frames")
     p.add_argument("--no-video", action="store_true", help="analysis only: no annotated video")
     p.add_argument("--mask-video", action="store_true", help="also write the motion mask video")
+    p.add_argument("--save", default="", metavar="STREAMS",
+                   help="also write intermediate movies: background,difference,motion,annotated")
     p.add_argument("--codec", help="video codec: vp80 (default, WebM), vp90, mp4v, mjpg, xvid")
     p.add_argument("--gt", help="ground truth to score the run against (any supported format)")
     p.add_argument("--detections", help="MOTChallenge det.txt: track these detections instead of "
@@ -104,7 +106,7 @@ def cmd_track(args) -> int:
         if args.min_score is not None:
             det = det.select(det.scores >= args.min_score)
     job = TrackJob(args.source, cfg, args.out, force=args.force, gt=gt, detections=det,
-                   show=_viewer() if args.show else None)
+                   show=_viewer() if args.show else None, save=args.save)
     log.info("source %s", job.src.info.describe())
     with GracefulStop() as stop, tqdm(total=job.expected_frames(), unit="frame", disable=None,
                                       file=sys.stderr, dynamic_ncols=True) as bar:

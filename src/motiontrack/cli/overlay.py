@@ -1,0 +1,77 @@
+"""``motiontrack overlay``: ground truth and several runs on the video, one colour each, with a legend."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "overlay", help="draw ground truth and several runs on the video (distinct colours, legend)",
+        description="Render SOURCE with the ground truth (green) and each --pred run in its own "
+                    "colour, as a video and/or PNG stills.")
+    p.add_argument("source", help="video file, image folder or synth:NAME")
+    p.add_argument("--gt", help="ground truth (any supported format; default: a synth: scene's own)")
+    p.add_argument("--pred", action="append", default=[], metavar="[NAME=]FILE",
+                   help="a run's tracks (any supported format; a sweep run folder's tracks.txt); "
+                        "repeatable; NAME is the legend text (default: the file's folder name)")
+    p.add_argument("-o", "--out", help="output video (e.g. overlay.webm)")
+    p.add_argument("--frames", metavar="A:B", help="1-based inclusive frame range")
+    p.add_argument("--png-frames", default="", metavar="F1,F2",
+                   help="also write these 1-based frames as PNG (frame_%%06d.png next to -o)")
+    p.add_argument("--png-dir", help="folder for the PNG stills")
+    p.add_argument("--codec", default=None, help="video codec (default from the -o extension: vp80 "
+                                                 "for .webm, mp4v for .mp4, mjpg for .avi)")
+    p.set_defaults(func=cmd_overlay)
+
+
+def _pred(item: str):
+    from pathlib import Path
+
+    from ..io.annotations import read_annotations
+
+    if "=" in item and not Path(item).exists():
+        name, path = item.split("=", 1)
+    else:
+        path = item
+        p = Path(item)
+        name = f"{p.parent.parent.name}/{p.parent.name}" if p.parent.parent.name.startswith("r") \
+            and p.parent.parent.name[1:].isdigit() else (p.parent.name or p.stem)
+    return name, read_annotations(path, mot_kind="results")
+
+
+def cmd_overlay(args) -> int:
+    from pathlib import Path
+
+    from tqdm import tqdm
+
+    from ..errors import ConfigError
+    from ..overlay import render_overlay
+    from ._common import frame_range, read_gt
+
+    runs = [_pred(p) for p in args.pred]
+    if args.gt:
+        gt = read_gt(args.gt)
+    elif args.source.startswith("synth:"):
+        from ..synth import parse_synth_spec
+
+        gt = parse_synth_spec(args.source).ground_truth()
+    else:
+        gt = None
+    if gt is None and not runs:
+        raise ConfigError("nothing to draw: give --gt and/or --pred")
+    try:
+        pngs = [int(x) for x in args.png_frames.split(",") if x.strip()]
+    except ValueError:
+        raise ConfigError(f"--png-frames expects comma-separated frame numbers, got {args.png_frames!r}") from None
+    codec = args.codec
+    if codec is None and args.out:
+        codec = {".mp4": "mp4v", ".avi": "mjpg"}.get(Path(args.out).suffix.lower(), "vp80")
+    frames = frame_range(args.frames) if args.frames else None
+    with tqdm(unit="frame", disable=None, file=sys.stderr, dynamic_ncols=True) as bar:
+        res = render_overlay(args.source, args.out, runs, gt, frames=frames, png_frames=pngs,
+                             png_dir=args.png_dir, codec=codec or "vp80", progress=bar.update)
+    print(f"frames    {res.frames}")
+    print(f"outputs   {', '.join(([res.video] if res.video else []) + res.pngs)}")
+    return 0

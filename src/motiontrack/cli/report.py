@@ -1,0 +1,24 @@
+"""``motiontrack report DIR -o report.html``: a self-contained HTML page of a sweep study."""
+
+from __future__ import annotations
+
+import argparse
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "report", help="one self-contained HTML page of a sweep study (readable offline)",
+        description="Meta data, tables, figures (embedded) and links to the clips of the study in DIR.")
+    p.add_argument("study", metavar="DIR", help="a `motiontrack sweep` output folder")
+    p.add_argument("-o", "--out", help="HTML file (default: DIR/report.html)")
+    p.set_defaults(func=cmd_report)
+
+
+def cmd_report(args) -> int:
+    from pathlib import Path
+
+    from ..evaluate.report import write_report
+
+    out = args.out or str(Path(args.study) / "report.html")
+    print(f"outputs   {write_report(args.study, out)}")
+    return 0

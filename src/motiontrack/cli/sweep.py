@@ -1,0 +1,99 @@
+"""``motiontrack sweep``: a parameter study (runs × sequences → table, figures, study.json)."""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import sys
+
+log = logging.getLogger("motiontrack")
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "sweep", help="parameter study: run the pipeline over a grid, score it, plot PR curves",
+        description="Run the pipeline once per point of the --param grid on SOURCE (or every "
+                    "sequence of --sequences) and score the motion regions (framewise pixel/object/"
+                    "localized precision and recall, thesis §4.1) and the tracks (HOTA/MOTA/IDF1). "
+                    "Writes results.csv (+ .parquet with pyarrow), summary.csv, figures/*.png|svg, "
+                    "runs/ and study.json to -o DIR; `--replay DIR` reruns a study exactly.")
+    p.add_argument("source", nargs="*", help="video file, image folder or synth:NAME (repeatable)")
+    p.add_argument("--gt", action="append", default=[],
+                   help="ground truth per SOURCE, in order (optional for synth: sources)")
+    p.add_argument("--param", action="append", default=[], metavar="STAGE.NAME=V1,V2|A:B:STEP",
+                   help="a swept parameter, e.g. motion.median.threshold=0.05:0.3:0.05 (repeatable; "
+                        "the grid is the product)")
+    p.add_argument("--sequences", help="TOML manifest of [[sequence]] tables (name, source, gt, group)")
+    p.add_argument("--config", help="base TOML config")
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="STAGE.PARAM=VALUE",
+                   help="override one base config field (repeatable)")
+    p.add_argument("--xi", type=float, default=0.75,
+                   help="localization threshold of the localized object metrics (default 0.75)")
+    p.add_argument("--save", default="", metavar="STREAMS",
+                   help="also write per-run videos: background,difference,motion,annotated")
+    p.add_argument("-j", "--jobs", type=int, default=1, help="parallel worker processes (default 1)")
+    p.add_argument("--cluster", metavar="URL",
+                   help="Dask distributed scheduler, e.g. tcp://host:8786 (pip install 'dask[distributed]')")
+    p.add_argument("--replay", metavar="DIR", help="rerun the study recorded in DIR/study.json")
+    p.add_argument("--no-figures", action="store_true", help="skip the figures")
+    p.add_argument("-o", "--out", required=True, help="output folder")
+    p.add_argument("--force", action="store_true", help="overwrite an existing study in -o")
+    p.set_defaults(func=cmd_sweep)
+
+
+def cmd_sweep(args) -> int:
+    from tqdm import tqdm
+
+    from ..config import load_config
+    from ..errors import ConfigError
+    from ..evaluate.sweep import TABLE_FILE, load_study, run_sweep, study_from_args
+    from ..intermediate import parse_streams
+    from ._common import sigterm_as_interrupt
+
+    if args.replay:
+        if args.source or args.param or args.sequences or args.gt or args.config or args.overrides:
+            raise ConfigError("--replay takes the study from DIR/study.json; do not give SOURCE, "
+                              "--gt, --param, --sequences, --config or --set with it")
+        study, meta = load_study(args.replay)
+        from ..evaluate.sweep import versions
+
+        now = versions()
+        for k, v in (meta.get("versions") or {}).items():
+            if k != "platform" and now.get(k) != v:
+                log.warning("study was run with %s %s, this is %s: numbers may differ", k, v, now.get(k))
+    else:
+        if not args.param:
+            raise ConfigError("give at least one --param stage.name=v1,v2,... (or --replay DIR)")
+        cfg = load_config(args.config, args.overrides)
+        study = study_from_args(args.source, args.gt, args.param, cfg, args.sequences, args.xi,
+                                parse_streams(args.save))
+    n = len(study.points()) * len(study.sequences)
+    log.info("%d runs (%d grid points x %d sequences)%s", n, len(study.points()), len(study.sequences),
+             f" on {args.cluster}" if args.cluster else (f" with {args.jobs} processes" if args.jobs > 1 else ""))
+    with sigterm_as_interrupt(), tqdm(total=n, unit="run", disable=None, file=sys.stderr,
+                                      dynamic_ncols=True) as bar:
+        res = run_sweep(study, args.out, jobs=args.jobs, cluster=args.cluster, progress=bar.update,
+                        figures=not args.no_figures, force=args.force)
+    _print_best(res.rows, study.keys)
+    if args.replay:
+        from pathlib import Path
+
+        old = Path(args.replay) / TABLE_FILE
+        # byte comparison: floats are written with repr, and nan == nan only as text
+        same = (old.read_bytes() == (Path(args.out) / TABLE_FILE).read_bytes()) if old.is_file() else None
+        if same is not None:
+            print(f"replay    {'identical to' if same else 'DIFFERS from'} {args.replay}/{TABLE_FILE}")
+    print(f"outputs   {args.out}/ (" + ", ".join(p.split('/')[-1] for v in res.outputs.values() for p in v)
+          + ")")
+    return 0
+
+
+def _print_best(rows, keys) -> None:
+    from ..evaluate.sweep import summarise_runs
+
+    summary = summarise_runs(rows, keys)
+    hdr = ["run"] + list(keys) + ["det_pixel_precision", "det_pixel_recall", "det_object_f1", "HOTA", "MOTA"]
+    hdr = [h for h in hdr if not summary or h in summary[0]]
+    print("  ".join(f"{h:>12.12}" for h in hdr))
+    for r in summary:
+        print("  ".join(f"{r[h]:>12.4g}" if isinstance(r[h], float) else f"{str(r[h]):>12.12}" for h in hdr))

@@ -1,0 +1,84 @@
+"""``motiontrack tune``: Optuna search for the best configuration (optional extra)."""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import sys
+
+log = logging.getLogger("motiontrack")
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "tune", help="search parameters that maximise a metric (needs optuna)",
+        description="Search the --param space with Optuna (seeded TPE) for the best mean --metric on "
+                    "the training sequences, score the best configuration on the validation "
+                    "sequences and write it as best_config.toml (use with `motiontrack track "
+                    "--config`).")
+    p.add_argument("--train", action="append", default=[], metavar="SOURCE[=GT]|MANIFEST.toml",
+                   help="training sequence: a source (with =GT unless synth:) or a manifest (repeatable)")
+    p.add_argument("--val", action="append", default=[], metavar="SOURCE[=GT]|MANIFEST.toml",
+                   help="validation sequence(s), never used by the search (repeatable)")
+    p.add_argument("--param", action="append", default=[], metavar="STAGE.NAME=LO:HI[:log]|A,B",
+                   help="search dimension (repeatable)")
+    p.add_argument("--metric", default="det_object_f1",
+                   help="table column to optimise (default det_object_f1; e.g. det_pixel_f1, HOTA)")
+    p.add_argument("--minimize", action="store_true", help="minimise the metric instead")
+    p.add_argument("--trials", type=int, default=20, help="number of trials (default 20)")
+    p.add_argument("--seed", type=int, default=0, help="sampler seed (default 0)")
+    p.add_argument("--config", help="base TOML config")
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="STAGE.PARAM=VALUE")
+    p.add_argument("--xi", type=float, default=0.75, help="localization threshold (default 0.75)")
+    p.add_argument("-j", "--jobs", type=int, default=1, help="processes per trial (over sequences)")
+    p.add_argument("-o", "--out", required=True, help="output folder")
+    p.set_defaults(func=cmd_tune)
+
+
+def _sequences(items, what):
+    from ..errors import ConfigError
+    from ..evaluate.sweep import SequenceSpec, _abs, _default_name, read_manifest
+
+    out = []
+    for it in items:
+        if it.endswith(".toml"):
+            out.extend(read_manifest(it))
+            continue
+        src, gt = (it.rsplit("=", 1) if "=" in it and not it.startswith("synth:") else (it, None))
+        out.append(SequenceSpec(name=_default_name(src), source=src if src.startswith("synth:")
+                                else _abs(src), gt=_abs(gt)))
+    names = [s.name for s in out]
+    if len(set(names)) != len(names):
+        raise ConfigError(f"{what} sequence names must be unique, got {names}")
+    return out
+
+
+def cmd_tune(args) -> int:
+    from tqdm import tqdm
+
+    from ..config import load_config
+    from ..errors import ConfigError
+    from ..evaluate.tune import parse_space, require_optuna, tune, write_tune_outputs
+
+    optuna = require_optuna()
+    optuna.logging.set_verbosity(optuna.logging.WARNING)
+    if not args.train:
+        raise ConfigError("give at least one --train sequence")
+    cfg = load_config(args.config, args.overrides)
+    space = [parse_space(p) for p in args.param]
+    train, val = _sequences(args.train, "training"), _sequences(args.val, "validation")
+    overlap = {s.source for s in train} & {s.source for s in val}
+    if overlap:
+        log.warning("validation sequence(s) also used for training: %s", ", ".join(sorted(overlap)))
+    with tqdm(total=args.trials, unit="trial", disable=None, file=sys.stderr, dynamic_ncols=True) as bar:
+        res = tune(train, val, space, cfg, metric=args.metric,
+                   direction="minimize" if args.minimize else "maximize", n_trials=args.trials,
+                   seed=args.seed, xi=args.xi, jobs=args.jobs, progress=bar.update)
+    paths = write_tune_outputs(res, args.out)
+    print("best      " + "  ".join(f"{k}={v:.6g}" if isinstance(v, float) else f"{k}={v}"
+                                   for k, v in res.best_params.items()))
+    print(f"train     {args.metric} {res.train_score:.4f} (mean over {len(train)} sequence(s))")
+    if res.validation_score is not None:
+        print(f"validate  {args.metric} {res.validation_score:.4f} (mean over {len(val)} sequence(s))")
+    print(f"outputs   {', '.join(paths.values())}")
+    return 0

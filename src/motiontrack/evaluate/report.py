@@ -1,0 +1,163 @@
+"""One self-contained HTML page per study (``motiontrack report DIR -o report.html``).
+
+The page holds the evaluation meta data (base tracker parameters, the swept grid, sequences and
+their ground truth, evaluation parameters, software versions), the per-run summary table and the
+full run × sequence table, every figure of ``DIR/figures`` (SVG inlined, or PNG as base64 when no SVG
+exists) and relative links to the annotated clips / intermediate videos found under ``DIR``. It has
+no external resources (no scripts, fonts or style sheets), so it reads offline in any browser.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import json
+import math
+import os
+import re
+from pathlib import Path
+from typing import Any, Mapping, Sequence
+
+from ..errors import InputError
+
+__all__ = ["build_report", "write_report"]
+
+_CSS = """
+body{font-family:system-ui,-apple-system,Segoe UI,Helvetica,Arial,sans-serif;margin:2em auto;
+max-width:1200px;padding:0 1em;color:#222}
+h1{font-size:1.6em}h2{border-bottom:1px solid #ddd;padding-bottom:.2em;margin-top:2em}
+table{border-collapse:collapse;font-size:.82em;margin:.5em 0}
+th,td{border:1px solid #ccc;padding:.2em .45em;text-align:right}
+th{background:#f3f3f3;position:sticky;top:0}td.t{text-align:left}
+.scroll{overflow:auto;max-height:32em;border:1px solid #eee}
+figure{margin:1em 0}figure svg,figure img{max-width:100%;height:auto}
+code,pre{background:#f6f6f6;padding:.1em .3em}pre{padding:.6em;overflow:auto}
+.small{color:#666;font-size:.85em}
+"""
+
+#: columns shown in the per-run summary table (when present)
+SUMMARY_COLUMNS = ("det_pixel_precision", "det_pixel_recall", "det_object_area_precision",
+                   "det_object_area_recall", "det_localized_object_precision",
+                   "det_localized_object_recall", "HOTA", "MOTA", "IDF1", "IDSW")
+
+
+def _e(x: Any) -> str:
+    return html.escape(str(x), quote=True)
+
+
+def _cell(v: Any) -> str:
+    if isinstance(v, float):
+        return "nan" if math.isnan(v) else f"{v:.4g}"
+    return _e(v)
+
+
+def _table(rows: Sequence[Mapping[str, Any]], cols: Sequence[str], text_cols: Sequence[str] = ()) -> str:
+    head = "".join(f"<th>{_e(c)}</th>" for c in cols)
+    body = "".join(
+        "<tr>" + "".join(f"<td class=\"t\">{_cell(r.get(c, ''))}</td>" if c in text_cols
+                         else f"<td>{_cell(r.get(c, ''))}</td>" for c in cols) + "</tr>"
+        for r in rows)
+    return f"<div class=\"scroll\"><table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table></div>"
+
+
+def _kv(d: Mapping[str, Any]) -> str:
+    return "<table>" + "".join(f"<tr><th>{_e(k)}</th><td class=\"t\">{_e(v)}</td></tr>"
+                               for k, v in d.items()) + "</table>"
+
+
+def _flat(d: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for k, v in d.items():
+        if isinstance(v, Mapping):
+            out.update(_flat(v, f"{prefix}{k}."))
+        else:
+            out[f"{prefix}{k}"] = v
+    return out
+
+
+def _svg_inline(text: str) -> str:
+    """Strip the XML prolog/doctype so the SVG can sit inside HTML."""
+    text = re.sub(r"<\?xml[^>]*\?>", "", text)
+    text = re.sub(r"<!DOCTYPE[^>]*>", "", text, flags=re.S)
+    return text.strip()
+
+
+def _figures(folder: Path) -> str:
+    fig_dir = folder / "figures"
+    if not fig_dir.is_dir():
+        return "<p>No figures.</p>"
+    parts = []
+    stems = sorted({p.stem for p in fig_dir.iterdir() if p.suffix in (".svg", ".png")})
+    for stem in stems:
+        svg, png = fig_dir / f"{stem}.svg", fig_dir / f"{stem}.png"
+        if svg.is_file():
+            body = _svg_inline(svg.read_text(encoding="utf-8"))
+        else:
+            b64 = base64.b64encode(png.read_bytes()).decode("ascii")
+            body = f"<img alt=\"{_e(stem)}\" src=\"data:image/png;base64,{b64}\">"
+        parts.append(f"<figure>{body}<figcaption>{_e(stem)}</figcaption></figure>")
+    return "\n".join(parts)
+
+
+def _clips(folder: Path, report_dir: Path) -> str:
+    vids = sorted(p for ext in ("*.webm", "*.mp4", "*.avi") for p in folder.rglob(ext)
+                  if not p.name.startswith("."))
+    if not vids:
+        return "<p>No clips (run the sweep with <code>--save annotated,background,difference,motion</code>).</p>"
+    items = []
+    for v in vids:
+        rel = os.path.relpath(v, report_dir).replace(os.sep, "/")
+        items.append(f"<li><a href=\"{_e(rel)}\">{_e(v.relative_to(folder).as_posix())}</a></li>")
+    return "<ul>" + "".join(items) + "</ul>"
+
+
+def build_report(folder: str | Path, report_path: str | Path | None = None) -> str:
+    """The HTML text of the report of the study in ``folder`` (links relative to ``report_path``)."""
+    from .sweep import STUDY_FILE, SUMMARY_FILE, TABLE_FILE, read_table
+
+    folder = Path(folder)
+    if not (folder / STUDY_FILE).is_file():
+        raise InputError(f"no {STUDY_FILE} in {folder}: not a sweep output folder")
+    try:
+        meta = json.loads((folder / STUDY_FILE).read_text(encoding="utf-8"))
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise InputError(f"malformed {folder / STUDY_FILE}: {exc}") from None
+    rows = read_table(folder / TABLE_FILE)
+    summary = read_table(folder / SUMMARY_FILE) if (folder / SUMMARY_FILE).is_file() else []
+    keys = [g["key"] for g in meta.get("grid", [])]
+    report_dir = Path(report_path).resolve().parent if report_path else folder.resolve()
+    seqs = meta.get("sequences", [])
+    grid_rows = [{"parameter": g["key"], "values": ", ".join(map(str, g["values"]))}
+                 for g in meta.get("grid", [])]
+    ev = dict(meta.get("evaluation", {}))
+    sum_cols = ["run"] + keys + [c for c in SUMMARY_COLUMNS if summary and c in summary[0]]
+    all_cols = list(rows[0].keys()) if rows else []
+    title = f"Parameter study: {', '.join(keys)}"
+    out = [
+        "<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\">",
+        f"<title>{_e(title)}</title><style>{_CSS}</style></head><body>",
+        f"<h1>{_e(title)}</h1>",
+        f"<p class=\"small\">{len(summary) or meta.get('runs', '?')} parameter settings × "
+        f"{len(seqs)} sequence(s); study folder <code>{_e(folder.resolve())}</code>. "
+        "Reproduce with <code>motiontrack sweep --replay " + _e(folder) + " -o NEW_DIR</code>.</p>",
+        "<h2>Sequences and ground truth</h2>",
+        _table(seqs, ["name", "group", "source", "gt"], text_cols=["name", "group", "source", "gt"]),
+        "<h2>Swept parameters</h2>", _table(grid_rows, ["parameter", "values"], ["parameter", "values"]),
+        "<h2>Evaluation parameters</h2>", _kv(ev),
+        "<h2>Figures</h2>", _figures(folder),
+        "<h2>Summary (mean over sequences)</h2>", _table(summary, sum_cols),
+        "<h2>All runs × sequences</h2>", _table(rows, all_cols, ["sequence", "group"]),
+        "<h2>Annotated clips</h2>", _clips(folder, report_dir),
+        "<h2>Base tracker parameters</h2>", _kv(_flat(meta.get("base_config", {}))),
+        "<h2>Software</h2>", _kv(meta.get("versions", {})),
+        "</body></html>",
+    ]
+    return "\n".join(out) + "\n"
+
+
+def write_report(folder: str | Path, path: str | Path) -> str:
+    """Write the report of ``folder`` to ``path`` (atomically); returns the path."""
+    from ..io.atomic import atomic_write_text
+
+    atomic_write_text(path, build_report(folder, path))
+    return str(path)

@@ -1,0 +1,719 @@
+"""Parameter studies: run the pipeline once per point of a parameter grid and score every run.
+
+This reproduces the thesis' evaluation workflow (its ``mkdaevaluation`` scripts, §4.4): each run is
+one point of the grid applied to a base configuration, on one or more sequences; the motion
+detector's regions (the *detections*) are scored with the framewise metrics of §4.1
+(:func:`~motiontrack.evaluate.framewise.evaluate_framewise`: pixel, object-area and localized
+object precision/recall) and the confirmed tracks with the same framewise metrics plus
+CLEAR-MOT / Identity / HOTA (:func:`~motiontrack.evaluate.mot.evaluate_tracking`).
+
+Grid syntax (one ``--param`` per parameter, the grid is their Cartesian product)::
+
+    motion.median.threshold=0.05,0.1,0.2      explicit values (TOML literals or bare strings)
+    regions.min_size=0:0.004:0.001            a:b:step, both ends inclusive
+
+The result is a tidy table: one row per run × sequence with the run number, the sequence, its
+group, every grid parameter (column named by its key) and every metric
+(``det_<framewise key>`` for regions, ``trk_<framewise key>`` for tracks, and the tracking metrics
+``HOTA``, ``MOTA``, ``IDF1``...). Rows come back in grid order whichever executor ran them (serial,
+a process pool, or a Dask cluster), so the tables are byte-identical.
+
+Every study writes ``study.json`` (sources, ground truth, grid, base config, evaluation parameters,
+versions); :func:`load_study` + :func:`run_sweep` reproduce it (``motiontrack sweep --replay DIR``).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import itertools
+import json
+import logging
+import math
+import os
+import platform
+import sys
+from dataclasses import dataclass, field
+from decimal import Decimal, InvalidOperation
+from pathlib import Path
+from typing import Any, Callable, Iterable, Mapping, Sequence
+
+import numpy as np
+
+from ..errors import ConfigError, InputError
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+log = logging.getLogger(__name__)
+
+__all__ = [
+    "parse_param", "format_value", "SequenceSpec", "Study", "RunSpec", "read_manifest",
+    "execute_run", "execute", "run_sweep", "load_study", "write_table", "read_table",
+    "summarise_runs", "STUDY_FILE", "TABLE_FILE", "FRAMEWISE_PAIRS",
+]
+
+STUDY_FILE = "study.json"
+TABLE_FILE = "results.csv"
+SUMMARY_FILE = "summary.csv"
+STUDY_FORMAT = 1
+
+#: the three precision–recall pairs of the thesis' figure 4.4: label → (precision key, recall key)
+FRAMEWISE_PAIRS: dict[str, tuple[str, str]] = {
+    "pixel": ("pixel_precision", "pixel_recall"),
+    "object": ("object_area_precision", "object_area_recall"),
+    "localized object": ("localized_object_precision", "localized_object_recall"),
+}
+
+#: the tracking metrics copied into the table (from evaluate_tracking's flat dict)
+TRACKING_KEYS = ("HOTA", "DetA", "AssA", "LocA", "MOTA", "MOTP", "IDF1", "IDP", "IDR", "IDSW",
+                 "TP", "FP", "FN", "MT", "ML", "Frag")
+
+#: intermediate streams a run may save (see motiontrack.intermediate)
+SAVE_STREAMS = ("background", "difference", "motion", "annotated")
+
+
+# ------------------------------------------------------------------------------- grid parsing
+def _parse_literal(text: str) -> Any:
+    """A TOML literal (``3``, ``0.5``, ``true``, ``"a"``) or, failing that, the bare string."""
+    try:
+        return tomllib.loads(f"v = {text}")["v"]
+    except tomllib.TOMLDecodeError:
+        return text
+
+
+def _range_values(a: str, b: str, step: str, item: str) -> tuple[Any, ...]:
+    """Inclusive arithmetic range ``a, a+step, ..., <= b`` computed in decimal (no float drift:
+    ``0:0.3:0.1`` gives exactly 0, 0.1, 0.2, 0.3)."""
+    try:
+        da, db, ds = Decimal(a.strip()), Decimal(b.strip()), Decimal(step.strip())
+    except InvalidOperation:
+        raise ConfigError(f"--param {item!r}: a:b:step needs three numbers") from None
+    if not all(d.is_finite() for d in (da, db, ds)):
+        raise ConfigError(f"--param {item!r}: a, b and step must be finite")
+    if ds <= 0:
+        raise ConfigError(f"--param {item!r}: step must be > 0, got {step.strip()}")
+    if db < da:
+        raise ConfigError(f"--param {item!r}: a:b:step needs a <= b")
+    n = int((db - da) / ds) + 1
+    if n > 10000:
+        raise ConfigError(f"--param {item!r}: {n} values is too many (at most 10000)")
+    is_int = all(d == d.to_integral_value() and "." not in t and "e" not in t.lower()
+                 for d, t in ((da, a), (db, b), (ds, step)))
+    vals = [da + i * ds for i in range(n)]
+    return tuple(int(v) for v in vals) if is_int else tuple(float(v) for v in vals)
+
+
+def parse_param(item: str) -> tuple[str, tuple[Any, ...]]:
+    """Parse one ``--param``: ``stage.name=v1,v2,...`` or ``stage.name=a:b:step``.
+
+    Returns
+    -------
+    key : str
+        Dotted config key, e.g. ``"motion.median.threshold"``.
+    values : tuple
+        The values in the order given (ints, floats, bools or strings).
+
+    Raises
+    ------
+    ConfigError
+        Malformed text, empty or repeated values, a bad range.
+    """
+    if "=" not in item:
+        raise ConfigError(f"--param expects stage.name=v1,v2,... or stage.name=a:b:step, got {item!r}")
+    key, text = item.split("=", 1)
+    key, text = key.strip(), text.strip()
+    if not key or any(not p for p in key.split(".")):
+        raise ConfigError(f"--param expects a dotted config key before '=', got {item!r}")
+    if not text:
+        raise ConfigError(f"--param {item!r} has no values")
+    if text.count(":") == 2 and "," not in text and not text.startswith(("'", '"')):
+        values = _range_values(*text.split(":"), item=item)
+    elif ":" in text and "," not in text and not text.startswith(("'", '"')) and text.count(":") == 1:
+        raise ConfigError(f"--param {item!r}: a range needs a step, a:b:step")
+    else:
+        parts = [p.strip() for p in text.split(",")]
+        if any(not p for p in parts):
+            raise ConfigError(f"--param {item!r} has an empty value")
+        values = tuple(_parse_literal(p) for p in parts)
+    if len(set(map(repr, values))) != len(values):
+        raise ConfigError(f"--param {item!r} repeats a value")
+    return key, values
+
+
+def format_value(v: Any) -> str:
+    """A value as a TOML literal for ``--set``-style overrides."""
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, (int, float)):
+        return repr(v)
+    return json.dumps(str(v))  # a TOML basic string
+
+
+# ------------------------------------------------------------------------------- sequences
+@dataclass(frozen=True)
+class SequenceSpec:
+    """One sequence of a study.
+
+    Parameters
+    ----------
+    name : str
+        Short unique name (table column ``sequence``).
+    source : str
+        Anything :func:`~motiontrack.io.sources.open_source` accepts (file, folder, ``synth:...``).
+    gt : str or None
+        Ground-truth file (any supported format); ``None`` only for ``synth:`` sources, whose
+        exact ground truth is rendered with the scene.
+    group : str
+        Sequence type (the thesis' table 4.1 groups sequences by type); plots average per study.
+    """
+
+    name: str
+    source: str
+    gt: str | None = None
+    group: str = ""
+
+    def __post_init__(self) -> None:
+        if not self.name or any(c in self.name for c in "/\\"):
+            raise ConfigError(f"sequence name must be non-empty without slashes, got {self.name!r}")
+        if not self.source:
+            raise ConfigError(f"sequence {self.name!r} has no source")
+        if self.gt is None and not self.source.startswith("synth:"):
+            raise ConfigError(f"sequence {self.name!r}: --gt is required for non-synthetic source "
+                              f"{self.source!r}")
+
+    def as_dict(self) -> dict[str, Any]:
+        return {"name": self.name, "source": self.source, "gt": self.gt, "group": self.group}
+
+
+def _default_name(source: str) -> str:
+    if source.startswith("synth:"):
+        return source[len("synth:"):].split("?")[0] or "synth"
+    p = Path(source)
+    return (p.parent.name if p.stem in ("video", "input", "img1") and p.parent.name else p.stem) or "seq"
+
+
+def _abs(path: str | None, base: Path | None = None) -> str | None:
+    if path is None or str(path).startswith("synth:"):
+        return path
+    p = Path(path)
+    if not p.is_absolute() and base is not None:
+        p = base / p
+    return str(p.resolve())
+
+
+def read_manifest(path: str | Path) -> tuple[SequenceSpec, ...]:
+    """Read a sequences manifest (TOML)::
+
+        [[sequence]]
+        name = "pets-s2l1"              # optional (default: derived from the source)
+        source = "pets09-s2l1/video.avi" # relative paths are relative to the manifest
+        gt = "pets09-s2l1/gt_mot15.txt"  # optional for synth: sources
+        group = "outdoor, medium crowd"  # optional: the sequence type (thesis table 4.1)
+    """
+    p = Path(path)
+    if not p.is_file():
+        raise InputError(f"sequences manifest not found: {p}")
+    try:
+        data = tomllib.loads(p.read_text(encoding="utf-8"))
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise InputError(f"malformed sequences manifest {p}: {exc}") from None
+    items = data.get("sequence")
+    if not isinstance(items, list) or not items:
+        raise InputError(f"{p}: expected one or more [[sequence]] tables")
+    out = []
+    for i, it in enumerate(items, 1):
+        if not isinstance(it, dict):
+            raise InputError(f"{p}: sequence {i} is not a table")
+        unknown = sorted(set(it) - {"name", "source", "gt", "group"})
+        if unknown:
+            raise InputError(f"{p}: sequence {i}: unknown key(s) {', '.join(unknown)}; "
+                             "valid: name, source, gt, group")
+        if not isinstance(it.get("source"), str):
+            raise InputError(f"{p}: sequence {i} needs source = \"...\"")
+        src = it["source"] if it["source"].startswith("synth:") else _abs(it["source"], p.parent)
+        out.append(SequenceSpec(name=str(it.get("name") or _default_name(it["source"])), source=src,
+                                gt=_abs(it.get("gt"), p.parent), group=str(it.get("group", ""))))
+    names = [s.name for s in out]
+    if len(set(names)) != len(names):
+        raise InputError(f"{p}: sequence names must be unique, got {names}")
+    return tuple(out)
+
+
+# ------------------------------------------------------------------------------- the study
+@dataclass(frozen=True)
+class RunSpec:
+    """Everything one worker needs for one run × sequence (picklable, self-contained)."""
+
+    run: int
+    params: tuple[tuple[str, Any], ...]
+    sequence: SequenceSpec
+    base_config: Mapping[str, Any] = field(repr=False)
+    xi: float = 0.75
+    save: tuple[str, ...] = ()
+    out_dir: str | None = None
+
+    def overrides(self) -> list[str]:
+        return [f"{k}={format_value(v)}" for k, v in self.params]
+
+    def run_dir(self) -> str:
+        return f"runs/r{self.run:03d}/{self.sequence.name}"
+
+
+@dataclass(frozen=True)
+class Study:
+    """A parameter study: sequences × the Cartesian product of ``grid`` applied to ``base_config``.
+
+    Parameters
+    ----------
+    sequences : tuple of SequenceSpec
+    grid : tuple of (key, values)
+        In ``--param`` order; the first parameter varies slowest.
+    base_config : dict
+        The resolved base :class:`~motiontrack.config.PipelineConfig` as a nested dict.
+    xi : float
+        Localization threshold of the localized object metrics (thesis: 0.75).
+    save : tuple of str
+        Intermediate streams written per run (``background``, ``difference``, ``motion``,
+        ``annotated``).
+    """
+
+    sequences: tuple[SequenceSpec, ...]
+    grid: tuple[tuple[str, tuple[Any, ...]], ...]
+    base_config: Mapping[str, Any] = field(repr=False)
+    xi: float = 0.75
+    save: tuple[str, ...] = ()
+
+    def __post_init__(self) -> None:
+        if not self.sequences:
+            raise ConfigError("a study needs at least one sequence")
+        if not self.grid:
+            raise ConfigError("a study needs at least one --param")
+        keys = [k for k, _ in self.grid]
+        if len(set(keys)) != len(keys):
+            raise ConfigError(f"--param keys must be distinct, got {keys}")
+        if not (0.0 <= float(self.xi) <= 1.0):
+            raise ConfigError(f"xi must be in [0, 1], got {self.xi}")
+        bad = sorted(set(self.save) - set(SAVE_STREAMS))
+        if bad:
+            raise ConfigError(f"unknown --save stream(s) {', '.join(bad)}; valid: {', '.join(SAVE_STREAMS)}")
+        names = [s.name for s in self.sequences]
+        if len(set(names)) != len(names):
+            raise ConfigError(f"sequence names must be unique, got {names}")
+        # every grid point must give a valid config: fail before any run starts
+        from ..config import PipelineConfig, apply_overrides, from_dict
+
+        base = from_dict(PipelineConfig, dict(self.base_config))
+        for key, values in self.grid:
+            for v in values:
+                apply_overrides(base, [f"{key}={format_value(v)}"])
+
+    @property
+    def keys(self) -> tuple[str, ...]:
+        return tuple(k for k, _ in self.grid)
+
+    def points(self) -> list[tuple[tuple[str, Any], ...]]:
+        """Grid points in order (first parameter slowest)."""
+        return [tuple(zip(self.keys, combo)) for combo in itertools.product(*(v for _, v in self.grid))]
+
+    def specs(self, out_dir: str | Path | None = None) -> list[RunSpec]:
+        """One :class:`RunSpec` per grid point × sequence (run numbers start at 1)."""
+        od = str(Path(out_dir).resolve()) if out_dir is not None else None
+        return [RunSpec(run=i, params=pt, sequence=seq, base_config=self.base_config, xi=self.xi,
+                        save=self.save, out_dir=od)
+                for i, pt in enumerate(self.points(), 1) for seq in self.sequences]
+
+    def as_dict(self) -> dict[str, Any]:
+        return {
+            "format": STUDY_FORMAT,
+            "sequences": [s.as_dict() for s in self.sequences],
+            "grid": [{"key": k, "values": list(v)} for k, v in self.grid],
+            "base_config": self.base_config,
+            "evaluation": {"xi": self.xi, "detections": "motion regions (framewise, thesis §4.1)",
+                           "tracks": "confirmed tracks (framewise + CLEAR-MOT/Identity/HOTA, IoU 0.5)"},
+            "save": list(self.save),
+        }
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any]) -> "Study":
+        try:
+            if d.get("format") != STUDY_FORMAT:
+                raise ConfigError(f"unsupported study format {d.get('format')!r} (expected {STUDY_FORMAT})")
+            return cls(
+                sequences=tuple(SequenceSpec(**s) for s in d["sequences"]),
+                grid=tuple((g["key"], tuple(g["values"])) for g in d["grid"]),
+                base_config=d["base_config"],
+                xi=float(d["evaluation"]["xi"]),
+                save=tuple(d.get("save", ())),
+            )
+        except (KeyError, TypeError) as exc:
+            raise InputError(f"malformed study meta data: missing or bad {exc}") from None
+
+
+def versions() -> dict[str, str]:
+    """Versions that can change the numbers of a study."""
+    import cv2
+
+    from .. import __version__
+
+    return {"motiontrack": __version__, "python": platform.python_version(), "numpy": np.__version__,
+            "opencv": cv2.__version__, "platform": platform.platform()}
+
+
+def load_study(folder: str | Path) -> tuple[Study, dict[str, Any]]:
+    """Read ``study.json`` of a study folder: the :class:`Study` and the full meta dict."""
+    p = Path(folder) / STUDY_FILE
+    if not p.is_file():
+        raise InputError(f"no {STUDY_FILE} in {folder}: not a sweep output folder")
+    try:
+        meta = json.loads(p.read_text(encoding="utf-8"))
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise InputError(f"malformed {p}: {exc}") from None
+    return Study.from_dict(meta), meta
+
+
+# ------------------------------------------------------------------------------- one run
+def _load_gt(seq: SequenceSpec):
+    if seq.gt is None:
+        from ..synth import parse_synth_spec
+
+        return parse_synth_spec(seq.source).ground_truth()
+    from ..io.annotations import read_annotations
+
+    return read_annotations(seq.gt, mot_kind="gt")
+
+
+def _annotations(frames: list[int], boxes: list[np.ndarray], ids: list[int], scores: list[float]):
+    from ..types import Annotations
+
+    if not frames:
+        return Annotations.empty()
+    return Annotations.from_columns(frames, ids, np.asarray(boxes, dtype=np.float64).reshape(-1, 4),
+                                    scores=np.asarray(scores, dtype=np.float64))
+
+
+def execute_run(spec: RunSpec) -> dict[str, Any]:
+    """Run the pipeline for one run × sequence and score it (pure apart from optional
+    intermediate videos written under ``spec.out_dir``).
+
+    Returns
+    -------
+    dict
+        ``{"row": {...table row...}, "files": {relative path: text}}`` where files are the run's
+        ``tracks.txt`` and ``regions.txt`` (MOTChallenge CSV, 1-based frames) for the caller to
+        write, so that remote workers need no shared file system.
+    """
+    from ..config import PipelineConfig, apply_overrides, from_dict
+    from ..io.mot import format_mot_rows
+    from ..pipeline import Pipeline, open_configured_source
+    from .framewise import evaluate_framewise
+    from .mot import evaluate_tracking
+
+    cfg = apply_overrides(from_dict(PipelineConfig, dict(spec.base_config)), spec.overrides())
+    seq = spec.sequence
+    gt = _load_gt(seq)
+    src = open_configured_source(seq.source, cfg)
+    info = src.info
+    pipe = Pipeline(cfg, (info.width, info.height))
+    writer = None
+    if spec.save and spec.out_dir:
+        from ..intermediate import IntermediateWriter
+
+        writer = IntermediateWriter(Path(spec.out_dir) / spec.run_dir(), spec.save,
+                                    fps=info.fps or 25.0, codec=cfg.output.codec)
+    rf: list[int] = []
+    rb: list[np.ndarray] = []
+    ri: list[int] = []
+    rs: list[float] = []
+    tf: list[int] = []
+    tb: list[np.ndarray] = []
+    ti: list[int] = []
+    ts: list[float] = []
+    n = 0
+    first = None
+    try:
+        for frame in src:
+            res = pipe.process(frame)
+            f = res.index + 1
+            first = f if first is None else first
+            for j, r in enumerate(res.regions, 1):
+                rf.append(f), rb.append(r.box.as_array()), ri.append(j), rs.append(r.score)
+            for t in res.tracks:
+                tf.append(f), tb.append(t.box.as_array()), ti.append(t.id), ts.append(t.score)
+            if writer is not None:
+                writer.write(res, pipe.detector)
+            n += 1
+    finally:
+        src.close()
+        if writer is not None:
+            writer.close()
+    regions = _annotations(rf, rb, ri, rs)
+    tracks = _annotations(tf, tb, ti, ts)
+    lo = first if first is not None else 1
+    hi = lo + n - 1
+    gt = gt.select((gt.frames >= lo) & (gt.frames <= hi))
+    size = (float(info.width), float(info.height))
+    row: dict[str, Any] = {"run": spec.run, "sequence": seq.name, "group": seq.group}
+    row.update({k: v for k, v in spec.params})
+    row["frames"] = n
+    row["n_tracks"] = int(len(np.unique(tracks.ids))) if len(tracks) else 0
+    det = evaluate_framewise(gt, regions, spec.xi, frame_size=size, frames=(lo, hi))[0]
+    trk = evaluate_framewise(gt, tracks, spec.xi, frame_size=size, frames=(lo, hi))[0]
+    for prefix, res in (("det_", det), ("trk_", trk)):
+        row.update({prefix + k: float(v) for k, v in res.items()})
+        for label, (pk, rk) in FRAMEWISE_PAIRS.items():
+            row[f"{prefix}{label.replace(' ', '_')}_f1"] = _f1(res[pk], res[rk])
+    mot = evaluate_tracking(gt, tracks)
+    row.update({k: float(mot[k]) for k in TRACKING_KEYS if k in mot})
+    files = {
+        f"{spec.run_dir()}/tracks.txt": format_mot_rows(tf, ti, np.asarray(tb).reshape(-1, 4), ts),
+        f"{spec.run_dir()}/regions.txt": format_mot_rows(rf, ri, np.asarray(rb).reshape(-1, 4), rs),
+    }
+    return {"row": row, "files": files}
+
+
+def _f1(p: float, r: float) -> float:
+    """Harmonic mean of precision and recall (nan when either is nan, 0 when both are 0)."""
+    if math.isnan(p) or math.isnan(r):
+        return float("nan")
+    return 2 * p * r / (p + r) if p + r > 0 else 0.0
+
+
+# ------------------------------------------------------------------------------- executors
+def _worker_init() -> None:
+    """One OpenCV thread per worker process: the runs are the parallelism."""
+    import cv2
+
+    cv2.setNumThreads(1)
+
+
+def execute(specs: Sequence[RunSpec], jobs: int = 1, cluster: str | None = None,
+            progress: Callable[[int], None] | None = None) -> list[dict[str, Any]]:
+    """Execute ``specs`` and return their results **in spec order**.
+
+    Parameters
+    ----------
+    jobs : int
+        1 = serial in this process; N > 1 = a pool of N spawned processes
+        (``concurrent.futures.ProcessPoolExecutor``, spawn start method, safe on every OS; as with
+        any spawned pool, a calling *script* must guard its entry point with
+        ``if __name__ == "__main__":``).
+    cluster : str, optional
+        Address of a Dask distributed scheduler (``tcp://host:8786``); needs ``dask[distributed]``
+        and workers that can open the sources. Overrides ``jobs``.
+    progress : callable, optional
+        Called with the number of runs finished (1) each time one finishes.
+    """
+    if jobs < 1:
+        raise ConfigError(f"-j must be >= 1, got {jobs}")
+    done = progress or (lambda k: None)
+    results: list[dict[str, Any] | None] = [None] * len(specs)
+    if not specs:
+        return []
+    if cluster:
+        try:
+            from distributed import Client, as_completed as dask_completed
+        except ImportError:
+            raise ConfigError("--cluster needs Dask distributed: pip install 'dask[distributed]'") from None
+        try:
+            client = Client(cluster, timeout=30)
+        except (OSError, TimeoutError) as exc:
+            raise InputError(f"cannot connect to the Dask scheduler at {cluster}: {exc}") from None
+        try:
+            client.run(_worker_init)
+            futures = client.map(execute_run, list(specs), pure=False)
+            index = {fut.key: i for i, fut in enumerate(futures)}
+            for fut in dask_completed(futures):
+                results[index[fut.key]] = fut.result()
+                done(1)
+        finally:
+            client.close()
+    elif jobs == 1:
+        for i, s in enumerate(specs):
+            results[i] = execute_run(s)
+            done(1)
+    else:
+        import multiprocessing
+        from concurrent.futures import ProcessPoolExecutor, as_completed
+
+        ctx = multiprocessing.get_context("spawn")
+        with ProcessPoolExecutor(max_workers=min(jobs, len(specs)), mp_context=ctx,
+                                 initializer=_worker_init) as pool:
+            futs = {pool.submit(execute_run, s): i for i, s in enumerate(specs)}
+            for fut in as_completed(futs):
+                results[futs[fut]] = fut.result()
+                done(1)
+    return results  # type: ignore[return-value]
+
+
+# ------------------------------------------------------------------------------- tables
+def _cell(v: Any) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, float):
+        return "nan" if math.isnan(v) else repr(v)
+    return str(v)
+
+
+def write_table(rows: Sequence[Mapping[str, Any]], path: str | Path) -> list[str]:
+    """Write rows (all with the same keys, in order) as CSV (atomic), and as Parquet next to it
+    when ``pyarrow`` is installed. Floats are written with ``repr`` (exact round trip).
+
+    Returns the paths written.
+    """
+    from ..io.atomic import atomic_write_bytes, atomic_write_text
+
+    path = Path(path)
+    cols = list(rows[0].keys()) if rows else ["run", "sequence"]
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(cols)
+    for r in rows:
+        w.writerow([_cell(r.get(c, "")) for c in cols])
+    atomic_write_text(path, buf.getvalue())
+    written = [str(path)]
+    try:
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+    except ImportError:
+        log.debug("pyarrow not installed: no Parquet table")
+        return written
+    table = pa.table({c: [r.get(c) for r in rows] for c in cols})
+    sink = pa.BufferOutputStream()
+    pq.write_table(table, sink)
+    pq_path = path.with_suffix(".parquet")
+    atomic_write_bytes(pq_path, sink.getvalue().to_pybytes())
+    written.append(str(pq_path))
+    return written
+
+
+def _uncell(text: str) -> Any:
+    if text in ("true", "false"):
+        return text == "true"
+    try:
+        return int(text)
+    except ValueError:
+        pass
+    try:
+        return float(text)
+    except ValueError:
+        return text
+
+
+def read_table(path: str | Path) -> list[dict[str, Any]]:
+    """Read a table written by :func:`write_table` (numbers parsed back to int/float)."""
+    p = Path(path)
+    if not p.is_file():
+        raise InputError(f"results table not found: {p}")
+    with open(p, newline="", encoding="utf-8") as fh:
+        rd = csv.DictReader(fh)
+        rows = [{k: (v if k in ("sequence", "group") else _uncell(v)) for k, v in r.items()} for r in rd]
+    return rows
+
+
+def summarise_runs(rows: Sequence[Mapping[str, Any]], keys: Sequence[str]) -> list[dict[str, Any]]:
+    """Average every metric over the sequences of each run (nan-aware): one row per run, with
+    ``sequences`` = how many were averaged."""
+    out: list[dict[str, Any]] = []
+    by_run: dict[int, list[Mapping[str, Any]]] = {}
+    for r in rows:
+        by_run.setdefault(int(r["run"]), []).append(r)
+    for run in sorted(by_run):
+        rs = by_run[run]
+        row: dict[str, Any] = {"run": run, "sequences": len(rs)}
+        row.update({k: rs[0][k] for k in keys})
+        for c in rs[0]:
+            if c in ("run", "sequence", "group") or c in keys:
+                continue
+            vals = np.array([float(x[c]) for x in rs], dtype=np.float64)
+            finite = vals[~np.isnan(vals)]
+            row[c] = float(finite.mean()) if len(finite) else float("nan")
+        out.append(row)
+    return out
+
+
+# ------------------------------------------------------------------------------- the sweep
+@dataclass(frozen=True)
+class SweepResult:
+    rows: list[dict[str, Any]]
+    out_dir: Path
+    outputs: dict[str, list[str]]
+
+
+def run_sweep(study: Study, out_dir: str | Path, *, jobs: int = 1, cluster: str | None = None,
+              progress: Callable[[int], None] | None = None, figures: bool = True,
+              force: bool = False) -> SweepResult:
+    """Run ``study`` and write its folder: ``study.json``, ``config.toml`` (base config),
+    ``results.csv`` (+ ``.parquet``), ``summary.csv`` (per-run averages over sequences),
+    ``runs/rNNN/<sequence>/{tracks,regions}.txt`` and, with ``figures``, ``figures/*.png|svg``.
+    """
+    from ..config import PipelineConfig, from_dict, save_config
+    from ..io.atomic import atomic_write_text, check_writable
+
+    out = Path(out_dir)
+    check_writable([out / STUDY_FILE, out / TABLE_FILE], force)
+    out.mkdir(parents=True, exist_ok=True)
+    meta = study.as_dict()
+    meta["versions"] = versions()
+    meta["runs"] = len(study.points())
+    atomic_write_text(out / STUDY_FILE, json.dumps(meta, indent=2) + "\n")
+    save_config(from_dict(PipelineConfig, dict(study.base_config)), out / "config.toml")
+    specs = study.specs(out)
+    log.info("sweep: %d runs x %d sequences = %d jobs", len(study.points()), len(study.sequences),
+             len(specs))
+    results = execute(specs, jobs=jobs, cluster=cluster, progress=progress)
+    for res in results:
+        for rel, text in res["files"].items():
+            atomic_write_text(out / rel, text)
+    rows = [res["row"] for res in results]
+    outputs = {"table": write_table(rows, out / TABLE_FILE),
+               "summary": write_table(summarise_runs(rows, study.keys), out / SUMMARY_FILE)[:1]}
+    if figures:
+        try:
+            import matplotlib  # noqa: F401  (optional extra: motiontrack[plot])
+        except ImportError:
+            log.warning("matplotlib is not installed: no figures (pip install 'motiontrack[plot]')")
+        else:
+            from .plots import study_figures
+
+            outputs["figures"] = study_figures(rows, study, out / "figures")
+    return SweepResult(rows=rows, out_dir=out, outputs=outputs)
+
+
+def study_from_args(sources: Sequence[str], gt: Sequence[str] | None, params: Iterable[str],
+                    base_config: Any, manifest: str | Path | None = None, xi: float = 0.75,
+                    save: Iterable[str] = ()) -> Study:
+    """Build a :class:`Study` from command-line style inputs (``SOURCE``, ``--gt``, ``--param``,
+    ``--sequences``)."""
+    from ..config import to_dict
+
+    seqs: list[SequenceSpec] = []
+    gts = list(gt or [])
+    if manifest is not None:
+        seqs.extend(read_manifest(manifest))
+    if sources:
+        if gts and len(gts) != len(sources):
+            raise ConfigError(f"give one --gt per SOURCE ({len(sources)} sources, {len(gts)} --gt)")
+        for i, s in enumerate(sources):
+            g = gts[i] if gts else None
+            src = s if s.startswith("synth:") else _abs(s)
+            seqs.append(SequenceSpec(name=_default_name(s), source=src, gt=_abs(g)))
+    if not seqs:
+        raise ConfigError("give a SOURCE or --sequences manifest.toml")
+    names = [s.name for s in seqs]
+    if len(set(names)) != len(names):  # make derived names unique: name, name-2, ...
+        seen: dict[str, int] = {}
+        fixed = []
+        for s in seqs:
+            seen[s.name] = seen.get(s.name, 0) + 1
+            nm = s.name if seen[s.name] == 1 else f"{s.name}-{seen[s.name]}"
+            fixed.append(SequenceSpec(nm, s.source, s.gt, s.group))
+        seqs = fixed
+    for s in seqs:
+        if s.gt is not None and not os.path.isfile(s.gt):
+            raise InputError(f"ground truth not found: {s.gt}")
+    grid = tuple(parse_param(p) for p in params)
+    return Study(sequences=tuple(seqs), grid=grid, base_config=to_dict(base_config), xi=xi,
+                 save=tuple(save))

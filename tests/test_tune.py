@@ -1,0 +1,81 @@
+"""Optuna tuning (optional extra): search space parsing, determinism, best config usable by track."""
+
+from __future__ import annotations
+
+import pytest
+
+from motiontrack.config import load_config
+from motiontrack.errors import ConfigError
+from motiontrack.evaluate.sweep import SequenceSpec
+from motiontrack.evaluate.tune import SearchParam, parse_space
+
+optuna = pytest.importorskip("optuna", reason="optuna not installed (pip install optuna)")
+
+
+@pytest.mark.parametrize("text, expected", [
+    ("motion.median.threshold=0.02:0.4", SearchParam("motion.median.threshold", "float", 0.02, 0.4)),
+    ("regions.min_area=50:2000:log", SearchParam("regions.min_area", "int", 50, 2000, log=True)),
+    ("regions.min_size=0.001:0.01:log", SearchParam("regions.min_size", "float", 0.001, 0.01, log=True)),
+    ("cleanup.dilate_iterations=0:4", SearchParam("cleanup.dilate_iterations", "int", 0, 4)),
+    ("motion.method=median,mog2", SearchParam("motion.method", "categorical", choices=("median", "mog2"))),
+])
+def test_parse_space(text, expected):
+    assert parse_space(text) == expected
+
+
+@pytest.mark.parametrize("text", ["a.b", "a.b=", "a.b=1:x", "a.b=2:1", "a.b=0:1:log", "a.b=1:2:3"])
+def test_parse_space_rejects(text):
+    with pytest.raises(ConfigError):
+        parse_space(text)
+
+
+TRAIN = (SequenceSpec("walker", "synth:walker?n_frames=40"),)
+VAL = (SequenceSpec("crossing", "synth:crossing?n_frames=40"),)
+SPACE = (parse_space("motion.median.threshold=0.02:0.45"),)
+
+
+@pytest.fixture(scope="module")
+def tuned():
+    from motiontrack.evaluate.tune import tune
+
+    base = load_config(None, ["motion.method=median"])
+    return [tune(TRAIN, VAL, SPACE, base, metric="det_object_f1", n_trials=4, seed=3)
+            for _ in range(2)]
+
+
+def test_tune_is_deterministic_and_scores_validation(tuned):
+    a, b = tuned
+    assert a.best_params == b.best_params and a.train_score == b.train_score
+    assert len(a.trials) == 4
+    best = max(t["det_object_f1"] for t in a.trials)
+    assert a.train_score == best                            # the best trial is reported
+    assert 0.0 <= a.validation_score <= 1.0                 # scored on the held-apart sequence
+    assert a.best_config.motion.median.threshold == a.best_params["motion.median.threshold"]
+
+
+def test_best_config_loads_with_track_config(tuned, tmp_path):
+    from motiontrack.evaluate.tune import write_tune_outputs
+
+    paths = write_tune_outputs(tuned[0], tmp_path)
+    cfg = load_config(paths["config"])
+    assert cfg == tuned[0].best_config
+    assert (tmp_path / "trials.csv").read_text().count("\n") == 1 + 4
+
+
+def test_unknown_metric_is_a_config_error():
+    from motiontrack.evaluate.tune import tune
+
+    with pytest.raises(ConfigError, match="unknown metric"):
+        tune(TRAIN, (), SPACE, load_config(None, ["motion.method=median"]), metric="nope", n_trials=1)
+
+
+def test_cli_tune(tmp_path, capsys):
+    from motiontrack.cli import main
+
+    code = main(["-q", "tune", "--train", "synth:walker?n_frames=30", "--val", "synth:crossing?n_frames=30",
+                 "--set", "motion.method=median", "--param", "motion.median.threshold=0.05:0.3",
+                 "--trials", "2", "-o", str(tmp_path)])
+    assert code == 0
+    out = capsys.readouterr().out
+    assert "validate  det_object_f1" in out
+    assert (tmp_path / "best_config.toml").is_file()
