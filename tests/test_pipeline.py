@@ -162,3 +162,40 @@ def test_selective_update_keeps_a_person_who_stops(protect, still_tracked):
     assert bool(last.tracks) is still_tracked
     if still_tracked:
         assert last.tracks[0].box.x == pytest.approx(10 + 4 * 40, abs=6)
+
+
+def test_people_preset_runs_heads_and_shapes_and_draws_them(tmp_path):
+    from motiontrack.cli import main
+
+    out = tmp_path / "o"
+    assert main(["track", "synth:crossing?n_frames=60", "--preset", "people", "-o", str(out),
+                 "--codec", "mjpg"]) == 0
+    cfg = load_config(out / "config.toml")
+    assert cfg.people.enabled and cfg.people.heads and cfg.people.shapes
+    cfg = load_config(None, preset="people")
+    results = list(run("synth:crossing?n_frames=60", cfg))
+    assert any(r.extras.get("heads") for r in results)
+    assert any(r.extras.get("shapes") for r in results)
+
+
+def test_unknown_preset(capsys):
+    from motiontrack.cli import main
+
+    assert main(["track", "synth:walker?n_frames=5", "--preset", "nope"]) == 2
+    assert "unknown preset 'nope'; valid presets: people" in capsys.readouterr().err
+
+
+def test_ablate_prints_one_row_per_configuration(capsys, tmp_path):
+    from motiontrack.cli import main
+
+    code = main(["ablate", "synth:crossing?n_frames=60", "--rows", "1,3", "--json",
+                 str(tmp_path / "a.json")])
+    assert code == 0
+    out = capsys.readouterr().out.splitlines()
+    assert out[0].split()[:2] == ["configuration", "LOP"]
+    assert out[1].startswith("motion + regions only") and out[2].startswith("+ head-based splitting")
+    import json
+
+    rows = json.loads((tmp_path / "a.json").read_text())
+    assert [r["configuration"] for r in rows] == ["motion + regions only", "+ head-based splitting"]
+    assert all(0.0 <= r["localized_object_recall"] <= 1.0 for r in rows)

@@ -39,6 +39,7 @@ __all__ = [
     "TrackerConfig",
     "OutputConfig",
     "MeasureConfig",
+    "PeopleConfig",
     "PipelineConfig",
     "load_config",
     "save_config",
@@ -270,6 +271,50 @@ class OutputConfig(_Section):
 
 
 @dataclass(frozen=True)
+class PeopleConfig(_Section):
+    """People stage (issue 7). Every module can be switched off for ablation studies.
+
+    Lengths are original-frame pixels unless stated otherwise.
+    """
+
+    enabled: bool = param(False, doc="run the people stage at all")
+    heads: bool = param(True, doc="detect heads in motion regions (thesis 4.3)")
+    split: bool = param(True, doc="split merged regions between adjacent heads (needs heads)")
+    head_min_width: float = param(6.0, lo=1.0, hi=500.0, doc="narrowest head interval (px)")
+    head_max_width: float = param(40.0, lo=1.0, hi=1000.0, doc="widest head interval (px)")
+    head_tolerance: float = param(3.0, lo=0.0, hi=100.0, doc="'similar height' tolerance (px)")
+    head_min_drop: float = param(4.0, lo=0.0, hi=200.0, doc="neighbours must be this much lower (px)")
+    shapes: bool = param(True, doc="active shape tracker on confirmed tracks")
+    shape_model: str = param("", doc="shape model .npz (empty = the shipped default)")
+    hypotheses: bool = param(False, doc="offer the fitted shape's box of a person the motion detector "
+                                        "lost to that lost track only (never starts a track)")
+    hypothesis_score: float = param(0.5, lo=0.0, hi=1.0, doc="score of shape hypotheses")
+    hypothesis_iou: float = param(0.3, lo=0.0, hi=1.0,
+                                  doc="a shape box matched to a region at this IoU counts as covered")
+    hypothesis_coast: int = param(2, lo=0, hi=1000,
+                                  doc="offer a hypothesis only while the shape found edges within "
+                                      "this many frames (a pure prediction is not evidence)")
+    hypothesis_agreement: float = param(0.5, lo=0.0, hi=1.0,
+                                        doc="offer a hypothesis only for a shape whose box agreed "
+                                            "(IoU) this much with its track when last measured")
+    refine: bool = param(False, doc="replace a region's box by the outline box of the well-fitted "
+                                   "shape matched to it (tighter boxes)")
+    refine_support: float = param(0.7, lo=0.0, hi=1.0,
+                                  doc="support a shape needs to refine its region's box")
+    samples: int = param(48, lo=8, hi=512, doc="shape sample points along the outline")
+    search: float = param(0.12, lo=0.0, hi=1.0, doc="normal search half-length, fraction of height")
+    edge_threshold: float = param(8.0, lo=0.0, hi=255.0, doc="weakest difference-image edge (grey levels)")
+    iterations: int = param(2, lo=1, hi=20, doc="measure/solve rounds per frame")
+    min_support: float = param(0.35, lo=0.0, hi=1.0, doc="fraction of samples with an edge for a fit")
+    max_coast: int = param(25, lo=0, hi=1000, doc="frames a shape may coast without edges")
+    hog: str = param("off", choices=("off", "alone", "regions"),
+                     doc="HOG people detector: off, whole frame alone, or inside motion regions")
+    hog_upscale: float = param(2.0, lo=0.1, hi=8.0, doc="magnification before HOG (people ~96 px)")
+    hog_threshold: float = param(0.0, lo=-10.0, hi=10.0, doc="SVM hit threshold")
+    hog_every: int = param(1, lo=1, hi=1000, doc="run HOG every N frames (speed)")
+
+
+@dataclass(frozen=True)
 class MeasureConfig(_Section):
     """Measurements in metres from a calibrated camera (see docs/calibration.md)."""
 
@@ -286,6 +331,7 @@ class PipelineConfig(_Section):
     tracker: TrackerConfig = field(default_factory=TrackerConfig)
     output: OutputConfig = field(default_factory=OutputConfig)
     measure: MeasureConfig = field(default_factory=MeasureConfig)
+    people: PeopleConfig = field(default_factory=PeopleConfig)
 
 
 # ------------------------------------------------------------------------------- (de)serialise
@@ -341,17 +387,55 @@ def from_dict(cls: type, data: dict[str, Any], where: str = "") -> Any:
     return cls(**kwargs)
 
 
-def load_config(path: str | Path | None = None, overrides: Iterable[str] = ()) -> PipelineConfig:
-    """Load a TOML config (or the defaults when ``path`` is None) and apply ``--set`` overrides."""
+def presets() -> dict[str, str]:
+    """Shipped presets: name → first comment line (``motiontrack list``)."""
+    from importlib import resources
+
+    out = {}
+    for entry in sorted(resources.files("motiontrack").joinpath("data", "presets").iterdir(),
+                        key=lambda e: e.name):
+        if entry.name.endswith(".toml"):
+            first = entry.read_text(encoding="utf-8").splitlines()[0].lstrip("# ").strip()
+            out[entry.name[:-5]] = first
+    return out
+
+
+def _read_toml(text: str, where: str) -> dict[str, Any]:
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(f"malformed config file {where}: {exc}") from None
+
+
+def _merge(base: dict[str, Any], top: dict[str, Any]) -> dict[str, Any]:
+    out = dict(base)
+    for k, v in top.items():
+        out[k] = _merge(out[k], v) if isinstance(v, dict) and isinstance(out.get(k), dict) else v
+    return out
+
+
+def load_config(path: str | Path | None = None, overrides: Iterable[str] = (),
+                preset: str | None = None) -> PipelineConfig:
+    """Load the defaults, then a shipped ``preset`` (e.g. ``"people"``), then a TOML config file,
+    then ``--set`` overrides; each layer changes only the keys it names."""
     data: dict[str, Any] = {}
+    if preset:
+        from importlib import resources
+
+        names = presets()
+        if preset not in names:
+            raise ConfigError(f"unknown preset {preset!r}; valid presets: {', '.join(names)}")
+        entry = resources.files("motiontrack").joinpath("data", "presets", f"{preset}.toml")
+        data = _read_toml(entry.read_text(encoding="utf-8"), f"preset {preset}")
     if path is not None:
         p = Path(path)
         if not p.is_file():
             raise InputError(f"config file not found: {p}")
         try:
-            data = tomllib.loads(p.read_text(encoding="utf-8"))
-        except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+            text = p.read_text(encoding="utf-8")
+        except UnicodeDecodeError as exc:
             raise InputError(f"malformed config file {p}: {exc}") from None
+        data = _merge(data, _read_toml(text, str(p)))
     cfg = from_dict(PipelineConfig, data)
     return apply_overrides(cfg, overrides)
 

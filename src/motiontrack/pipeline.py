@@ -91,6 +91,12 @@ class Pipeline:
         pw, ph = scaled_size(image_size[0], image_size[1], self.scale)
         self.roi = load_roi(pre.roi, pw, ph) if pre.roi else None
         self.tracker = TRACKERS.get(cfg.tracker.method)(cfg.tracker, image_size)
+        self.people = None
+        if cfg.people.enabled:
+            from .people import PeopleStage
+
+            self.people = PeopleStage(cfg.people)
+        self._prev_tracks: tuple = ()
         self.bridge = None
         if cfg.tracker.bridge != "none":
             from .track.bridge import Bridge
@@ -99,7 +105,7 @@ class Pipeline:
         self.frames_seen = 0
         #: run detection and tracking in one thread (needed when a later stage reads the
         #: detector's state, e.g. its background image, for the same frame)
-        self.sequential = False
+        self.sequential = self.people is not None
 
     def _frame_gap(self, frame: Frame) -> int:
         """Frame periods since the previous frame, from the timestamps (wall-clock for live
@@ -143,12 +149,27 @@ class Pipeline:
 
     def track(self, frame: Frame, mask: np.ndarray | None, regions: list[Region],
               extras: dict[str, Any]) -> FrameResult:
-        """Tracking stage of one frame, after :meth:`detect`."""
+        """Tracking stage of one frame, after :meth:`detect` (and the people stage, when on)."""
+        if self.people is not None:
+            background = self.detector.background() if self.detector is not None else None
+            regions, people_extras = self.people.process(
+                frame.image, background, mask, regions, self._prev_tracks, work=extras.get("small"))
+            extras = {**extras, **people_extras}
         owned = self.bridge.measurements(self.tracker, frame.image) if self.bridge else None
+        hyps = extras.get("hypotheses_by_track") if self.cfg.people.hypotheses else None
+        if hyps:
+            # the shape tracker's box of a person the motion detector lost is a hypothesis for
+            # that one (lost) track only; it never starts a track (thesis §4.5)
+            index = {m.tid: i for i, m in enumerate(self.tracker.meta) if m.tid > 0 and m.tsu > 0}
+            owned = dict(owned or {})
+            for tid, region in hyps.items():
+                if tid in index and index[tid] not in owned:
+                    owned[index[tid]] = region.box.as_array()
         tracks = self.tracker.update(regions, dt=self._frame_gap(frame), owned=owned,
                                      image=extras.get("small"), mask=mask, scale=self.scale)
         if self.bridge is not None:
             self.bridge.remember(frame.image, tracks)
+        self._prev_tracks = tuple(tracks)
         self.frames_seen += 1
         return FrameResult(index=frame.index, timestamp=frame.timestamp, frame=frame.image,
                            mask=mask, regions=tuple(regions), tracks=tuple(tracks), extras=extras)
@@ -320,6 +341,10 @@ class TrackJob:
                         img = annotate_frame(res.frame, res.tracks, res.regions, res.mask,
                                              cfg.output.trail, cfg.output.mask_inset,
                                              text=f"frame {res.index}")
+                        if pipe.people is not None:
+                            from .people.draw import draw_people
+
+                            draw_people(img, res.extras, inplace=True)
                         if video is not None:
                             video.write(img)
                         if self.show is not None and not self.show(img):

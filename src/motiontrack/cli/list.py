@@ -15,7 +15,10 @@ def cmd_list(args) -> int:
     from ..track.single import SINGLE_TRACKERS
     from ..track.tracker import TRACKERS
 
-    groups = [("motion detectors (--set motion.method=NAME)", DETECTORS.describe()),
+    from ..config import presets
+
+    groups = [("presets (motiontrack track --preset NAME)", presets()),
+              ("motion detectors (--set motion.method=NAME)", DETECTORS.describe()),
               ("trackers (--set tracker.method=NAME)", TRACKERS.describe()),
               ("single-object trackers (motiontrack follow --tracker NAME)",
                SINGLE_TRACKERS.describe())]

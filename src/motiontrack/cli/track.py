@@ -18,7 +18,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("source", help="video file, camera index (0), rtsp/http URL, image folder or glob "
                                   "('input/*.jpg'), or synth:NAME (see `motiontrack list`)")
     p.add_argument("-o", "--out", default="out", help="output folder (default: out)")
-    p.add_argument("--config", help="TOML config file")
+    p.add_argument("--preset", help="shipped settings to start from, e.g. people (see `motiontrack list`)")
+    p.add_argument("--config", help="TOML config file (applied after --preset)")
     p.add_argument("--set", dest="overrides", action="append", default=[], metavar="STAGE.PARAM=VALUE",
                    help="override one config field, e.g. --set motion.method=knn (repeatable)")
     p.add_argument("--start", type=int, help="first frame index (0-based)")
@@ -57,7 +58,7 @@ def _build_config(args):
         overrides.append(f"measure.camera={json.dumps(args.camera)}")
     if args.codec:
         overrides.append(f'output.codec="{args.codec}"')
-    return load_config(args.config, overrides)
+    return load_config(args.config, overrides, preset=args.preset)
 
 
 def _viewer():

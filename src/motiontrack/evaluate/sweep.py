@@ -465,7 +465,8 @@ def execute_run(spec: RunSpec) -> dict[str, Any]:
         row.update({prefix + k: float(v) for k, v in res.items()})
         for label, (pk, rk) in FRAMEWISE_PAIRS.items():
             row[f"{prefix}{label.replace(' ', '_')}_f1"] = _f1(res[pk], res[rk])
-    mot = evaluate_tracking(gt, tracks)
+    # consider = 0 rows are ignore regions, as when `motiontrack track --gt` scores a run
+    mot = evaluate_tracking(gt, tracks, ignore_zero_marked=True)
     row.update({k: float(mot[k]) for k in TRACKING_KEYS if k in mot})
     files = {
         f"{spec.run_dir()}/tracks.txt": format_mot_rows(tf, ti, np.asarray(tb).reshape(-1, 4), ts),

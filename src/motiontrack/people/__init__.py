@@ -1,0 +1,242 @@
+"""People-specific modules of the Reading People Tracker: heads, active shapes, HOG.
+
+* :mod:`.heads` — human feature (head) detector and head-based splitting of merged regions;
+* :mod:`.bspline`, :mod:`.shape_model` — closed B-spline outlines and the point-distribution model;
+* :mod:`.shape_tracker` — active shape tracker fitted to the difference image;
+* :mod:`.hog` — OpenCV's HOG people detector (whole frame or motion regions);
+* :mod:`.draw` — drawing outlines, control points, heads and search normals.
+
+:class:`PeopleStage` wires them for the pipeline, one call per frame::
+
+    stage = PeopleStage(cfg.people)
+    regions, extras = stage.process(frame.image, background, mask, regions, tracks, work=small)
+    tracks = tracker.update(regions)
+
+``tracks`` are the region tracker's tracks from the previous frame (the stage runs before the
+tracker update). ``regions`` come back with merged regions split at heads and HOG detections when
+HOG is on. For people whose shape is still tracked but no region covers them any more (the motion
+detector lost them), ``extras["hypotheses_by_track"]`` holds the fitted shape's box per track id;
+with ``hypotheses`` on, the pipeline offers it to that one lost track as a measurement that can
+never start a new track (Siebel's thesis, section 4.5: the region tracker takes the shape's box as
+its hypothesis). See ``docs/people.md``.
+"""
+
+from __future__ import annotations
+
+import logging
+from typing import Any, Sequence
+
+import numpy as np
+
+from ..config import PeopleConfig
+from ..types import Region
+
+log = logging.getLogger(__name__)
+
+__all__ = ["PeopleConfig", "PeopleStage"]
+
+
+class PeopleStage:
+    """Per-frame people processing for the pipeline (see the module docstring).
+
+    Parameters
+    ----------
+    cfg : PeopleConfig
+    """
+
+    def __init__(self, cfg: PeopleConfig | None = None) -> None:
+        self.cfg = cfg or PeopleConfig()
+        c = self.cfg
+        self.shape_tracker = None
+        if c.shapes:
+            from .shape_model import ShapeModel, load_default_model
+            from .shape_tracker import ShapeTracker, ShapeTrackerParams
+
+            model = ShapeModel.load(c.shape_model) if c.shape_model else load_default_model()
+            self.shape_tracker = ShapeTracker(model, ShapeTrackerParams(
+                samples=c.samples, search=c.search, edge_threshold=c.edge_threshold,
+                iterations=c.iterations, min_support=c.min_support, max_coast=c.max_coast))
+        self.hog = None
+        if c.hog != "off":
+            from .hog import HOGParams, HOGPeopleDetector
+
+            self.hog = HOGPeopleDetector(HOGParams(upscale=c.hog_upscale, hit_threshold=c.hog_threshold))
+        self._frame = 0
+        self._hyp_active: set[int] = set()
+        self._hog_cache: list[Region] = []
+
+    def _head_params(self) -> dict[str, float]:
+        c = self.cfg
+        return {"min_width": c.head_min_width, "max_width": c.head_max_width,
+                "tolerance": c.head_tolerance, "min_drop": c.head_min_drop}
+
+    def process(self, frame_img: np.ndarray, background: np.ndarray | None, mask: np.ndarray | None,
+                regions: Sequence[Region], tracks: Sequence[Any], work: np.ndarray | None = None
+                ) -> tuple[list[Region], dict[str, Any]]:
+        """One frame.
+
+        Parameters
+        ----------
+        frame_img : (H, W[, 3]) uint8
+            The original frame.
+        background : (h, w[, 3]) uint8 or None
+            The motion detector's background estimate (processing resolution is fine).
+        mask : (h, w) uint8 or None
+            Cleaned motion mask at processing resolution (None with external detections: heads
+            and splitting are then skipped).
+        regions : sequence of Region
+            Motion regions, original pixels.
+        tracks : sequence of Track
+            The region tracker's tracks from the previous frame.
+        work : (h, w[, 3]) uint8, optional
+            The preprocessed frame the motion detector saw (same size as ``background``); pass it,
+            otherwise the shape tracker approximates the default preprocessing.
+
+        Returns
+        -------
+        regions_out : list of Region
+            Regions for the region tracker.
+        extras : dict
+            ``heads`` (list of Head), ``shapes`` (list of FittedShape), ``hypotheses`` (list of
+            Region: fitted boxes of lost people when ``hypotheses`` is on, for drawing),
+            ``hypotheses_by_track`` (``{track_id: Region}``: the fitted box of every tracked
+            person no region covers, whatever ``hypotheses`` says — for a region tracker that
+            can apply a hypothesis to that one track without ever starting a new track from it),
+            ``hog`` (list of Region).
+        """
+        from .heads import detect_heads, split_region_by_heads
+
+        c = self.cfg
+        H, W = frame_img.shape[:2]
+        regions = list(regions)
+        extras: dict[str, Any] = {"heads": [], "shapes": [], "hypotheses": [], "hog": [],
+                                  "hypotheses_by_track": {}}
+        # 1. heads, and splitting merged regions between them.
+        out: list[Region] = []
+        if c.heads and mask is not None:
+            scale = mask.shape[1] / W
+            hp = self._head_params()
+            for r in regions:
+                hs = detect_heads(mask, r.box, scale, **hp)
+                extras["heads"].extend(hs)
+                out.extend(split_region_by_heads(r, mask, hs, scale) if c.split else [r])
+        else:
+            out = regions
+        # 2. HOG, alone or inside motion regions.
+        if self.hog is not None:
+            if self._frame % c.hog_every == 0:
+                self._hog_cache = (self.hog.detect(frame_img) if c.hog == "alone"
+                                   else self.hog.detect_in_regions(frame_img, regions))
+            dets = self._hog_cache
+            extras["hog"] = list(dets)
+            if c.hog == "alone":
+                out = list(dets)
+            else:
+                out = _replace_with_detections(out, dets)
+        # 3. shapes, and hypotheses for people no region covers.
+        if self.shape_tracker is not None:
+            shapes = self.shape_tracker.update(frame_img, background, out, tracks,
+                                               heads=extras["heads"], mask=mask, work=work)
+            extras["shapes"] = shapes
+            if c.refine and shapes:
+                out = _refine(shapes, out, c.hypothesis_iou, c.refine_support)
+            if shapes:
+                # Every tracked person no region covers, for a region tracker that can apply a
+                # hypothesis to that one track (never starting a new track from it).
+                extras["hypotheses_by_track"] = _by_track(shapes, out, c, W, H)
+            if c.hypotheses and shapes:
+                # Only for people the region tracker has lost (or that were already being
+                # offered): a hypothesis for a reported track would compete with its own region.
+                # And only while the shape still finds edges: a pure prediction is not evidence.
+                eligible = [s for s in shapes if (s.unseen > 0 or s.track_id in self._hyp_active)
+                            and s.coasting <= c.hypothesis_coast
+                            and s.agreement >= c.hypothesis_agreement]
+                hyps, ids = _uncovered(eligible, shapes, out, c.hypothesis_iou,
+                                       c.hypothesis_score, W, H)
+                self._hyp_active = set(ids)
+                extras["hypotheses"] = hyps
+            else:
+                self._hyp_active = set()
+        self._frame += 1
+        return out, extras
+
+
+def _replace_with_detections(regions: list[Region], dets: list[Region]) -> list[Region]:
+    """Motion regions containing a detection centre are replaced by those detections."""
+    if not dets:
+        return regions
+    centres = np.array([d.box.center for d in dets])
+    used = np.zeros(len(dets), bool)
+    out: list[Region] = []
+    for r in regions:
+        b = r.box
+        inside = ((centres[:, 0] >= b.x) & (centres[:, 0] <= b.x2)
+                  & (centres[:, 1] >= b.y) & (centres[:, 1] <= b.y2) & ~used)
+        if inside.any():
+            used |= inside
+            out.extend(d for d, k in zip(dets, inside) if k)
+        else:
+            out.append(r)
+    return out
+
+
+def _by_track(shapes, regions: list[Region], c: PeopleConfig, W: int, H: int) -> dict[int, Region]:
+    """``{track_id: Region}`` for every shape no region covers that found edges recently."""
+    eligible = [s for s in shapes if s.coasting <= c.hypothesis_coast
+                and s.agreement >= c.hypothesis_agreement]
+    hyps, ids = _uncovered(eligible, shapes, regions, c.hypothesis_iou, c.hypothesis_score, W, H)
+    return dict(zip(ids, hyps))
+
+
+def _refine(shapes, regions: list[Region], min_iou: float, min_support: float) -> list[Region]:
+    """Regions matched one-to-one to a shape with ``support >= min_support`` take its box.
+
+    Matching is Hungarian on IoU gated at ``min_iou``; the region keeps its score and area, its
+    centroid becomes the outline box centre.
+    """
+    from ..track.association import assign, association_cost
+
+    good = [s for s in shapes if s.support >= min_support and s.visible >= min_support
+            and s.coasting == 0]
+    if not good or not regions:
+        return regions
+    sb = np.array([s.box.as_array() for s in good]).reshape(-1, 4)
+    rb = np.array([r.box.as_array() for r in regions]).reshape(-1, 4)
+    matches, _, _ = assign(association_cost(sb, rb, min_iou, 0.0, "iou"))
+    out = list(regions)
+    for si, ri in matches:
+        box = good[si].box
+        out[ri] = Region(box=box, centroid=box.center, area=regions[ri].area, score=regions[ri].score)
+    return out
+
+
+def _uncovered(eligible, shapes, regions: list[Region], min_iou: float, score: float, W: int, H: int
+               ) -> tuple[list[Region], list[int]]:
+    """Boxes of ``eligible`` shapes that no region is assigned to, and their track ids (aligned).
+
+    Regions are assigned to all ``shapes`` (Hungarian on IoU, gated at ``min_iou``), so a merged
+    region covers one person only.
+    """
+    from ..track.association import assign, association_cost
+    from ..types import Box
+
+    if not eligible:
+        return [], []
+    sb = np.array([s.box.as_array() for s in shapes]).reshape(-1, 4)
+    rb = np.array([r.box.as_array() for r in regions]).reshape(-1, 4)
+    cost = association_cost(sb, rb, min_iou, 0.0, "iou")  # IoU gate only
+    matches, unmatched, _ = assign(cost)
+    want = {s.track_id for s in eligible}
+    hyps, ids = [], []
+    for i in unmatched:
+        if shapes[i].track_id not in want:
+            continue
+        x, y, w, h = (float(v) for v in sb[i])
+        x1, y1 = max(0.0, x), max(0.0, y)
+        x2, y2 = min(float(W), x + w), min(float(H), y + h)
+        if x2 - x1 < 1 or y2 - y1 < 1:
+            continue
+        box = Box(x1, y1, x2 - x1, y2 - y1)
+        hyps.append(Region(box=box, centroid=box.center, area=box.area, score=score))
+        ids.append(shapes[i].track_id)
+    return hyps, ids

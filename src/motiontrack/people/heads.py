@@ -1,0 +1,223 @@
+"""Human feature (head) detector of the Reading People Tracker.
+
+Siebel's thesis (section 4.3, "Human Feature Tracker") finds heads in a motion region from its
+*vertical height profile*: scan each column from the top of the region for the first foreground
+pixel; a head is an interval of columns with similar top heights that stands out above its
+neighbours on both sides (the shoulders, or the gap to the next person). Steps, numbered as in
+:func:`detect_heads`:
+
+1. profile ``top[x]`` = row of the first foreground pixel in column ``x`` of the region (columns
+   without foreground get the region's bottom), smoothed by a running median of 3 columns;
+2. a column is a *peak column* when its top is within ``tolerance`` px of the highest top within
+   ``min_width`` columns either side (a local maximum of the silhouette, plateau included);
+3. consecutive peak columns form intervals; an interval narrower than ``min_width`` or wider than
+   ``max_width`` is dropped;
+4. the interval must stand out: on each side, the highest top within ``min_width`` columns
+   beyond its edge lies at least ``min_drop`` px lower (off the region counts as infinitely low);
+5. the head is at ``x`` = interval centre and ``y`` = the interval's mean top + half the interval
+   width (the head's centre, assuming a round head as wide as the interval).
+
+Heads seed people: :func:`split_region_by_heads` cuts a merged region between adjacent heads.
+Widths are given in original-frame pixels and converted with the mask ``scale``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..types import Box, Region
+
+__all__ = ["Head", "height_profile", "detect_heads", "detect_heads_in_regions", "split_region_by_heads"]
+
+
+@dataclass(frozen=True)
+class Head:
+    """A detected head, original-frame pixels.
+
+    Attributes
+    ----------
+    x, y : float
+        Head centre.
+    width : float
+        Width of the head interval.
+    top : float
+        Mean top of the interval (row of the top of the head).
+    """
+
+    x: float
+    y: float
+    width: float
+    top: float
+
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.x) and np.isfinite(self.y)) or self.width <= 0:
+            raise ValueError(f"head needs a finite position and width > 0, got {self}")
+
+
+def height_profile(mask: np.ndarray) -> np.ndarray:
+    """Row of the first foreground pixel per column of a (cropped) mask.
+
+    Parameters
+    ----------
+    mask : (h, w) array
+        Non-zero = foreground.
+
+    Returns
+    -------
+    (w,) float64
+        ``top[x]`` in rows from the crop's top; ``h`` for empty columns.
+    """
+    m = np.asarray(mask) > 0
+    if m.ndim != 2:
+        raise ValueError(f"mask must be 2-D, got shape {m.shape}")
+    h = m.shape[0]
+    any_fg = m.any(axis=0)
+    top = np.where(any_fg, np.argmax(m, axis=0), h).astype(np.float64)
+    return top
+
+
+def _running_max_top(top: np.ndarray, r: int) -> np.ndarray:
+    """Highest (smallest) top within ``r`` columns either side: ``min(top[x-r:x+r+1])``."""
+    if r <= 0 or len(top) == 0:
+        return top.copy()
+    padded = np.pad(top, r, mode="constant", constant_values=np.inf)
+    win = np.lib.stride_tricks.sliding_window_view(padded, 2 * r + 1)
+    return win.min(axis=1)
+
+
+def detect_heads(mask: np.ndarray, box: Box | None = None, scale: float = 1.0,
+                 min_width: float = 6.0, max_width: float = 40.0, tolerance: float = 3.0,
+                 min_drop: float = 4.0) -> list[Head]:
+    """Heads in one motion region (thesis section 4.3; steps in the module docstring).
+
+    Parameters
+    ----------
+    mask : (H, W) uint8
+        Motion mask (non-zero = foreground) at processing resolution.
+    box : Box, optional
+        The region's box in original-frame pixels (default: the whole mask).
+    scale : float
+        Mask pixels per original pixel (the pipeline's ``preprocess.scale``).
+    min_width, max_width : float
+        Head interval width limits, original pixels.
+    tolerance : float
+        "Similar height": tops within this many original px of the local maximum.
+    min_drop : float
+        How much lower (original px) the neighbours must be.
+
+    Returns
+    -------
+    list of Head
+        Sorted by ``x``; original-frame pixels. Empty for an empty region.
+    """
+    m = np.asarray(mask)
+    H, W = m.shape[:2]
+    if box is None:
+        x1, y1, x2, y2 = 0, 0, W, H
+    else:
+        x1 = max(int(np.floor(box.x * scale)), 0)
+        y1 = max(int(np.floor(box.y * scale)), 0)
+        x2 = min(int(np.ceil(box.x2 * scale)), W)
+        y2 = min(int(np.ceil(box.y2 * scale)), H)
+    if x2 <= x1 or y2 <= y1:
+        return []
+    crop = m[y1:y2, x1:x2]
+    # 1. profile, smoothed across 3 columns (single-column mask noise).
+    top = height_profile(crop)
+    if len(top) >= 3:
+        p = np.pad(top, 1, mode="edge")
+        top = np.median(np.stack([p[:-2], p[1:-1], p[2:]]), axis=0)
+    h = crop.shape[0]
+    wmin = max(1.0, min_width * scale)
+    wmax = max(wmin, max_width * scale)
+    tol = tolerance * scale
+    drop = min_drop * scale
+    # 2. peak columns: within tol of the highest top within one (smallest) head width.
+    r = max(1, int(np.ceil(wmin)))
+    near = _running_max_top(top, r)
+    peak = (top <= near + tol) & (top < h)
+    # 3. runs of peak columns.
+    heads: list[Head] = []
+    d = np.diff(np.concatenate([[0], peak.astype(np.int8), [0]]))
+    starts, stops = np.flatnonzero(d == 1), np.flatnonzero(d == -1)
+    n = len(top)
+    for a, b in zip(starts, stops):  # columns a .. b-1
+        width = b - a
+        if width < wmin or width > wmax:
+            continue
+        level = float(top[a:b].min())
+        # 4. stand out on both sides (off the region = infinitely low).
+        reach = int(np.ceil(wmin))
+        left = top[max(0, a - reach):a]
+        right = top[b:min(n, b + reach)]
+        if (len(left) and left.min() < level + drop) or (len(right) and right.min() < level + drop):
+            continue
+        # 5. position: interval centre; y = mean top + half the width (round head).
+        xc = (a + b - 1) / 2.0
+        mean_top = float(top[a:b].mean())
+        heads.append(Head(x=(x1 + xc + 0.5) / scale - 0.5, y=(y1 + mean_top + width / 2.0) / scale,
+                          width=width / scale, top=(y1 + mean_top) / scale))
+    return heads
+
+
+def detect_heads_in_regions(mask: np.ndarray, regions, scale: float = 1.0, **params) -> list[list[Head]]:
+    """:func:`detect_heads` for each region; one list per region (same order)."""
+    return [detect_heads(mask, r.box, scale, **params) for r in regions]
+
+
+def split_region_by_heads(region: Region, mask: np.ndarray, heads: list[Head] | None = None,
+                          scale: float = 1.0, min_fraction: float = 0.1, **params) -> list[Region]:
+    """Separate the people inside a merged region at the midpoints between adjacent heads.
+
+    Parameters
+    ----------
+    region : Region
+        Motion region, original-frame pixels.
+    mask : (H, W) uint8
+        Motion mask at processing resolution (``scale`` mask px per original px).
+    heads : list of Head, optional
+        Heads in this region (default: :func:`detect_heads` with ``params``).
+    min_fraction : float
+        A part with fewer than this fraction of the region's foreground pixels is dropped.
+
+    Returns
+    -------
+    list of Region
+        One region per head (tight box around the foreground of its vertical slice, centroid and
+        area from those pixels, the parent's score); ``[region]`` unchanged with fewer than two
+        heads or when the split leaves fewer than two usable parts.
+    """
+    if heads is None:
+        heads = detect_heads(mask, region.box, scale, **params)
+    heads = sorted((h for h in heads if region.box.x <= h.x <= region.box.x2), key=lambda h: h.x)
+    if len(heads) < 2:
+        return [region]
+    m = np.asarray(mask)
+    Hm, Wm = m.shape[:2]
+    x1 = max(int(np.floor(region.box.x * scale)), 0)
+    y1 = max(int(np.floor(region.box.y * scale)), 0)
+    x2 = min(int(np.ceil(region.box.x2 * scale)), Wm)
+    y2 = min(int(np.ceil(region.box.y2 * scale)), Hm)
+    fg = m[y1:y2, x1:x2] > 0
+    total = int(fg.sum())
+    if total == 0:
+        return [region]
+    # Cut columns (mask px, relative to the crop) halfway between adjacent head centres.
+    cuts = [int(round((a.x + b.x) / 2.0 * scale)) - x1 for a, b in zip(heads[:-1], heads[1:])]
+    edges = [0] + [min(max(c, 0), fg.shape[1]) for c in cuts] + [fg.shape[1]]
+    parts: list[Region] = []
+    for lo, hi in zip(edges[:-1], edges[1:]):
+        sub = fg[:, lo:hi]
+        cnt = int(sub.sum())
+        if hi <= lo or cnt < min_fraction * total:
+            continue
+        ys, xs = np.nonzero(sub)
+        bx1, bx2 = (x1 + lo + xs.min()) / scale, (x1 + lo + xs.max() + 1) / scale
+        by1, by2 = (y1 + ys.min()) / scale, (y1 + ys.max() + 1) / scale
+        cx = (x1 + lo + xs.mean() + 0.5) / scale
+        cy = (y1 + ys.mean() + 0.5) / scale
+        parts.append(Region(box=Box.from_xyxy(bx1, by1, bx2, by2), centroid=(cx, cy),
+                            area=cnt / (scale * scale), score=region.score))
+    return parts if len(parts) >= 2 else [region]

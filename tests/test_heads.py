@@ -1,0 +1,97 @@
+"""Head detector (thesis 4.3) on hand-built masks, and splitting merged regions by heads."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+import pytest
+
+from motiontrack.people.heads import detect_heads, height_profile, split_region_by_heads
+from motiontrack.types import Box, Region
+
+
+def _person(mask: np.ndarray, cx: int, foot: int, height: int = 90, head_r: int = 6,
+            body_w: int = 24) -> None:
+    """A round head on a rectangular body, feet at row ``foot``."""
+    top = foot - height
+    cv2.circle(mask, (cx, top + head_r), head_r, 255, -1)
+    cv2.rectangle(mask, (cx - body_w // 2, top + 2 * head_r - 1), (cx + body_w // 2, foot), 255, -1)
+
+
+def _region(mask: np.ndarray) -> Region:
+    ys, xs = np.nonzero(mask)
+    box = Box.from_xyxy(xs.min(), ys.min(), xs.max() + 1, ys.max() + 1)
+    return Region(box=box, centroid=(xs.mean(), ys.mean()), area=float(len(xs)))
+
+
+# (head x positions, foot rows, heights): one, two and three people, side by side or merged.
+# A head must stand above the neighbouring shoulders: a much shorter person whose head is level
+# with a neighbour's shoulder is not separable by the height profile (a limitation of the method).
+CASES = [
+    pytest.param([50], [110], [90], id="one"),
+    pytest.param([40, 70], [110, 110], [90, 90], id="two-touching"),
+    pytest.param([40, 64], [110, 112], [90, 86], id="two-merged-different-heights"),
+    pytest.param([30, 58, 90], [110, 110, 110], [90, 90, 90], id="three"),
+    pytest.param([30, 52, 80], [110, 108, 112], [88, 92, 90], id="three-merged"),
+]
+
+
+@pytest.mark.parametrize("xs, feet, heights", CASES)
+def test_heads_found_at_exact_x(xs, feet, heights):
+    mask = np.zeros((130, 130), np.uint8)
+    for x, f, h in zip(xs, feet, heights):
+        _person(mask, x, f, h)
+    heads = detect_heads(mask)
+    assert [round(h.x) for h in heads] == pytest.approx(xs, abs=1)
+    for h, f, ht in zip(heads, feet, heights):
+        # y: mean top of the head interval + half its width, close to the circle centre
+        assert h.y == pytest.approx(f - ht + 6, abs=2)
+        assert 6 <= h.width <= 13
+
+
+@pytest.mark.parametrize("scale", [0.5, 0.25])
+def test_heads_on_a_downscaled_mask_are_reported_in_original_pixels(scale):
+    mask = np.zeros((240, 260), np.uint8)
+    for x in (80, 140, 200):
+        _person(mask, x, 220, height=180, head_r=12, body_w=48)
+    small = cv2.resize(mask, None, fx=scale, fy=scale, interpolation=cv2.INTER_AREA)
+    small = np.where(small > 127, 255, 0).astype(np.uint8)
+    heads = detect_heads(small, _region(mask).box, scale=scale)
+    assert [h.x for h in heads] == pytest.approx([80, 140, 200], abs=2 / scale)
+
+
+def test_flat_top_and_empty_mask_give_no_heads():
+    box_only = np.zeros((60, 60), np.uint8)
+    box_only[10:50, 10:50] = 255  # flat top, 40 px wide: wider than any head
+    assert detect_heads(box_only, max_width=30) == []
+    assert detect_heads(np.zeros((30, 30), np.uint8)) == []
+    assert detect_heads(np.zeros((0, 0), np.uint8)) == []
+
+
+def test_height_profile():
+    m = np.zeros((5, 4), np.uint8)
+    m[2:, 0] = 1
+    m[0:, 2] = 1
+    assert height_profile(m).tolist() == [2.0, 5.0, 0.0, 5.0]
+
+
+@pytest.mark.parametrize("xs", [[40, 70], [30, 58, 90]])
+def test_split_merged_region_between_heads(xs):
+    mask = np.zeros((130, 130), np.uint8)
+    for x in xs:
+        _person(mask, x, 110)
+    region = _region(mask)
+    parts = split_region_by_heads(region, mask)
+    assert len(parts) == len(xs)
+    for p, x in zip(parts, xs):
+        assert p.box.x <= x <= p.box.x2
+        assert p.box.h == pytest.approx(91, abs=1)
+        assert p.score == region.score
+    assert sum(p.area for p in parts) == pytest.approx(region.area)
+
+
+def test_split_keeps_a_single_person():
+    mask = np.zeros((130, 130), np.uint8)
+    _person(mask, 60, 110)
+    region = _region(mask)
+    assert split_region_by_heads(region, mask) == [region]
