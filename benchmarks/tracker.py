@@ -15,8 +15,8 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from motiontrack.config import TrackerConfig
-from motiontrack.track.association import iou_matrix
-from motiontrack.track.tracker import MultiObjectTracker
+from motiontrack.tracking.association import iou_matrix
+from motiontrack.tracking.tracker import MultiObjectTracker
 
 
 def scene(n_obj: int = 20, n_frames: int = 500, seed: int = 0) -> list[np.ndarray]:

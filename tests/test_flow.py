@@ -21,8 +21,8 @@ from motiontrack.motion.dense_flow import (
     write_flow_videos,
 )
 from motiontrack.synth import make_scene
-from motiontrack.track.association import iou_matrix
-from motiontrack.track.flow import SparseFlowParams, SparseFlowTracker, forward_backward_lk
+from motiontrack.tracking.association import iou_matrix
+from motiontrack.tracking.flow import SparseFlowParams, SparseFlowTracker, forward_backward_lk
 
 
 def _texture(h=120, w=160, seed=0, blur=5):

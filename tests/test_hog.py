@@ -65,7 +65,7 @@ def _pets(data, index: int):
 def _recall(dets: list[Region], gt: np.ndarray, thr: float = 0.5) -> tuple[int, int]:
     from scipy.optimize import linear_sum_assignment
 
-    from motiontrack.track.association import iou_matrix
+    from motiontrack.tracking.association import iou_matrix
 
     if len(gt) == 0 or not dets:
         return 0, len(gt)

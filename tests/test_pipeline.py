@@ -7,13 +7,13 @@ import numpy as np
 import pytest
 
 import motiontrack
-from motiontrack.pipeline import run
+
 from motiontrack.config import PipelineConfig, load_config
 from motiontrack.evaluate.mot import evaluate_tracking
 from motiontrack.io.mot import read_mot
 from motiontrack.motion import DETECTORS
 from motiontrack.synth import parse_synth_spec
-from motiontrack.track.association import iou_matrix
+from motiontrack.tracking.association import iou_matrix
 from motiontrack.types import Annotations, FrameResult
 
 
@@ -21,7 +21,7 @@ def run_scene(spec, overrides=()):
     """Tracks of a run as Annotations, plus the per-frame results."""
     cfg = load_config(None, list(overrides))
     rows, results = [], []
-    for res in run(spec, cfg):
+    for res in motiontrack.track(spec, cfg):
         results.append(res)
         rows += [(res.index + 1, t.id, *t.box.as_array()) for t in res.tracks]
     a = np.array(rows, float).reshape(-1, 6)
@@ -29,7 +29,7 @@ def run_scene(spec, overrides=()):
 
 
 def test_python_api_yields_frame_results():
-    results = list(run("synth:walker?n_frames=40"))
+    results = list(motiontrack.track("synth:walker?n_frames=40"))
     assert len(results) == 40
     assert all(isinstance(r, FrameResult) for r in results)
     assert [r.index for r in results] == list(range(40))
@@ -97,7 +97,7 @@ def test_pets09_well_above_the_tutorial_baseline(data):
     gt = read_mot(data("pets09-s2l1", "gt_mot15.txt"), kind="gt")
     cfg = PipelineConfig()
     rows = []
-    for res in run(str(video), cfg):
+    for res in motiontrack.track(str(video), cfg):
         rows += [(res.index + 1, t.id, *t.box.as_array()) for t in res.tracks]
     a = np.array(rows, float)
     pred = Annotations.from_columns(a[:, 0], a[:, 1], a[:, 2:6])
@@ -157,7 +157,7 @@ def test_selective_update_keeps_a_person_who_stops(protect, still_tracked):
 
     cfg = load_config(None, ["motion.method=median", f"motion.median.protect={str(protect).lower()}",
                              "preprocess.scale=1.0", "regions.max_size=0.5"])
-    results = list(run(ArraySource(_walk_then_stop()), cfg))
+    results = list(motiontrack.track(ArraySource(_walk_then_stop()), cfg))
     last = results[-1]
     assert bool(last.tracks) is still_tracked
     if still_tracked:
@@ -173,7 +173,7 @@ def test_people_preset_runs_heads_and_shapes_and_draws_them(tmp_path):
     cfg = load_config(out / "config.toml")
     assert cfg.people.enabled and cfg.people.heads and cfg.people.shapes
     cfg = load_config(None, preset="people")
-    results = list(run("synth:crossing?n_frames=60", cfg))
+    results = list(motiontrack.track("synth:crossing?n_frames=60", cfg))
     assert any(r.extras.get("heads") for r in results)
     assert any(r.extras.get("shapes") for r in results)
 

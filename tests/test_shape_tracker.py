@@ -15,7 +15,7 @@ from motiontrack.people.shape_tracker import (
     edge_image,
     search_normals,
 )
-from motiontrack.track.association import iou_matrix
+from motiontrack.tracking.association import iou_matrix
 from motiontrack.types import Box, Track, TrackState
 
 

@@ -11,8 +11,8 @@ import pytest
 from motiontrack.cli import main
 from motiontrack.errors import ConfigError
 from motiontrack.synth import make_scene
-from motiontrack.track.association import iou_matrix
-from motiontrack.track.single import (
+from motiontrack.tracking.association import iou_matrix
+from motiontrack.tracking.single import (
     SINGLE_TRACKERS,
     background_weights,
     clip_box,

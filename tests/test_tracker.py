@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from motiontrack.config import TrackerConfig
-from motiontrack.track import kalman
-from motiontrack.track.association import INF_COST, assign, association_cost, iou_matrix
-from motiontrack.track.tracker import MultiObjectTracker
+from motiontrack.tracking import kalman
+from motiontrack.tracking.association import INF_COST, assign, association_cost, iou_matrix
+from motiontrack.tracking.tracker import MultiObjectTracker
 from motiontrack.types import TrackState
 
 
@@ -170,7 +170,7 @@ def test_appearance_guards_reidentification(weight, same_id):
 
 
 def test_histograms_and_distance():
-    from motiontrack.track.appearance import bhattacharyya, histograms
+    from motiontrack.tracking.appearance import bhattacharyya, histograms
 
     img, mask = _scene_image([(10, 10, 20, 20, (0, 0, 200)), (50, 10, 20, 20, (200, 0, 0))])
     h = histograms(img, np.array([[10, 10, 20, 20], [50, 10, 20, 20], [100, 80, 10, 10]]), mask)

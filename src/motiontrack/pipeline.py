@@ -31,7 +31,7 @@ from .motion import create_detector
 from .motion.cleanup import clean_mask
 from .preprocess import load_roi, preprocess, scaled_size
 from .regions import find_regions
-from .track.tracker import TRACKERS
+from .tracking.tracker import TRACKERS
 from .types import Annotations, Box, Frame, FrameResult, Region
 
 log = logging.getLogger(__name__)
@@ -99,7 +99,7 @@ class Pipeline:
         self._prev_tracks: tuple = ()
         self.bridge = None
         if cfg.tracker.bridge != "none":
-            from .track.bridge import Bridge
+            from .tracking.bridge import Bridge
 
             self.bridge = Bridge(cfg.tracker.bridge, cfg.tracker.bridge_frames)
         self.frames_seen = 0

@@ -53,9 +53,9 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def sparse_params(items: list[str]):
-    """``--param`` values → :class:`~motiontrack.track.flow.SparseFlowParams`."""
+    """``--param`` values → :class:`~motiontrack.tracking.flow.SparseFlowParams`."""
     from ..errors import ConfigError
-    from ..track.flow import SparseFlowParams
+    from ..tracking.flow import SparseFlowParams
     from .follow import parse_params
 
     given = parse_params(items, "--param")
@@ -127,7 +127,7 @@ def _sparse(args, cfg, params, src) -> int:
     from ..io.atomic import atomic_open, check_writable
     from ..io.mot import format_mot_rows
     from ..io.video import VideoSink, extension_for
-    from ..track.flow import SparseFlowTracker, draw_feature_trails
+    from ..tracking.flow import SparseFlowTracker, draw_feature_trails
     from ..types import Annotations
     from ._common import GracefulStop, read_gt
 

@@ -39,7 +39,7 @@ def parse_params(items: list[str], where: str) -> dict[str, Any]:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    from ..track.single import SINGLE_TRACKERS
+    from ..tracking.single import SINGLE_TRACKERS
 
     names = "|".join(SINGLE_TRACKERS.names())
     p = sub.add_parser(
@@ -76,7 +76,7 @@ def cmd_follow(args) -> int:
     from ..io.mot import format_mot_rows
     from ..io.sources import open_source
     from ..io.video import CODECS, VideoSink, extension_for
-    from ..track.single import create_single_tracker, follow, follow_accuracy, parse_box
+    from ..tracking.single import create_single_tracker, follow, follow_accuracy, parse_box
     from ..types import Annotations, Track, TrackState
     from ._common import GracefulStop, read_gt
 

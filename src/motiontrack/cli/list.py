@@ -12,8 +12,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def cmd_list(args) -> int:
     from ..motion import DETECTORS
-    from ..track.single import SINGLE_TRACKERS
-    from ..track.tracker import TRACKERS
+    from ..tracking.single import SINGLE_TRACKERS
+    from ..tracking.tracker import TRACKERS
 
     from ..config import presets
 

@@ -194,7 +194,7 @@ def _refine(shapes, regions: list[Region], min_iou: float, min_support: float) -
     Matching is Hungarian on IoU gated at ``min_iou``; the region keeps its score and area, its
     centroid becomes the outline box centre.
     """
-    from ..track.association import assign, association_cost
+    from ..tracking.association import assign, association_cost
 
     good = [s for s in shapes if s.support >= min_support and s.visible >= min_support
             and s.coasting == 0]
@@ -217,7 +217,7 @@ def _uncovered(eligible, shapes, regions: list[Region], min_iou: float, score: f
     Regions are assigned to all ``shapes`` (Hungarian on IoU, gated at ``min_iou``), so a merged
     region covers one person only.
     """
-    from ..track.association import assign, association_cost
+    from ..tracking.association import assign, association_cost
     from ..types import Box
 
     if not eligible:

@@ -1,7 +1,7 @@
 """Bridging motion-detection misses with single-object trackers.
 
 When a confirmed track is not matched — the person stopped and faded into the background model,
-or the mask broke up — a single-object tracker (:mod:`motiontrack.track.single`, e.g. KCF) is
+or the mask broke up — a single-object tracker (:mod:`motiontrack.tracking.single`, e.g. KCF) is
 started on the track's last reported box in the previous frame. While motion detection does not
 find the track, the single-object tracker's box is offered to the multi-object tracker as a
 measurement that belongs to that track. The bridge ends when motion detection finds the track

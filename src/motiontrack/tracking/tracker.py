@@ -103,9 +103,9 @@ class MultiObjectTracker:
         (dropped frames, a live source that reconnected), so predictions move on by the elapsed
         time and tracks age accordingly. ``owned`` maps a track index (in :attr:`meta`) to a
         measurement that can only belong to that track (e.g. from a single-object tracker
-        bridging a detection miss, see :mod:`motiontrack.track.bridge`); it is used only when no
+        bridging a detection miss, see :mod:`motiontrack.tracking.bridge`); it is used only when no
         detection matches the track. ``image`` and ``mask`` (processing scale ``scale``) feed the
-        appearance model (:mod:`motiontrack.track.appearance`) when ``appearance_weight`` > 0.
+        appearance model (:mod:`motiontrack.tracking.appearance`) when ``appearance_weight`` > 0.
 
         Returns the snapshots of the tracks to report this frame: confirmed tracks matched in this
         frame (plus coasting lost tracks when ``output_lost``).
