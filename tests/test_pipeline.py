@@ -199,3 +199,17 @@ def test_ablate_prints_one_row_per_configuration(capsys, tmp_path):
     rows = json.loads((tmp_path / "a.json").read_text())
     assert [r["configuration"] for r in rows] == ["motion + regions only", "+ head-based splitting"]
     assert all(0.0 <= r["localized_object_recall"] <= 1.0 for r in rows)
+
+
+@pytest.mark.parametrize("fps, stamps, gaps", [
+    (10.0, [0.0, 0.1, 0.2, 0.5], [1, 1, 1, 3]),    # a 10 fps source: 0.3 s is three periods
+    (None, [0.0, 0.1, 0.2, 0.5], [1, 1, 1, 3]),    # rate unknown: learnt from the shortest gap
+    (None, [5.0, 5.04, 5.08, 5.2], [1, 1, 1, 3]),  # live wall-clock stamps
+])
+def test_frame_gaps_from_timestamps(fps, stamps, gaps):
+    from motiontrack.pipeline import Pipeline
+    from motiontrack.types import Frame
+
+    pipe = Pipeline(PipelineConfig(), (64, 48), fps=fps)
+    img = np.zeros((48, 64, 3), np.uint8)
+    assert [pipe._frame_gap(Frame(i, img, t)) for i, t in enumerate(stamps)] == gaps

@@ -75,7 +75,8 @@ class Pipeline:
     def __init__(self, cfg: PipelineConfig, image_size: tuple[int, int],
                  detections: Annotations | None = None, fps: float | None = None) -> None:
         self.cfg = cfg
-        self.fps = fps or 25.0
+        self._period = 1.0 / fps if fps else None   # seconds per frame, when the source knows it
+        self._min_gap: float | None = None
         self._last_ts: float | None = None
         self.image_size = image_size
         self.scale = cfg.preprocess.scale
@@ -111,9 +112,14 @@ class Pipeline:
         """Frame periods since the previous frame, from the timestamps (wall-clock for live
         sources), so the tracker sees gaps such as a camera that dropped and reconnected."""
         last, self._last_ts = self._last_ts, frame.timestamp
-        if last is None:
+        if last is None or frame.timestamp <= last:
             return 1
-        return max(1, int(round((frame.timestamp - last) * self.fps)))
+        gap = frame.timestamp - last
+        if self._period is None:
+            # frame rate unknown: the shortest gap seen so far is one frame period
+            self._min_gap = gap if self._min_gap is None else min(self._min_gap, gap)
+            return max(1, int(round(gap / self._min_gap)))
+        return max(1, int(round(gap / self._period)))
 
     def _protect_mask(self, shape: tuple[int, int]) -> np.ndarray | None:
         """Pixels (processing scale) where moving tracks are expected: not learnt as background."""
