@@ -15,7 +15,8 @@ from dataclasses import dataclass, field, fields, is_dataclass, replace
 from pathlib import Path
 from typing import Any, Iterable
 
-from .errors import ConfigError, InputError
+from .errors import ConfigError
+from .io.tomlfile import parse_toml, read_toml
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -400,13 +401,6 @@ def presets() -> dict[str, str]:
     return out
 
 
-def _read_toml(text: str, where: str) -> dict[str, Any]:
-    try:
-        return tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError(f"malformed config file {where}: {exc}") from None
-
-
 def _merge(base: dict[str, Any], top: dict[str, Any]) -> dict[str, Any]:
     out = dict(base)
     for k, v in top.items():
@@ -426,16 +420,9 @@ def load_config(path: str | Path | None = None, overrides: Iterable[str] = (),
         if preset not in names:
             raise ConfigError(f"unknown preset {preset!r}; valid presets: {', '.join(names)}")
         entry = resources.files("motiontrack").joinpath("data", "presets", f"{preset}.toml")
-        data = _read_toml(entry.read_text(encoding="utf-8"), f"preset {preset}")
+        data = parse_toml(entry.read_text(encoding="utf-8"), f"preset {preset}")
     if path is not None:
-        p = Path(path)
-        if not p.is_file():
-            raise InputError(f"config file not found: {p}")
-        try:
-            text = p.read_text(encoding="utf-8")
-        except UnicodeDecodeError as exc:
-            raise InputError(f"malformed config file {p}: {exc}") from None
-        data = _merge(data, _read_toml(text, str(p)))
+        data = _merge(data, read_toml(path, "config file"))
     cfg = from_dict(PipelineConfig, data)
     return apply_overrides(cfg, overrides)
 

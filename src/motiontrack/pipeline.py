@@ -21,7 +21,7 @@ import numpy as np
 
 from .annotate import annotate_frame
 from .errors import SourceError
-from .config import PipelineConfig, load_config, save_config, to_dict
+from .config import PipelineConfig, load_config, save_config
 from .io.atomic import atomic_open, atomic_write_text, check_writable
 from .io.mot import format_mot_rows, read_mot, write_mot
 from .io.sources import Source, open_source, prefetch

@@ -18,12 +18,9 @@ from typing import Protocol, Union
 
 import numpy as np
 
-try:  # Python >= 3.11
-    import tomllib
-except ModuleNotFoundError:  # pragma: no cover - Python 3.10
-    import tomli as tomllib
 
 from ..errors import InputError
+from ..io.tomlfile import read_toml
 from .chessboard import OpenCVCamera, read_opencv_yaml
 from .ground import GroundHomography, ground_from_toml_doc
 from .tsai import TsaiCamera, read_tsai_xml, tsai_from_toml_doc
@@ -52,10 +49,7 @@ def load_camera(path: str | Path) -> AnyCamera:
     if suffix in (".yml", ".yaml"):
         return read_opencv_yaml(p)
     if suffix == ".toml":
-        try:
-            doc = tomllib.loads(p.read_text(encoding="utf-8"))
-        except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-            raise InputError(f"malformed camera TOML {p}: {exc}") from None
+        doc = read_toml(p, "camera TOML")
         model = doc.get("model")
         if model == "tsai":
             return tsai_from_toml_doc(doc, str(p))

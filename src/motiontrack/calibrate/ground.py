@@ -18,12 +18,9 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-try:  # Python >= 3.11
-    import tomllib
-except ModuleNotFoundError:  # pragma: no cover - Python 3.10
-    import tomli as tomllib
 
 from ..errors import ConfigError, InputError
+from ..io.tomlfile import read_toml
 from ..io.atomic import atomic_write_text
 from .tsai import _as_pixels, _as_world
 
@@ -168,11 +165,4 @@ def ground_from_toml_doc(doc: dict, name: str) -> GroundHomography:
 
 
 def read_ground_toml(path: str | Path) -> GroundHomography:
-    p = Path(path)
-    if not p.is_file():
-        raise InputError(f"camera file not found: {p}")
-    try:
-        doc = tomllib.loads(p.read_text(encoding="utf-8"))
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise InputError(f"malformed camera TOML {p}: {exc}") from None
-    return ground_from_toml_doc(doc, str(p))
+    return ground_from_toml_doc(read_toml(path, "camera TOML"), str(path))

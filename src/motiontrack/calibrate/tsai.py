@@ -32,12 +32,9 @@ from pathlib import Path
 
 import numpy as np
 
-try:  # Python >= 3.11
-    import tomllib
-except ModuleNotFoundError:  # pragma: no cover - Python 3.10
-    import tomli as tomllib
 
 from ..errors import InputError
+from ..io.tomlfile import read_toml
 from ..io.atomic import atomic_write_text
 
 log = logging.getLogger(__name__)
@@ -420,11 +417,4 @@ def tsai_from_toml_doc(doc: dict, name: str) -> TsaiCamera:
 
 
 def read_tsai_toml(path: str | Path) -> TsaiCamera:
-    p = Path(path)
-    if not p.is_file():
-        raise InputError(f"camera file not found: {p}")
-    try:
-        doc = tomllib.loads(p.read_text(encoding="utf-8"))
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise InputError(f"malformed camera TOML {p}: {exc}") from None
-    return tsai_from_toml_doc(doc, str(p))
+    return tsai_from_toml_doc(read_toml(path, "camera TOML"), str(path))

@@ -41,6 +41,7 @@ from typing import Any, Callable, Iterable, Mapping, Sequence
 import numpy as np
 
 from ..errors import ConfigError, InputError
+from ..io.tomlfile import read_toml
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -214,12 +215,7 @@ def read_manifest(path: str | Path) -> tuple[SequenceSpec, ...]:
         group = "outdoor, medium crowd"  # optional: the sequence type (thesis table 4.1)
     """
     p = Path(path)
-    if not p.is_file():
-        raise InputError(f"sequences manifest not found: {p}")
-    try:
-        data = tomllib.loads(p.read_text(encoding="utf-8"))
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise InputError(f"malformed sequences manifest {p}: {exc}") from None
+    data = read_toml(p, "sequences manifest")
     items = data.get("sequence")
     if not isinstance(items, list) or not items:
         raise InputError(f"{p}: expected one or more [[sequence]] tables")
