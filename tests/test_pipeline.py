@@ -120,7 +120,7 @@ def test_single_object_tracker_bridges_detection_misses():
     reported = {}
     for bridge in ("none", "kcf"):
         cfg = load_config(None, [f"tracker.bridge={bridge}"])
-        pipe = Pipeline(cfg, (640, 480), detections=det, fps=25.0)
+        pipe = Pipeline(cfg, (640, 480), detections=det)
         hits = 0
         for frame in open_source(spec):
             res = pipe.process(frame)
@@ -201,15 +201,15 @@ def test_ablate_prints_one_row_per_configuration(capsys, tmp_path):
     assert all(0.0 <= r["localized_object_recall"] <= 1.0 for r in rows)
 
 
-@pytest.mark.parametrize("fps, stamps, gaps", [
-    (10.0, [0.0, 0.1, 0.2, 0.5], [1, 1, 1, 3]),    # a 10 fps source: 0.3 s is three periods
-    (None, [0.0, 0.1, 0.2, 0.5], [1, 1, 1, 3]),    # rate unknown: learnt from the shortest gap
-    (None, [5.0, 5.04, 5.08, 5.2], [1, 1, 1, 3]),  # live wall-clock stamps
+@pytest.mark.parametrize("stamps, gaps", [
+    ([0.0, 0.1, 0.2, 0.5], [1, 1, 1, 3]),      # a 10 fps file: 0.3 s is three periods
+    ([5.0, 5.04, 5.08, 5.2], [1, 1, 1, 3]),    # live wall-clock stamps at 25 fps, then a drop
+    ([0.0, 0.2, 0.3, 0.5], [1, 1, 1, 2]),      # a gap first is taken as one period until a shorter one shows
 ])
-def test_frame_gaps_from_timestamps(fps, stamps, gaps):
+def test_frame_gaps_from_timestamps(stamps, gaps):
     from motiontrack.pipeline import Pipeline
     from motiontrack.types import Frame
 
-    pipe = Pipeline(PipelineConfig(), (64, 48), fps=fps)
+    pipe = Pipeline(PipelineConfig(), (64, 48))
     img = np.zeros((48, 64, 3), np.uint8)
     assert [pipe._frame_gap(Frame(i, img, t)) for i, t in enumerate(stamps)] == gaps

@@ -20,12 +20,12 @@ from typing import Any, Callable, Iterable, Iterator
 import numpy as np
 
 from .annotate import annotate_frame
-from .errors import SourceError
 from .config import PipelineConfig, load_config, save_config
+from .errors import SourceError
+from .intermediate import IntermediateWriter, parse_streams
 from .io.atomic import atomic_open, atomic_write_text, check_writable
 from .io.mot import format_mot_rows, read_mot, write_mot
 from .io.sources import Source, open_source, prefetch
-from .intermediate import IntermediateWriter, parse_streams
 from .io.video import VideoSink, extension_for
 from .motion import create_detector
 from .motion.cleanup import clean_mask
@@ -73,10 +73,9 @@ class Pipeline:
     """
 
     def __init__(self, cfg: PipelineConfig, image_size: tuple[int, int],
-                 detections: Annotations | None = None, fps: float | None = None) -> None:
+                 detections: Annotations | None = None) -> None:
         self.cfg = cfg
-        self._period = 1.0 / fps if fps else None   # seconds per frame, when the source knows it
-        self._min_gap: float | None = None
+        self._min_gap: float | None = None   # shortest time between frames seen: one period
         self._last_ts: float | None = None
         self.image_size = image_size
         self.scale = cfg.preprocess.scale
@@ -110,16 +109,16 @@ class Pipeline:
 
     def _frame_gap(self, frame: Frame) -> int:
         """Frame periods since the previous frame, from the timestamps (wall-clock for live
-        sources), so the tracker sees gaps such as a camera that dropped and reconnected."""
+        sources), so the tracker sees gaps such as a camera that dropped and reconnected.
+
+        The period is learnt as the shortest gap seen so far rather than taken from the source's
+        nominal rate, which cameras often misreport."""
         last, self._last_ts = self._last_ts, frame.timestamp
         if last is None or frame.timestamp <= last:
             return 1
         gap = frame.timestamp - last
-        if self._period is None:
-            # frame rate unknown: the shortest gap seen so far is one frame period
-            self._min_gap = gap if self._min_gap is None else min(self._min_gap, gap)
-            return max(1, int(round(gap / self._min_gap)))
-        return max(1, int(round(gap / self._period)))
+        self._min_gap = gap if self._min_gap is None else min(self._min_gap, gap)
+        return max(1, int(round(gap / self._min_gap)))
 
     def _protect_mask(self, shape: tuple[int, int]) -> np.ndarray | None:
         """Pixels (processing scale) where moving tracks are expected: not learnt as background."""
@@ -205,7 +204,7 @@ def run(source: Any, config: PipelineConfig | str | Path | None = None,
     """Yield a :class:`FrameResult` for every frame of ``source`` (see :func:`open_source`)."""
     cfg = resolve_config(config)
     src = open_configured_source(source, cfg)
-    pipe = Pipeline(cfg, (src.info.width, src.info.height), detections, src.info.fps)
+    pipe = Pipeline(cfg, (src.info.width, src.info.height), detections)
     try:
         yield from pipe.results(src)
     finally:
@@ -298,8 +297,7 @@ class TrackJob:
 
             self.camera = load_camera(cfg.measure.camera)
         # build every stage now: a bad plug-in name or ROI fails before anything is written
-        self.pipe = Pipeline(cfg, (self.src.info.width, self.src.info.height), detections,
-                             self.src.info.fps)
+        self.pipe = Pipeline(cfg, (self.src.info.width, self.src.info.height), detections)
         self.pipe.sequential = "background" in self.save
 
     def expected_frames(self) -> int | None:
