@@ -11,6 +11,12 @@ Lifecycle (parameters of :class:`~motiontrack.config.TrackerConfig`):
 4. A lost track unseen for more than ``max_lost`` frames, or whose prediction has left the image,
    is **deleted**.
 
+Region-tracker semantics of the Reading People Tracker (see :mod:`.merge`): a blob holding
+several tracks' predictions is split into one synthetic measurement per track, and a partly
+occluded view is anchored on its visible edges with the track's reference size. Optional: an
+appearance model in the cost (:mod:`.appearance`) and measurements *owned* by one track (a
+single-object tracker's bridge, a shape hypothesis) that can never start a track.
+
 The per-frame step is vectorised over tracks (batched Kalman maths, one Hungarian solve).
 """
 
@@ -111,7 +117,6 @@ class MultiObjectTracker:
         frame (plus coasting lost tracks when ``output_lost``).
         """
         dt = max(1, int(dt))
-        c = self.cfg
         if isinstance(detections, np.ndarray):
             det = np.asarray(detections, np.float64).reshape(-1, 4)
             det_scores = np.ones(len(det)) if scores is None else np.asarray(scores, np.float64)
@@ -121,7 +126,26 @@ class MultiObjectTracker:
         self.frame_count += 1
 
         pred = self.predict(dt)
-        if c.split_merged and len(det):
+        det, det_scores, owner, n_real = self._measurements(pred, det, det_scores, owned)
+        det_hist = (histograms(image, det, mask, scale)
+                    if self.cfg.appearance_weight > 0 and image is not None and len(det) else None)
+        matches, un_tracks, un_dets = assign(self._cost(pred, det, owner, n_real, det_hist))
+        self._correct(matches, pred, det, det_scores, owner, n_real, det_hist)
+        self._miss(un_tracks, dt)
+        for m in self.meta:
+            m.age += dt
+        # synthetic (split) and owned (bridge, hypothesis) measurements never start tracks
+        self._spawn(un_dets[owner[un_dets] < 0], det, det_scores, det_hist)
+        return self._snapshots()
+
+    # ------------------------------------------------------------------------ update steps
+    def _measurements(self, pred: np.ndarray, det: np.ndarray, det_scores: np.ndarray,
+                      owned: dict[int, np.ndarray] | None):
+        """This frame's measurements: merged blobs split per track, then the owned ones.
+
+        Returns ``(boxes, scores, owner, n_real)``: ``owner`` is the track index a synthetic
+        measurement belongs to (-1 for a detection); rows from ``n_real`` on are owned ones."""
+        if self.cfg.split_merged and len(det):
             established = np.array([m.state != TrackState.TENTATIVE for m in self.meta], bool)
             det, origin, owner = split_merged(pred, established, det)
             det_scores = det_scores[origin]
@@ -133,13 +157,16 @@ class MultiObjectTracker:
             det = np.concatenate([det, np.array([owned[i] for i in idx]).reshape(-1, 4)])
             det_scores = np.concatenate([det_scores, np.full(len(idx), 0.5)])
             owner = np.concatenate([owner, idx])
+        return det, det_scores, owner, n_real
+
+    def _cost(self, pred: np.ndarray, det: np.ndarray, owner: np.ndarray, n_real: int,
+              det_hist: np.ndarray | None) -> np.ndarray:
+        c = self.cfg
         # the search window around an unseen track's prediction grows with the time it is unseen
         tsu = np.array([m.tsu for m in self.meta], np.float64)
         cost = association_cost(pred, det, c.min_iou, c.max_distance * (1.0 + c.search_growth * tsu),
                                 c.cost)
-        det_hist = None
-        if c.appearance_weight > 0 and image is not None and len(det) and len(self.meta):
-            det_hist = histograms(image, det, mask, scale)
+        if det_hist is not None and len(self.meta):
             have = [i for i, m in enumerate(self.meta) if m.hist is not None]
             if have:
                 d_app = bhattacharyya(np.array([self.meta[i].hist for i in have]), det_hist)
@@ -150,57 +177,64 @@ class MultiObjectTracker:
                 lost = (tsu[have] > 0)[:, None]
                 sub[lost & (d_app > c.appearance_gate)] = INF_COST
                 cost[have] = sub
-        # a synthetic measurement belongs to the track it was made for
+        # a synthetic measurement belongs to the track it was made for: split measurements are
+        # certain (cost 0), owned ones a fallback (cost 2, above any detection match)
         synth = np.flatnonzero(owner >= 0)
         if len(synth):
             cost[:, synth] = INF_COST
-            # split measurements are certain (cost 0); a bridge is a fallback (cost 2, above any
-            # detection match)
             cost[owner[synth], synth] = np.where(synth >= n_real, 2.0, 0.0)
-        matches, un_tracks, un_dets = assign(cost)
+        return cost
 
-        if len(matches):
-            ti, di = matches[:, 0], matches[:, 1]
-            if det_hist is not None:
-                # learn appearance only from detections that overlap no other detection
-                overlap = iou_matrix(det, det) > 0
-                np.fill_diagonal(overlap, False)
-                isolated = ~overlap.any(axis=1)
-            ref = np.array([self.meta[t].ref for t in ti]).reshape(-1, 2)
-            boxes, partial = anchor_partial(pred[ti], det[di], ref, c.partial_ratio)
-            for k, t in enumerate(ti):
-                m = self.meta[t]
-                m.partials = m.partials + 1 if partial[k] else 0
-                if m.partials > MAX_PARTIAL_FRAMES:
-                    # a view that stays "partial" for long is the object's real size: accept it
-                    boxes[k] = det[di[k]]
-                    partial[k] = False
-                if not partial[k] and owner[di[k]] < 0:
-                    m.ref = m.ref + REF_RATE * (det[di[k], 2:4] - m.ref)
-                    if det_hist is not None and det_hist[di[k]].any() and isolated[di[k]]:
-                        m.hist = (det_hist[di[k]].copy() if m.hist is None
-                                  else m.hist + APPEARANCE_RATE * (det_hist[di[k]] - m.hist))
-            z = kalman.box_to_z(boxes)
-            self.x[ti], self.P[ti] = kalman.update(self.x[ti], self.P[ti], z, c.measurement_noise)
-            for t, d in zip(ti, di):
-                m = self.meta[t]
-                m.hits += 1
-                m.tsu = 0
-                m.bridged = bool(d >= n_real)
-                if not m.moved:
-                    centre = self.x[t, :2]
-                    if m.origin is None:
-                        m.origin = centre.copy()
-                    elif np.hypot(*(centre - m.origin)) > m.ref[1]:
-                        m.moved = True
-                m.score = float(det_scores[d])
-                if m.state == TrackState.TENTATIVE and m.hits >= c.confirm_hits:
-                    m.state = TrackState.CONFIRMED
-                    m.tid = self.next_id
-                    self.next_id += 1
-                elif m.state == TrackState.LOST:
-                    m.state = TrackState.CONFIRMED
+    def _correct(self, matches: np.ndarray, pred: np.ndarray, det: np.ndarray,
+                 det_scores: np.ndarray, owner: np.ndarray, n_real: int,
+                 det_hist: np.ndarray | None) -> None:
+        """Kalman correction of the matched tracks and their bookkeeping."""
+        if not len(matches):
+            return
+        c = self.cfg
+        ti, di = matches[:, 0], matches[:, 1]
+        if det_hist is not None:
+            # learn appearance only from detections that overlap no other detection
+            overlap = iou_matrix(det, det) > 0
+            np.fill_diagonal(overlap, False)
+            isolated = ~overlap.any(axis=1)
+        ref = np.array([self.meta[t].ref for t in ti]).reshape(-1, 2)
+        boxes, partial = anchor_partial(pred[ti], det[di], ref, c.partial_ratio)
+        for k, (t, d) in enumerate(zip(ti, di)):
+            m = self.meta[t]
+            m.partials = m.partials + 1 if partial[k] else 0
+            if m.partials > MAX_PARTIAL_FRAMES:
+                # a view that stays "partial" for long is the object's real size: accept it
+                boxes[k] = det[d]
+                partial[k] = False
+            if not partial[k] and owner[d] < 0:
+                m.ref = m.ref + REF_RATE * (det[d, 2:4] - m.ref)
+                if det_hist is not None and det_hist[d].any() and isolated[d]:
+                    m.hist = (det_hist[d].copy() if m.hist is None
+                              else m.hist + APPEARANCE_RATE * (det_hist[d] - m.hist))
+        self.x[ti], self.P[ti] = kalman.update(self.x[ti], self.P[ti], kalman.box_to_z(boxes),
+                                               c.measurement_noise)
+        for t, d in zip(ti, di):
+            m = self.meta[t]
+            m.hits += 1
+            m.tsu = 0
+            m.bridged = bool(d >= n_real)
+            if not m.moved:
+                centre = self.x[t, :2]
+                if m.origin is None:
+                    m.origin = centre.copy()
+                elif np.hypot(*(centre - m.origin)) > m.ref[1]:
+                    m.moved = True
+            m.score = float(det_scores[d])
+            if m.state == TrackState.TENTATIVE and m.hits >= c.confirm_hits:
+                m.state = TrackState.CONFIRMED
+                m.tid = self._new_id()
+            elif m.state == TrackState.LOST:
+                m.state = TrackState.CONFIRMED
 
+    def _miss(self, un_tracks: np.ndarray, dt: int) -> None:
+        """Unmatched tracks: tentative ones are dropped, confirmed ones coast, old ones go."""
+        c = self.cfg
         keep = np.ones(len(self.meta), bool)
         boxes = self._boxes()
         for t in un_tracks:
@@ -208,35 +242,37 @@ class MultiObjectTracker:
             m.tsu += dt
             if m.state == TrackState.TENTATIVE:
                 keep[t] = False
-            else:
-                m.state = TrackState.LOST
-                # coast on position only: the size keeps its reference value
-                self.x[t, 2:4] = m.ref
-                self.x[t, 6:8] = 0.0
-                if m.tsu > c.max_lost or self._outside(boxes[t]):
-                    keep[t] = False
-        for m in self.meta:
-            m.age += dt
+                continue
+            m.state = TrackState.LOST
+            # coast on position only: the size keeps its reference value
+            self.x[t, 2:4] = m.ref
+            self.x[t, 6:8] = 0.0
+            if m.tsu > c.max_lost or self._outside(boxes[t]):
+                keep[t] = False
         self._keep(keep)
 
-        un_dets = un_dets[owner[un_dets] < 0]
-        if len(un_dets):
-            x0, P0 = kalman.initiate(det[un_dets], c.position_noise, c.velocity_noise)
-            self.x = np.concatenate([self.x, x0])
-            self.P = np.concatenate([self.P, P0])
-            for d in un_dets:
-                m = _TrackState(c.history, det[d, 2:4])
-                m.score = float(det_scores[d])
-                if det_hist is not None and det_hist[d].any():
-                    m.hist = det_hist[d].copy()
-                if c.confirm_hits <= 1:
-                    m.state = TrackState.CONFIRMED
-                    m.tid = self.next_id
-                    self.next_id += 1
-                self.meta.append(m)
+    def _spawn(self, rows: np.ndarray, det: np.ndarray, det_scores: np.ndarray,
+               det_hist: np.ndarray | None) -> None:
+        """New tentative tracks (confirmed at once when ``confirm_hits`` is 1)."""
+        if not len(rows):
+            return
+        c = self.cfg
+        x0, P0 = kalman.initiate(det[rows], c.position_noise, c.velocity_noise)
+        self.x = np.concatenate([self.x, x0])
+        self.P = np.concatenate([self.P, P0])
+        for d in rows:
+            m = _TrackState(c.history, det[d, 2:4])
+            m.score = float(det_scores[d])
+            if det_hist is not None and det_hist[d].any():
+                m.hist = det_hist[d].copy()
+            if c.confirm_hits <= 1:
+                m.state = TrackState.CONFIRMED
+                m.tid = self._new_id()
+            self.meta.append(m)
 
-        return self._snapshots()
-
+    def _new_id(self) -> int:
+        tid, self.next_id = self.next_id, self.next_id + 1
+        return tid
     def _outside(self, box: np.ndarray) -> bool:
         if self.image_size is None:
             return False
