@@ -293,3 +293,31 @@ def test_intermediate_writer_with_the_pipeline(tmp_path):
     cap.release()
     assert n == 12 and ok
     assert img.shape[:2] == (240, 320)          # processing scale 0.5 of 640x480
+
+
+def test_interrupted_sweep_keeps_finished_runs(tmp_path, monkeypatch, capsys):
+    import json as _json
+
+    import motiontrack.evaluate.sweep as sw
+    from motiontrack.cli import main
+
+    real = sw.execute_run
+    calls = []
+
+    def flaky(spec):
+        calls.append(spec.run)
+        if len(calls) == 3:           # Ctrl-C while the third run is going
+            raise KeyboardInterrupt
+        return real(spec)
+
+    monkeypatch.setattr(sw, "execute_run", flaky)
+    out = tmp_path / "study"
+    code = main(["sweep", "synth:walker?n_frames=30", "--param", "motion.median.threshold=0.1,0.2,0.3,0.4",
+                 "--set", "motion.method=median", "--no-figures", "-o", str(out)])
+    assert code == 130
+    summary = _json.loads((out / "summary.json").read_text())
+    assert summary == {"interrupted": True, "runs_done": 2, "runs": 4}
+    rows = sw.read_table(out / "results.csv")
+    assert [r["motion.median.threshold"] for r in rows] == [0.1, 0.2]
+    assert (out / "runs" / "r001" / "walker" / "tracks.txt").is_file()
+    assert "interrupted" in capsys.readouterr().err

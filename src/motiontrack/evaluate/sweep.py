@@ -487,7 +487,8 @@ def _worker_init() -> None:
 
 
 def execute(specs: Sequence[RunSpec], jobs: int = 1, cluster: str | None = None,
-            progress: Callable[[int], None] | None = None) -> list[dict[str, Any]]:
+            progress: Callable[[int], None] | None = None,
+            on_result: Callable[[int, dict[str, Any]], None] | None = None) -> list[dict[str, Any]]:
     """Execute ``specs`` and return their results **in spec order**.
 
     Parameters
@@ -502,13 +503,24 @@ def execute(specs: Sequence[RunSpec], jobs: int = 1, cluster: str | None = None,
         and workers that can open the sources. Overrides ``jobs``.
     progress : callable, optional
         Called with the number of runs finished (1) each time one finishes.
+    on_result : callable, optional
+        Called as ``on_result(index, result)`` as soon as each run finishes (in completion order),
+        so a caller can save finished runs before an interruption. On ``KeyboardInterrupt``
+        pending runs are cancelled and the interrupt is re-raised.
     """
     if jobs < 1:
         raise ConfigError(f"-j must be >= 1, got {jobs}")
-    done = progress or (lambda k: None)
     results: list[dict[str, Any] | None] = [None] * len(specs)
     if not specs:
         return []
+
+    def done(i: int, res: dict[str, Any]) -> None:
+        results[i] = res
+        if on_result is not None:
+            on_result(i, res)
+        if progress is not None:
+            progress(1)
+
     if cluster:
         try:
             from distributed import Client, as_completed as dask_completed
@@ -523,25 +535,30 @@ def execute(specs: Sequence[RunSpec], jobs: int = 1, cluster: str | None = None,
             futures = client.map(execute_run, list(specs), pure=False)
             index = {fut.key: i for i, fut in enumerate(futures)}
             for fut in dask_completed(futures):
-                results[index[fut.key]] = fut.result()
-                done(1)
+                done(index[fut.key], fut.result())
+        except KeyboardInterrupt:
+            client.cancel(futures)
+            raise
         finally:
             client.close()
     elif jobs == 1:
         for i, s in enumerate(specs):
-            results[i] = execute_run(s)
-            done(1)
+            done(i, execute_run(s))
     else:
         import multiprocessing
         from concurrent.futures import ProcessPoolExecutor, as_completed
 
         ctx = multiprocessing.get_context("spawn")
-        with ProcessPoolExecutor(max_workers=min(jobs, len(specs)), mp_context=ctx,
-                                 initializer=_worker_init) as pool:
+        pool = ProcessPoolExecutor(max_workers=min(jobs, len(specs)), mp_context=ctx,
+                                   initializer=_worker_init)
+        try:
             futs = {pool.submit(execute_run, s): i for i, s in enumerate(specs)}
             for fut in as_completed(futs):
-                results[futs[fut]] = fut.result()
-                done(1)
+                done(futs[fut], fut.result())
+        except BaseException:  # interrupt or a failed run: cancel what has not started
+            pool.shutdown(wait=False, cancel_futures=True)
+            raise
+        pool.shutdown()
     return results  # type: ignore[return-value]
 
 
@@ -644,6 +661,8 @@ def run_sweep(study: Study, out_dir: str | Path, *, jobs: int = 1, cluster: str 
               force: bool = False) -> SweepResult:
     """Run ``study`` and write its folder: ``study.json``, ``config.toml`` (base config),
     ``results.csv`` (+ ``.parquet``), ``summary.csv`` (per-run averages over sequences),
+    ``summary.json`` (``"interrupted"``, runs done; on an interrupt the table holds the finished
+    runs),
     ``runs/rNNN/<sequence>/{tracks,regions}.txt`` and, with ``figures``, ``figures/*.png|svg``.
     """
     from ..config import PipelineConfig, from_dict, save_config
@@ -660,10 +679,29 @@ def run_sweep(study: Study, out_dir: str | Path, *, jobs: int = 1, cluster: str 
     specs = study.specs(out)
     log.info("sweep: %d runs x %d sequences = %d jobs", len(study.points()), len(study.sequences),
              len(specs))
-    results = execute(specs, jobs=jobs, cluster=cluster, progress=progress)
-    for res in results:
+    finished: dict[int, dict[str, Any]] = {}
+
+    def save_run(i: int, res: dict[str, Any]) -> None:
+        # each run's files are written as soon as it finishes: an interruption keeps them
         for rel, text in res["files"].items():
             atomic_write_text(out / rel, text)
+        finished[i] = res
+
+    def status(interrupted: bool) -> None:
+        atomic_write_text(out / "summary.json", json.dumps(
+            {"interrupted": interrupted, "runs_done": len(finished), "runs": len(specs)}, indent=2) + "\n")
+
+    try:
+        results = execute(specs, jobs=jobs, cluster=cluster, progress=progress, on_result=save_run)
+    except KeyboardInterrupt:
+        rows = [finished[i]["row"] for i in sorted(finished)]
+        if rows:
+            write_table(rows, out / TABLE_FILE)
+        status(interrupted=True)
+        log.warning("sweep interrupted after %d of %d runs; their table is in %s", len(finished),
+                    len(specs), out / TABLE_FILE)
+        raise
+    status(interrupted=False)
     rows = [res["row"] for res in results]
     outputs = {"table": write_table(rows, out / TABLE_FILE),
                "summary": write_table(summarise_runs(rows, study.keys), out / SUMMARY_FILE)[:1]}
