@@ -466,3 +466,18 @@ def test_unsafe_xml_is_refused(tmp_path, attack, root):
     reader = read_cvml if root == "dataset" else read_cvat
     with pytest.raises(InputError, match="refused unsafe XML"):
         reader(p)
+
+
+@pytest.mark.parametrize("kind, text", [
+    ("gt", "1,1,10,20,5,6,1,1,0.5\n2,1,11,20,5,6,0,7,1\n"),                 # MOT17 gt, 9 columns
+    ("results", "1,3,10.5,20,5,6,0.9,-1,-1,-1\n1,4,30,20,5,6,0.8,-1,-1,-1\n"),  # 10 columns
+    ("det", "1,-1,10,20,5,6\n2,-1,11, 21, 5, 6\n"),                        # 6 columns, spaces
+    ("gt", "1,9,499,158,31.03,75.17,1,-4.15,-7.35,0\n"),                   # MOT15 gt with world
+])
+def test_mot_fast_and_line_by_line_parsers_agree(kind, text):
+    from motiontrack.io.mot import parse_mot
+
+    fast = parse_mot(text, kind)
+    slow = parse_mot("# forces the line-by-line parser\n" + text, kind)
+    for col in ("frames", "ids", "boxes", "scores", "consider", "classes", "visibility", "world"):
+        assert np.array_equal(getattr(fast, col), getattr(slow, col)), col
