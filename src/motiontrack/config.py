@@ -11,7 +11,7 @@ from __future__ import annotations
 import dataclasses
 import sys
 import typing
-from dataclasses import dataclass, field, fields, is_dataclass, replace
+from dataclasses import dataclass, field, fields, is_dataclass
 from pathlib import Path
 from typing import Any, Iterable
 
@@ -469,8 +469,3 @@ def save_config(cfg: Any, path: str | Path) -> None:
     from .io.atomic import atomic_write_text
 
     atomic_write_text(Path(path), tomli_w.dumps(to_dict(cfg)))
-
-
-def config_replace(cfg: Any, **changes: Any) -> Any:
-    """``dataclasses.replace`` that re-validates (frozen sections validate in ``__post_init__``)."""
-    return replace(cfg, **changes)

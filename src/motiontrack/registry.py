@@ -28,8 +28,8 @@ class Registry(Generic[T]):
             if name in self._items:
                 raise ValueError(f"{self.kind} {name!r} is already registered")
             self._items[name] = factory
-            text = doc or (factory.__doc__ or "").strip().splitlines()[0:1]
-            self._docs[name] = text if isinstance(text, str) else (text[0] if text else "")
+            lines = (factory.__doc__ or "").strip().splitlines()
+            self._docs[name] = doc or (lines[0] if lines else "")
             return factory
 
         return deco

@@ -26,7 +26,6 @@ __all__ = [
     "Frame",
     "FrameResult",
     "Annotations",
-    "boxes_to_array",
 ]
 
 
@@ -70,10 +69,6 @@ class Box:
     def as_array(self) -> np.ndarray:
         return np.array([self.x, self.y, self.w, self.h], dtype=np.float64)
 
-    def scaled(self, factor: float) -> "Box":
-        """The same box with all coordinates multiplied by ``factor``."""
-        return Box(self.x * factor, self.y * factor, self.w * factor, self.h * factor)
-
     @classmethod
     def from_xyxy(cls, x1: float, y1: float, x2: float, y2: float) -> "Box":
         return cls(float(x1), float(y1), float(x2 - x1), float(y2 - y1))
@@ -81,14 +76,6 @@ class Box:
     @classmethod
     def from_center(cls, xc: float, yc: float, w: float, h: float) -> "Box":
         return cls(float(xc - w / 2.0), float(yc - h / 2.0), float(w), float(h))
-
-
-def boxes_to_array(boxes) -> np.ndarray:
-    """Stack boxes (objects with ``.box`` or :class:`Box`) into a ``(N, 4) float64`` array."""
-    rows = [(b.box if hasattr(b, "box") else b).as_array() for b in boxes]
-    if not rows:
-        return np.zeros((0, 4), dtype=np.float64)
-    return np.stack(rows).astype(np.float64, copy=False)
 
 
 @dataclass(frozen=True)

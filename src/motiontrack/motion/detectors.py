@@ -239,8 +239,9 @@ class TemporalMedian(MotionDetector):
 
 @DETECTORS.register("farneback")
 class FarnebackMotion(MotionDetector):
-    """Dense optical flow (Farnebäck 2003): pixels whose flow magnitude exceeds ``threshold``
-    (pixels per frame at processing scale) are foreground. Useful with a slowly panning camera
+    """Dense optical flow (Farnebäck 2003): flow magnitude above a threshold is foreground.
+
+    ``threshold`` is in pixels per frame at processing scale. Useful with a slowly panning camera
     when combined with a high threshold. ``last_flow`` keeps the latest (h, w, 2) flow field."""
 
     def __init__(self, threshold: float = 0.7, pyr_scale: float = 0.5, levels: int = 3,

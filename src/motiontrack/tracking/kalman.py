@@ -19,13 +19,17 @@ H = np.eye(NDIM, 2 * NDIM)
 def box_to_z(boxes: np.ndarray) -> np.ndarray:
     """(N, 4) ``x, y, w, h`` → (N, 4) measurements ``cx, cy, w, h``."""
     b = np.asarray(boxes, np.float64).reshape(-1, 4)
-    return np.column_stack([b[:, 0] + b[:, 2] / 2, b[:, 1] + b[:, 3] / 2, b[:, 2], b[:, 3]])
+    z = b.copy()
+    z[:, :2] += b[:, 2:] / 2
+    return z
 
 
 def z_to_box(z: np.ndarray) -> np.ndarray:
     """(N, ≥4) states or measurements → (N, 4) ``x, y, w, h`` boxes."""
     z = np.asarray(z, np.float64).reshape(len(z), -1)
-    return np.column_stack([z[:, 0] - z[:, 2] / 2, z[:, 1] - z[:, 3] / 2, z[:, 2], z[:, 3]])
+    b = z[:, :4].copy()
+    b[:, :2] -= z[:, 2:4] / 2
+    return b
 
 
 def initiate(boxes: np.ndarray, pos_std: float, vel_std: float) -> tuple[np.ndarray, np.ndarray]:

@@ -43,13 +43,14 @@ def split_merged(pred: np.ndarray, established: np.ndarray, det: np.ndarray,
     pred = np.asarray(pred, np.float64).reshape(-1, 4)
     det = np.asarray(det, np.float64).reshape(-1, 4)
     m = len(det)
-    if m == 0 or len(pred) == 0 or not np.any(established):
+    established = np.asarray(established, bool)
+    if m == 0 or np.count_nonzero(established) < 2:  # a split needs two established tracks
         return det.copy(), np.arange(m), np.full(m, -1, np.int64)
     cx = pred[:, 0] + pred[:, 2] / 2
     cy = pred[:, 1] + pred[:, 3] / 2
     inside = ((cx[:, None] >= det[None, :, 0]) & (cx[:, None] <= det[None, :, 0] + det[None, :, 2])
               & (cy[:, None] >= det[None, :, 1]) & (cy[:, None] <= det[None, :, 1] + det[None, :, 3]))
-    inside &= np.asarray(established, bool)[:, None]
+    inside &= established[:, None]
     if not (inside.sum(axis=0) >= 2).any():  # the common case: nothing to split
         return det.copy(), np.arange(m), np.full(m, -1, np.int64)
     small = (pred[:, 2] * pred[:, 3])[:, None] <= max_share * (det[:, 2] * det[:, 3])[None, :]
