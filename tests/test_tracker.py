@@ -65,8 +65,8 @@ def walk(t, x0=10.0, vx=4.0, y=50.0):
 
 
 def test_lifecycle_tentative_confirmed_lost_deleted():
-    cfg = TrackerConfig(confirm_hits=3, max_lost=2)
-    trk = MultiObjectTracker(cfg, image_size=(640, 480))
+    cfg = TrackerConfig(confirm_hits=3, max_lost_s=0.2)
+    trk = MultiObjectTracker(cfg, image_size=(640, 480), fps=10.0)   # 0.2 s at 10 fps = 2 frames
     # frames 0-1: seen, still tentative → nothing reported, no id spent
     for t in range(2):
         assert trk.update(np.array([walk(t)])) == []
@@ -114,7 +114,7 @@ def test_history_is_bounded():
 
 
 def test_track_leaving_image_is_deleted():
-    trk = MultiObjectTracker(TrackerConfig(confirm_hits=1, max_lost=100), image_size=(100, 100))
+    trk = MultiObjectTracker(TrackerConfig(confirm_hits=1, max_lost_s=100.0), image_size=(100, 100))
     for t in range(5):
         trk.update(np.array([[60 + 10 * t, 10, 10, 10]]))
     for _ in range(10):

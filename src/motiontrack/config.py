@@ -236,7 +236,9 @@ class TrackerConfig(_Section):
     max_distance: float = param(1.0, lo=0.0,
                                 doc="gate: centre distance / predicted box diagonal above this never matches")
     confirm_hits: int = param(5, lo=1, hi=100, doc="hits needed to turn tentative into confirmed")
-    max_lost: int = param(50, lo=0, hi=10000, doc="frames a confirmed track may coast unseen before deletion")
+    max_lost_s: float = param(2.0, lo=0.0, hi=3600.0,
+                              doc="seconds a confirmed track may coast unseen before deletion (converted "
+                                  "with the source's frame rate, so it means the same at 10 and 30 fps)")
     position_noise: float = param(0.05, lo=1e-6, hi=10.0,
                                   doc="Kalman process noise std of position/size, fraction of box height")
     velocity_noise: float = param(0.00625, lo=1e-6, hi=10.0,

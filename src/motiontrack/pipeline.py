@@ -70,10 +70,12 @@ class Pipeline:
     image_size : (width, height) of the source frames.
     detections : optional external detections (MOTChallenge det rows, 1-based frames); when given
         they replace the motion stage.
+    fps : the source's frame rate (None = unknown, taken as 25): converts durations in seconds
+        (``tracker.max_lost_s``) to frames.
     """
 
     def __init__(self, cfg: PipelineConfig, image_size: tuple[int, int],
-                 detections: Annotations | None = None) -> None:
+                 detections: Annotations | None = None, fps: float | None = None) -> None:
         self.cfg = cfg
         self._min_gap: float | None = None   # shortest time between frames seen: one period
         self._last_ts: float | None = None
@@ -90,7 +92,7 @@ class Pipeline:
         self.pre_cfg = pre
         pw, ph = scaled_size(image_size[0], image_size[1], self.scale)
         self.roi = load_roi(pre.roi, pw, ph) if pre.roi else None
-        self.tracker = TRACKERS.get(cfg.tracker.method)(cfg.tracker, image_size)
+        self.tracker = TRACKERS.get(cfg.tracker.method)(cfg.tracker, image_size, fps)
         self.people = None
         if cfg.people.enabled:
             from .people import PeopleStage
@@ -204,7 +206,7 @@ def run(source: Any, config: PipelineConfig | str | Path | None = None,
     """Yield a :class:`FrameResult` for every frame of ``source`` (see :func:`open_source`)."""
     cfg = resolve_config(config)
     src = open_configured_source(source, cfg)
-    pipe = Pipeline(cfg, (src.info.width, src.info.height), detections)
+    pipe = Pipeline(cfg, (src.info.width, src.info.height), detections, src.info.fps)
     try:
         yield from pipe.results(src)
     finally:
@@ -297,7 +299,8 @@ class TrackJob:
 
             self.camera = load_camera(cfg.measure.camera)
         # build every stage now: a bad plug-in name or ROI fails before anything is written
-        self.pipe = Pipeline(cfg, (self.src.info.width, self.src.info.height), detections)
+        self.pipe = Pipeline(cfg, (self.src.info.width, self.src.info.height), detections,
+                             self.src.info.fps)
         self.pipe.sequential = "background" in self.save
 
     def expected_frames(self) -> int | None:

@@ -412,7 +412,7 @@ def execute_run(spec: RunSpec) -> dict[str, Any]:
     gt = _load_gt(seq)
     src = open_configured_source(seq.source, cfg)
     info = src.info
-    pipe = Pipeline(cfg, (info.width, info.height))
+    pipe = Pipeline(cfg, (info.width, info.height), fps=info.fps)
     writer = None
     if spec.save and spec.out_dir:
         from ..intermediate import IntermediateWriter

@@ -8,8 +8,8 @@ Lifecycle (parameters of :class:`~motiontrack.config.TrackerConfig`):
    A tentative track that misses a frame is deleted.
 3. A confirmed track that misses a frame becomes **lost** and coasts on its prediction; a match
    makes it confirmed again with the same id.
-4. A lost track unseen for more than ``max_lost`` frames, or whose prediction has left the image,
-   is **deleted**.
+4. A lost track unseen for more than ``max_lost_s`` seconds (at the source's frame rate), or
+   whose prediction has left the image, is **deleted**.
 
 Region-tracker semantics of the Reading People Tracker (see :mod:`.merge`): a blob holding
 several tracks' predictions is split into one synthetic measurement per track, and a partly
@@ -71,9 +71,12 @@ class _TrackState:
 class MultiObjectTracker:
     """SORT-style tracker with an explicit tentative → confirmed → lost → deleted lifecycle."""
 
-    def __init__(self, cfg: TrackerConfig | None = None, image_size: tuple[int, int] | None = None) -> None:
+    def __init__(self, cfg: TrackerConfig | None = None, image_size: tuple[int, int] | None = None,
+                 fps: float | None = None) -> None:
         self.cfg = cfg or TrackerConfig()
         self.image_size = image_size
+        #: frames a lost track may coast (``max_lost_s`` at ``fps``; 25 fps when unknown)
+        self.max_lost = int(round(self.cfg.max_lost_s * (fps or 25.0)))
         self.x = np.zeros((0, 8))
         self.P = np.zeros((0, 8, 8))
         self.meta: list[_TrackState] = []
@@ -247,7 +250,7 @@ class MultiObjectTracker:
             # coast on position only: the size keeps its reference value
             self.x[t, 2:4] = m.ref
             self.x[t, 6:8] = 0.0
-            if m.tsu > c.max_lost or self._outside(boxes[t]):
+            if m.tsu > self.max_lost or self._outside(boxes[t]):
                 keep[t] = False
         self._keep(keep)
 
