@@ -105,7 +105,22 @@ def test_pets09_well_above_the_tutorial_baseline(data):
     recall = r["TP"] / (r["TP"] + r["FN"])
     precision = r["TP"] / (r["TP"] + r["FP"])
     assert recall >= 0.63 and precision >= 0.72
-    assert r["MOTA"] >= 0.4 and r["IDF1"] >= 0.55
+    assert r["MOTA"] >= 0.4 and r["IDF1"] >= 0.62 and r["HOTA"] >= 0.42
+
+
+@pytest.mark.data
+def test_pets09_people_preset_splits_groups_by_heads(data):
+    # head-based splitting separates people walking together: measured MOTA 0.61, IDF1 0.76,
+    # HOTA 0.53 on these 300 frames (default pipeline: 0.46, 0.65, 0.46)
+    video = data("pets09-s2l1", "video.avi")
+    gt = read_mot(data("pets09-s2l1", "gt_mot15.txt"), kind="gt")
+    rows = []
+    for res in motiontrack.track(str(video), load_config(None, preset="people")):
+        rows += [(res.index + 1, t.id, *t.box.as_array()) for t in res.tracks]
+    a = np.array(rows, float)
+    r = evaluate_tracking(gt, Annotations.from_columns(a[:, 0], a[:, 1], a[:, 2:6]),
+                          ignore_zero_marked=True)
+    assert r["MOTA"] >= 0.57 and r["IDF1"] >= 0.72 and r["HOTA"] >= 0.5
 
 
 def test_single_object_tracker_bridges_detection_misses():
