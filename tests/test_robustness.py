@@ -122,3 +122,43 @@ def test_truncated_video_finishes_cleanly_with_what_decoded(data, tmp_path, caps
 
     cap = cv2.VideoCapture(str(out / "annotated.avi"))
     assert int(cap.get(cv2.CAP_PROP_FRAME_COUNT)) == summary["frames"]
+
+
+def test_stream_failing_midway_keeps_outputs_and_fails(tmp_path, capsys):
+    """A camera that drops and never comes back: outputs hold every frame, exit is non-zero."""
+    import itertools
+
+    import numpy as np
+
+    from motiontrack.config import load_config
+    from motiontrack.errors import SourceError
+    from motiontrack.io.sources import LiveSource
+    from motiontrack.pipeline import TrackJob
+
+    class Cam:
+        def __init__(self, ok):
+            self.ok, self.n = ok, 0
+
+        def isOpened(self):
+            return self.ok
+
+        def read(self):
+            self.n += 1
+            return (self.n <= 12, np.full((48, 64, 3), self.n * 5 % 255, np.uint8) if self.n <= 12 else None)
+
+        def get(self, prop):
+            return 0.0
+
+        def release(self):
+            pass
+
+    opens = iter([True] + [False] * 10)
+    src = LiveSource(0, reconnect_attempts=2, backoff=0.0, opener=lambda t: Cam(next(opens)),
+                     sleep=lambda s: None, clock=itertools.count().__next__)
+    out = tmp_path / "o"
+    job = TrackJob(src, load_config(None, ['output.codec="mjpg"']), out)
+    with pytest.raises(SourceError, match="failed after 12 frames"):
+        job.run()
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["frames"] == 12 and summary["status"].startswith("source failed")
+    assert (out / "tracks.txt").is_file() and (out / "annotated.avi").is_file()

@@ -313,7 +313,8 @@ class TrackJob:
         ``should_stop`` is polled after each complete frame (the CLI's signal handlers set it), so
         an interruption never splits a frame between the outputs. A ``KeyboardInterrupt`` raised
         mid-frame is handled too. Either way the outputs are finalised, ``summary.json`` records
-        ``"interrupted": true``, and ``KeyboardInterrupt`` is re-raised.
+        ``"interrupted": true``, and ``KeyboardInterrupt`` is re-raised. A live source that fails
+        for good (:class:`SourceError`) is handled the same way and its error re-raised.
         """
         cfg, info = self.cfg, self.src.info
         self.out.mkdir(parents=True, exist_ok=True)
@@ -325,13 +326,14 @@ class TrackJob:
                       if "mask_video" in self.paths else None)
         inter = IntermediateWriter(self.out, self.save, fps, cfg.output.codec) if self.save else None
         ids: set[int] = set()
+        failure: SourceError | None = None
         t0 = time.perf_counter()
         pipe = self.pipe
 
         with atomic_open(self.paths["tracks"]) as tracks_fh:
             try:
                 for res in pipe.results(self.src):
-                    ts = [t for t in res.tracks]
+                    ts = res.tracks
                     if ts:
                         boxes = np.array([t.box.as_array() for t in ts])
                         f = [res.index + 1] * len(ts)
@@ -371,9 +373,11 @@ class TrackJob:
                 summary.status = "interrupted"
                 log.warning("interrupted after %d frames; writing what was processed", summary.frames)
             except SourceError as exc:
+                failure = exc
                 summary.status = f"source failed: {exc}"
                 summary.truncated = True
-                log.error("%s; writing what was processed", exc)
+                log.warning("source failed after %d frames; writing what was processed",
+                            summary.frames)
             finally:
                 summary.seconds = time.perf_counter() - t0
                 for sink in (video, mask_video, inter):
@@ -399,6 +403,8 @@ class TrackJob:
         atomic_write_text(self.paths["summary"], json.dumps(summary.as_dict(), indent=2) + "\n")
         if summary.interrupted:
             raise KeyboardInterrupt
+        if failure is not None:  # everything is written; the command still fails
+            raise failure
         return summary
 
 
