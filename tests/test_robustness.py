@@ -162,3 +162,36 @@ def test_stream_failing_midway_keeps_outputs_and_fails(tmp_path, capsys):
     summary = json.loads((out / "summary.json").read_text())
     assert summary["frames"] == 12 and summary["status"].startswith("source failed")
     assert (out / "tracks.txt").is_file() and (out / "annotated.avi").is_file()
+
+
+@pytest.mark.parametrize("argv_tail, path", [
+    (["gt-stats", "{gt}", "--image-size", "64x48", "--json", "{out}"], "{out}"),
+    (["ablate", "synth:walker?n_frames=20", "--rows", "1", "--json", "{out}"], "{out}"),
+])
+def test_json_outputs_need_force(tmp_path, capsys, argv_tail, path):
+    gt = tmp_path / "gt.txt"
+    gt.write_text("1,1,10,10,5,8,1,-1,-1,-1\n2,1,11,10,5,8,1,-1,-1,-1\n")
+    out = tmp_path / "o.json"
+    out.write_text("keep me")
+    argv = [a.format(gt=gt, out=out) for a in argv_tail]
+    assert main(argv) == 2
+    assert "use --force" in capsys.readouterr().err and out.read_text() == "keep me"
+    assert main(argv + ["--force"]) == 0
+    assert out.read_text() != "keep me"
+
+
+@pytest.mark.parametrize("line, words", [
+    ("gt-stats {missing} --image-size 64x48", "not found"),
+    ("gt-stats {csv_ok} --image-size 64by48", "wxh"),
+    ("report {out}", "study.json"),
+    ("overlay {missing} --gt {csv_ok} -o {out}/o.webm", "not found"),
+    ("sweep synth:walker?n_frames=5 --param motion.nope=1,2 -o {out}/s", "unknown config key"),
+    ("ablate synth:walker?n_frames=5 --rows 9", "--rows"),
+    ("shape train {missing} --gt {csv_ok} -o {out}/m.npz", "not found"),
+])
+def test_more_commands_bad_input(files, capsys, line, words):
+    args = line.format(**{k: str(v) for k, v in files.items()}).split()
+    code = main(args)
+    err = [ln for ln in capsys.readouterr().err.splitlines() if "error" in ln]
+    assert code not in (0, None), line
+    assert len(err) == 1 and words.lower() in err[0].lower(), err

@@ -39,6 +39,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--rows", help="comma-separated row numbers to run (default all)")
     p.add_argument("-j", "--jobs", type=int, default=1, help="parallel processes")
     p.add_argument("--json", help="also write the table as JSON")
+    p.add_argument("--force", action="store_true", help="overwrite an existing --json file")
     p.set_defaults(func=cmd_ablate)
 
 
@@ -50,6 +51,12 @@ def cmd_ablate(args) -> int:
 
     if not 0.0 <= args.xi <= 1.0:
         raise ConfigError(f"--xi must be in [0, 1], got {args.xi}")
+    from pathlib import Path
+
+    from ..io.atomic import check_writable
+
+    if args.json:
+        check_writable([Path(args.json)], args.force)
     base = load_config(args.config, args.overrides)
     rows = list(ROWS)
     if args.rows:

@@ -16,12 +16,18 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--image-size", required=True, metavar="WxH", help="frame size, e.g. 768x576")
     p.add_argument("--sample-std", action="store_true", help="use the sample std (N-1) instead of N")
     p.add_argument("--json", metavar="PATH", help="also write the numbers as JSON")
+    p.add_argument("--force", action="store_true", help="overwrite an existing --json file")
     p.set_defaults(func=cmd_gt_stats)
 
 
 def cmd_gt_stats(args) -> int:
     from ..evaluate.gtstats import gt_statistics, parse_image_size
-    from ..io.atomic import atomic_write_text
+    from ..io.atomic import atomic_write_text, check_writable
+
+    if args.json:
+        from pathlib import Path
+
+        check_writable([Path(args.json)], args.force)
     from ._common import read_gt
 
     size = parse_image_size(args.image_size)

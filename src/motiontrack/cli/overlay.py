@@ -18,6 +18,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "repeatable; NAME is the legend text (default: the file's folder name)")
     p.add_argument("-o", "--out", help="output video (e.g. overlay.webm)")
     p.add_argument("--frames", metavar="A:B", help="1-based inclusive frame range")
+    p.add_argument("--force", action="store_true", help="overwrite an existing output video")
     p.add_argument("--png-frames", default="", metavar="F1,F2",
                    help="also write these 1-based frames as PNG (frame_%%06d.png next to -o)")
     p.add_argument("--png-dir", help="folder for the PNG stills")
@@ -50,6 +51,10 @@ def cmd_overlay(args) -> int:
     from ..overlay import render_overlay
     from ._common import frame_range, read_gt
 
+    from ..io.atomic import check_writable
+
+    if args.out:
+        check_writable([Path(args.out)], args.force)
     runs = [_pred(p) for p in args.pred]
     if args.gt:
         gt = read_gt(args.gt)

@@ -11,6 +11,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         description="Meta data, tables, figures (embedded) and links to the clips of the study in DIR.")
     p.add_argument("study", metavar="DIR", help="a `motiontrack sweep` output folder")
     p.add_argument("-o", "--out", help="HTML file (default: DIR/report.html)")
+    p.add_argument("--force", action="store_true", help="overwrite an existing report")
     p.set_defaults(func=cmd_report)
 
 
@@ -19,6 +20,9 @@ def cmd_report(args) -> int:
 
     from ..evaluate.report import write_report
 
+    from ..io.atomic import check_writable
+
     out = args.out or str(Path(args.study) / "report.html")
+    check_writable([Path(out)], args.force)
     print(f"outputs   {write_report(args.study, out)}")
     return 0

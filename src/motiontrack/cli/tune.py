@@ -32,6 +32,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--xi", type=float, default=0.75, help="localization threshold (default 0.75)")
     p.add_argument("-j", "--jobs", type=int, default=1, help="processes per trial (over sequences)")
     p.add_argument("-o", "--out", required=True, help="output folder")
+    p.add_argument("--force", action="store_true", help="overwrite an earlier tuning in --out")
     p.set_defaults(func=cmd_tune)
 
 
@@ -60,6 +61,11 @@ def cmd_tune(args) -> int:
     from ..errors import ConfigError
     from ..evaluate.tune import parse_space, require_optuna, tune, write_tune_outputs
 
+    from pathlib import Path
+
+    from ..io.atomic import check_writable
+
+    check_writable([Path(args.out) / "best_config.toml", Path(args.out) / "tune.json"], args.force)
     optuna = require_optuna()
     optuna.logging.set_verbosity(optuna.logging.WARNING)
     if not args.train:
