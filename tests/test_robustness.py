@@ -195,3 +195,28 @@ def test_more_commands_bad_input(files, capsys, line, words):
     err = [ln for ln in capsys.readouterr().err.splitlines() if "error" in ln]
     assert code not in (0, None), line
     assert len(err) == 1 and words.lower() in err[0].lower(), err
+
+
+def test_run_outcome_records_then_reraises():
+    from motiontrack.errors import RunOutcome, SourceError
+
+    with RunOutcome() as ok:
+        pass
+    assert ok.status == "complete" and not ok.interrupted and not ok.failed
+    ok.reraise()                                   # nothing to raise
+
+    with RunOutcome() as cut:
+        raise KeyboardInterrupt
+    assert cut.interrupted and cut.status == "interrupted"
+    with pytest.raises(KeyboardInterrupt):
+        cut.reraise()
+
+    with RunOutcome() as dropped:
+        raise SourceError("camera 0 failed after 3 frames")
+    assert dropped.failed and dropped.status == "source failed: camera 0 failed after 3 frames"
+    with pytest.raises(SourceError, match="camera 0"):
+        dropped.reraise()
+
+    with pytest.raises(ValueError):                # a bug is not swallowed
+        with RunOutcome():
+            raise ValueError("bug")

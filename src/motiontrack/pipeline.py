@@ -21,7 +21,7 @@ import numpy as np
 
 from .annotate import annotate_frame
 from .config import PipelineConfig, load_config, save_config
-from .errors import SourceError
+from .errors import RunOutcome
 from .intermediate import IntermediateWriter, parse_streams
 from .io.atomic import atomic_open, atomic_write_text, check_writable
 from .io.mot import format_mot_rows, read_mot, write_mot
@@ -326,64 +326,32 @@ class TrackJob:
                       if "mask_video" in self.paths else None)
         inter = IntermediateWriter(self.out, self.save, fps, cfg.output.codec) if self.save else None
         ids: set[int] = set()
-        failure: SourceError | None = None
         t0 = time.perf_counter()
         pipe = self.pipe
 
         with atomic_open(self.paths["tracks"]) as tracks_fh:
             try:
-                for res in pipe.results(self.src):
-                    ts = res.tracks
-                    if ts:
-                        boxes = np.array([t.box.as_array() for t in ts])
-                        f = [res.index + 1] * len(ts)
-                        tid = [t.id for t in ts]
-                        world = None
-                        if self.camera is not None:
-                            from .calibrate import world_positions
-
-                            world = np.column_stack([world_positions(boxes, self.camera),
-                                                     np.zeros(len(boxes))])
-                        tracks_fh.write(format_mot_rows(f, tid, boxes, [t.score for t in ts], world))
-                        ids.update(tid)
-                    if video is not None or self.show is not None:
-                        img = annotate_frame(res.frame, res.tracks, res.regions, res.mask,
-                                             cfg.output.trail, cfg.output.mask_inset,
-                                             text=f"frame {res.index}")
-                        if pipe.people is not None:
-                            from .people.draw import draw_people
-
-                            draw_people(img, res.extras, inplace=True)
-                        if video is not None:
-                            video.write(img)
-                        if self.show is not None and not self.show(img):
+                with RunOutcome() as outcome:
+                    for res in pipe.results(self.src):
+                        if not self._write_frame(res, tracks_fh, video, mask_video, inter, ids):
                             summary.status = "stopped by user"
                             break
-                    if mask_video is not None and res.mask is not None:
-                        mask_video.write(res.mask)
-                    if inter is not None:
-                        inter.write(res, pipe.detector)
-                    summary.frames += 1
-                    if progress is not None:
-                        progress(1)
-                    if should_stop is not None and should_stop():
-                        raise KeyboardInterrupt
-            except KeyboardInterrupt:
-                summary.interrupted = True
-                summary.status = "interrupted"
-                log.warning("interrupted after %d frames; writing what was processed", summary.frames)
-            except SourceError as exc:
-                failure = exc
-                summary.status = f"source failed: {exc}"
-                summary.truncated = True
-                log.warning("source failed after %d frames; writing what was processed",
-                            summary.frames)
+                        summary.frames += 1
+                        if progress is not None:
+                            progress(1)
+                        if should_stop is not None and should_stop():
+                            raise KeyboardInterrupt
             finally:
                 summary.seconds = time.perf_counter() - t0
                 for sink in (video, mask_video, inter):
                     if sink is not None:
                         sink.close()
-        summary.truncated = summary.truncated or self.src.truncated
+        if outcome.status != "complete":
+            log.warning("%s after %d frames; writing what was processed", outcome.status,
+                        summary.frames)
+            summary.status = outcome.status
+        summary.interrupted = outcome.interrupted
+        summary.truncated = summary.truncated or self.src.truncated or outcome.failed
         summary.tracks = len(ids)
         summary.outputs = {k: str(v) for k, v in self.paths.items()
                            if v.exists() or k == "summary"}
@@ -401,11 +369,42 @@ class TrackJob:
                 write_mot(self.gt, self.paths["gt"], kind="gt")
                 summary.outputs["gt"] = str(self.paths["gt"])
         atomic_write_text(self.paths["summary"], json.dumps(summary.as_dict(), indent=2) + "\n")
-        if summary.interrupted:
-            raise KeyboardInterrupt
-        if failure is not None:  # everything is written; the command still fails
-            raise failure
+        outcome.reraise()  # everything is written; an interrupt or a failed source still surfaces
         return summary
+
+
+    def _write_frame(self, res: FrameResult, tracks_fh, video: VideoSink | None,
+                     mask_video: VideoSink | None, inter: IntermediateWriter | None,
+                     ids: set[int]) -> bool:
+        """Append one frame to every output; False when the live viewer asked to stop."""
+        cfg = self.cfg
+        if res.tracks:
+            boxes = np.array([t.box.as_array() for t in res.tracks])
+            tid = [t.id for t in res.tracks]
+            world = None
+            if self.camera is not None:
+                from .calibrate import world_positions
+
+                world = np.column_stack([world_positions(boxes, self.camera), np.zeros(len(boxes))])
+            tracks_fh.write(format_mot_rows([res.index + 1] * len(tid), tid, boxes,
+                                            [t.score for t in res.tracks], world))
+            ids.update(tid)
+        if video is not None or self.show is not None:
+            img = annotate_frame(res.frame, res.tracks, res.regions, res.mask, cfg.output.trail,
+                                 cfg.output.mask_inset, text=f"frame {res.index}")
+            if self.pipe.people is not None:
+                from .people.draw import draw_people
+
+                draw_people(img, res.extras, inplace=True)
+            if video is not None:
+                video.write(img)
+            if self.show is not None and not self.show(img):
+                return False
+        if mask_video is not None and res.mask is not None:
+            mask_video.write(res.mask)
+        if inter is not None:
+            inter.write(res, self.pipe.detector)
+        return True
 
 
 def score_run(gt: Annotations, pred: Annotations, frames: int, src: Source) -> dict[str, float]:

@@ -108,13 +108,13 @@ def cmd_flow(args) -> int:
         src.close()
 
 
-def _finish(paths: dict[str, Path], summary: dict[str, Any], interrupted: bool) -> None:
+def _finish(paths: dict[str, Path], summary: dict[str, Any], outcome) -> None:
+    """Write the summary, then let an interrupt or a failed source surface (RunOutcome)."""
     from ..io.atomic import atomic_write_text
 
     summary["outputs"] = {k: str(v) for k, v in paths.items() if v.exists() or k == "summary"}
     atomic_write_text(paths["summary"], json.dumps(summary, indent=2) + "\n")
-    if interrupted:
-        raise KeyboardInterrupt
+    outcome.reraise()
 
 
 def _sparse(args, cfg, params, src) -> int:
@@ -123,7 +123,7 @@ def _sparse(args, cfg, params, src) -> int:
 
     from ..annotate import annotate_frame
     from ..config import save_config
-    from ..errors import SourceError
+    from ..errors import RunOutcome
     from ..io.atomic import atomic_open, check_writable
     from ..io.mot import format_mot_rows
     from ..io.video import VideoSink, extension_for
@@ -153,46 +153,45 @@ def _sparse(args, cfg, params, src) -> int:
     rows_f: list[int] = []
     rows_id: list[int] = []
     rows_box: list[np.ndarray] = []
-    n, status, interrupted = 0, "complete", False
+    n = 0
+    outcome = RunOutcome()
     t0 = time.perf_counter()
     with atomic_open(paths["tracks"]) as fh, GracefulStop() as stop, \
             tqdm(total=src.expected_frames(), unit="frame", disable=None, file=sys.stderr,
                  dynamic_ncols=True) as bar:
         try:
-            for frame in src:
-                tracks = tracker.update(frame.image)
-                if tracks:
-                    boxes = np.array([t.box.as_array() for t in tracks])
-                    f = [frame.index + 1] * len(tracks)
-                    ids = [t.id for t in tracks]
-                    fh.write(format_mot_rows(f, ids, boxes, [t.score for t in tracks]))
-                    rows_f += f
-                    rows_id += ids
-                    rows_box.append(boxes)
-                if video is not None:
-                    img = annotate_frame(frame.image, tracks, (), tracker.last_mask,
-                                         cfg.output.trail, cfg.output.mask_inset,
-                                         text=f"frame {frame.index}")
-                    shown = {t.id for t in tracks}
-                    draw_feature_trails(img, [tr for tr in tracker.trails() if tr[0] in shown])
-                    video.write(img)
-                if mask_video is not None and tracker.last_mask is not None:
-                    mask_video.write(tracker.last_mask)
-                n += 1
-                bar.update(1)
-                if stop.stop():  # SIGINT/SIGTERM: finish this frame, then finalise the outputs
-                    raise KeyboardInterrupt
-        except KeyboardInterrupt:
-            status, interrupted = "interrupted", True
-            log.warning("interrupted after %d frames; writing what was processed", n)
-        except SourceError as exc:
-            status = f"source failed: {exc}"
-            log.error("%s; writing what was processed", exc)
+            with outcome:
+                for frame in src:
+                    tracks = tracker.update(frame.image)
+                    if tracks:
+                        boxes = np.array([t.box.as_array() for t in tracks])
+                        f = [frame.index + 1] * len(tracks)
+                        ids = [t.id for t in tracks]
+                        fh.write(format_mot_rows(f, ids, boxes, [t.score for t in tracks]))
+                        rows_f += f
+                        rows_id += ids
+                        rows_box.append(boxes)
+                    if video is not None:
+                        img = annotate_frame(frame.image, tracks, (), tracker.last_mask,
+                                             cfg.output.trail, cfg.output.mask_inset,
+                                             text=f"frame {frame.index}")
+                        shown = {t.id for t in tracks}
+                        draw_feature_trails(img, [tr for tr in tracker.trails() if tr[0] in shown])
+                        video.write(img)
+                    if mask_video is not None and tracker.last_mask is not None:
+                        mask_video.write(tracker.last_mask)
+                    n += 1
+                    bar.update(1)
+                    if stop.stop():  # SIGINT/SIGTERM: finish this frame, then finalise the outputs
+                        raise KeyboardInterrupt
         finally:
             for sink in (video, mask_video):
                 if sink is not None:
                     sink.close()
     seconds = time.perf_counter() - t0
+    status, interrupted = outcome.status, outcome.interrupted
+    if status != "complete":
+        log.warning("%s after %d frames; writing what was processed", status, n)
     summary: dict[str, Any] = {
         "source": info.name, "width": info.width, "height": info.height, "source_fps": info.fps,
         "mode": "sparse", "params": asdict(params), "frames": n, "seconds": round(seconds, 3),
@@ -205,7 +204,7 @@ def _sparse(args, cfg, params, src) -> int:
         pred = Annotations.from_columns(
             rows_f, rows_id, np.concatenate(rows_box) if rows_box else np.zeros((0, 4)))
         summary["accuracy"] = score_run(gt, pred, n, src)
-    _finish(paths, summary, interrupted)
+    _finish(paths, summary, outcome)
     lines = [f"frames    {n} in {seconds:.2f} s ({summary['fps']:.1f} fps)",
              f"tracks    {summary['tracks']}"]
     if "accuracy" in summary:
@@ -221,7 +220,7 @@ def _sparse(args, cfg, params, src) -> int:
 def _dense(args, cfg, src) -> int:
     from tqdm import tqdm
 
-    from ..errors import SourceError
+    from ..errors import RunOutcome
     from ..io.atomic import check_writable
     from ..io.video import extension_for
     from ..motion.dense_flow import write_flow_videos
@@ -236,26 +235,22 @@ def _dense(args, cfg, src) -> int:
     info = src.info
     log.info("source %s", info.describe())
     out.mkdir(parents=True, exist_ok=True)
-    status, interrupted = "complete", False
     stats = None
     t0 = time.perf_counter()
     with GracefulStop() as stop, tqdm(total=src.expected_frames(), unit="frame", disable=None,
-                                      file=sys.stderr, dynamic_ncols=True) as bar:
-        try:
-            stats = write_flow_videos(src, paths["flow_video"], info.fps or 25.0,
-                                      mask_path=paths.get("mask_video"), codec=cfg.output.codec,
-                                      params=cfg.motion.farneback,
-                                      max_magnitude=args.max_magnitude, progress=bar.update,
-                                      should_stop=stop.stop)
-            if stats.stopped:
-                status, interrupted = "interrupted", True
-        except KeyboardInterrupt:
-            status, interrupted = "interrupted", True
-            log.warning("interrupted; the videos hold what was processed")
-        except SourceError as exc:
-            status = f"source failed: {exc}"
-            log.error("%s; the videos hold what was processed", exc)
+                                      file=sys.stderr, dynamic_ncols=True) as bar, \
+            RunOutcome() as outcome:
+        stats = write_flow_videos(src, paths["flow_video"], info.fps or 25.0,
+                                  mask_path=paths.get("mask_video"), codec=cfg.output.codec,
+                                  params=cfg.motion.farneback,
+                                  max_magnitude=args.max_magnitude, progress=bar.update,
+                                  should_stop=stop.stop)
+        if stats.stopped:
+            raise KeyboardInterrupt
     seconds = time.perf_counter() - t0
+    status, interrupted = outcome.status, outcome.interrupted
+    if status != "complete":
+        log.warning("%s; the videos hold what was processed", status)
     summary: dict[str, Any] = {
         "source": info.name, "width": info.width, "height": info.height, "source_fps": info.fps,
         "mode": "dense", "farneback": asdict(cfg.motion.farneback),
@@ -265,7 +260,7 @@ def _dense(args, cfg, src) -> int:
     if stats is not None:
         summary.update(asdict(stats))
         summary["fps"] = round(stats.frames / seconds, 2) if seconds > 0 else 0.0
-    _finish(paths, summary, interrupted)
+    _finish(paths, summary, outcome)
     if stats is not None:
         print(f"frames    {stats.frames} in {seconds:.2f} s\n"
               f"flow      mean {stats.mean_magnitude:.3f} px/frame, max "

@@ -71,7 +71,7 @@ def cmd_follow(args) -> int:
     from tqdm import tqdm
 
     from ..annotate import annotate_frame, draw_label
-    from ..errors import ConfigError, SourceError
+    from ..errors import ConfigError, RunOutcome, SourceError
     from ..io.atomic import atomic_open, atomic_write_text, check_writable
     from ..io.mot import format_mot_rows
     from ..io.sources import open_source
@@ -104,45 +104,43 @@ def cmd_follow(args) -> int:
     history: list[tuple[float, float]] = []
     n = 0
     last_index = args.start - 1
-    status, interrupted = "complete", False
+    outcome = RunOutcome()
     t0 = time.perf_counter()
     with atomic_open(paths["tracks"]) as fh, GracefulStop() as stop, \
             tqdm(total=src.expected_frames(), unit="frame", disable=None, file=sys.stderr,
                  dynamic_ncols=True) as bar:
         try:
-            for index, image, ok, b, score in follow(src, tracker, box):
-                tracks = ()
-                if ok and b is not None:
-                    fh.write(format_mot_rows([index + 1], [1], b.as_array()[None], [score]))
-                    frames_f.append(index + 1)
-                    boxes.append(b.as_array())
-                    scores.append(score)
-                    history.append(b.center)
-                    del history[:-64]
-                    tracks = (Track(id=1, box=b, state=TrackState.CONFIRMED, score=score,
-                                    history=tuple(history)),)
-                if video is not None:
-                    img = annotate_frame(image, tracks, text=f"frame {index}")
-                    label = f"{args.tracker} {score:.2f}" if ok else f"{args.tracker}: lost"
-                    draw_label(img, label, (4, 20), (40, 40, 40) if ok else (0, 0, 200))
-                    video.write(img)
-                n += 1
-                last_index = index
-                bar.update(1)
-                if stop.stop():  # SIGINT/SIGTERM: finish this frame, then finalise the outputs
-                    raise KeyboardInterrupt
-        except KeyboardInterrupt:
-            status, interrupted = "interrupted", True
-            log.warning("interrupted after %d frames; writing what was processed", n)
-        except SourceError as exc:
-            status = f"source failed: {exc}"
-            log.error("%s; writing what was processed", exc)
+            with outcome:
+                for index, image, ok, b, score in follow(src, tracker, box):
+                    tracks = ()
+                    if ok and b is not None:
+                        fh.write(format_mot_rows([index + 1], [1], b.as_array()[None], [score]))
+                        frames_f.append(index + 1)
+                        boxes.append(b.as_array())
+                        scores.append(score)
+                        history.append(b.center)
+                        del history[:-64]
+                        tracks = (Track(id=1, box=b, state=TrackState.CONFIRMED, score=score,
+                                        history=tuple(history)),)
+                    if video is not None:
+                        img = annotate_frame(image, tracks, text=f"frame {index}")
+                        label = f"{args.tracker} {score:.2f}" if ok else f"{args.tracker}: lost"
+                        draw_label(img, label, (4, 20), (40, 40, 40) if ok else (0, 0, 200))
+                        video.write(img)
+                    n += 1
+                    last_index = index
+                    bar.update(1)
+                    if stop.stop():  # SIGINT/SIGTERM: finish this frame, then finalise the outputs
+                        raise KeyboardInterrupt
         finally:
             if video is not None:
                 video.close()
             src.close()
     seconds = time.perf_counter() - t0
-    if n == 0:
+    status, interrupted = outcome.status, outcome.interrupted
+    if status != "complete":
+        log.warning("%s after %d frames; writing what was processed", status, n)
+    if n == 0 and not interrupted:
         raise SourceError(f"no frames to follow in {args.source} (check --start)")
     summary: dict[str, Any] = {
         "source": info.name, "width": info.width, "height": info.height, "source_fps": info.fps,
@@ -159,8 +157,7 @@ def cmd_follow(args) -> int:
                                         meta={"last_frame": last_index + 1})
         summary["accuracy"] = follow_accuracy(gt, pred, args.gt_id)
     atomic_write_text(paths["summary"], json.dumps(summary, indent=2) + "\n")
-    if interrupted:
-        raise KeyboardInterrupt
+    outcome.reraise()
     lines = [f"frames    {n} in {seconds:.2f} s ({summary['fps']:.1f} fps), object found in "
              f"{len(frames_f)}"]
     if "accuracy" in summary and summary["accuracy"]["frames"] > 0:
