@@ -180,3 +180,20 @@ def test_histograms_and_distance():
     assert d[0, 0] == pytest.approx(0.0, abs=1e-6) and d[0, 1] == pytest.approx(1.0)
     assert d[2, 0] == 0.0                        # empty histograms give no evidence
     assert histograms(img, np.zeros((0, 4))).shape == (0, 64)
+
+
+def test_kalman_update_equals_the_textbook_formula():
+    # K = P Hᵀ (H P Hᵀ + R)⁻¹, x' = x + K (z − H x), P' = (I − K H) P, one track at a time
+    rng = np.random.default_rng(1)
+    x = rng.normal(50, 10, (5, 8))
+    x[:, 3] = np.abs(x[:, 3]) + 20
+    A = rng.normal(0, 1, (5, 8, 8))
+    P = A @ A.transpose(0, 2, 1) + np.eye(8)
+    z = x[:, :4] + rng.normal(0, 1, (5, 4))
+    x2, P2 = kalman.update(x, P, z, 0.05)
+    H = kalman.H
+    for i in range(5):
+        R = np.eye(4) * (0.05 * x[i, 3]) ** 2
+        K = P[i] @ H.T @ np.linalg.inv(H @ P[i] @ H.T + R)
+        assert np.allclose(x2[i], x[i] + K @ (z[i] - H @ x[i]))
+        assert np.allclose(P2[i], (np.eye(8) - K @ H) @ P[i])

@@ -48,6 +48,7 @@ def initiate(boxes: np.ndarray, pos_std: float, vel_std: float) -> tuple[np.ndar
 
 
 _DIAG = np.arange(2 * NDIM)
+_MEAS = np.arange(NDIM)
 
 
 def process_noise(x: np.ndarray, pos_std: float, vel_std: float) -> np.ndarray:
@@ -88,15 +89,13 @@ def update(x: np.ndarray, P: np.ndarray, z: np.ndarray, meas_std: float) -> tupl
     """Kalman correction with measurements ``z`` (N, 4) for a batch of N tracks."""
     if len(x) == 0:
         return x.copy(), P.copy()
-    h = np.maximum(x[:, 3:4], 1.0)
-    r = (meas_std * h) ** 2
-    R = np.zeros((len(x), NDIM, NDIM))
-    idx = np.arange(NDIM)
-    R[:, idx, idx] = np.repeat(r, NDIM, axis=1)
-    PHt = P @ H.T                                  # (N, 8, 4)
-    S = H @ PHt + R                                # (N, 4, 4)
+    # H = [I 0] selects the first NDIM states, so P Hᵀ, H P Hᵀ and H P are slices of P
+    h = np.maximum(x[:, 3], 1.0)
+    S = P[:, :NDIM, :NDIM].copy()
+    S[:, _MEAS, _MEAS] += ((meas_std * h) ** 2)[:, None]   # + R (diagonal)
+    PHt = P[:, :, :NDIM]                                      # (N, 8, 4)
     K = np.linalg.solve(S, PHt.transpose(0, 2, 1)).transpose(0, 2, 1)  # P Hᵀ S⁻¹
-    innov = z - x @ H.T
-    x2 = x + np.einsum("nij,nj->ni", K, innov)
-    P2 = P - K @ H @ P
+    innov = z - x[:, :NDIM]
+    x2 = x + (K @ innov[:, :, None])[:, :, 0]
+    P2 = P - K @ P[:, :NDIM, :]
     return x2, P2

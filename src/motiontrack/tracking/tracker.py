@@ -22,6 +22,7 @@ The per-frame step is vectorised over tracks (batched Kalman maths, one Hungaria
 
 from __future__ import annotations
 
+import math
 from collections import deque
 from typing import Sequence
 
@@ -61,7 +62,7 @@ class _TrackState:
         self.history: deque = deque(maxlen=max(history, 1))
         self.score = 1.0
         self.partials = 0
-        self.origin: np.ndarray | None = None   # centre where it was first matched
+        self.origin: tuple[float, float] | None = None   # centre where it was first matched
         self.moved = False                        # has travelled at least one body height
         self.bridged = False                      # last matched to a bridge measurement
         self.hist: np.ndarray | None = None       # appearance (colour histogram), running average
@@ -203,32 +204,37 @@ class MultiObjectTracker:
             isolated = ~overlap.any(axis=1)
         ref = np.array([self.meta[t].ref for t in ti]).reshape(-1, 2)
         boxes, partial = anchor_partial(pred[ti], det[di], ref, c.partial_ratio)
-        for k, (t, d) in enumerate(zip(ti, di)):
+        new_ref = ref + REF_RATE * (det[di, 2:4] - ref)
+        tl, dl = ti.tolist(), di.tolist()
+        part = partial.tolist()
+        for k, (t, d) in enumerate(zip(tl, dl)):
             m = self.meta[t]
-            m.partials = m.partials + 1 if partial[k] else 0
+            m.partials = m.partials + 1 if part[k] else 0
             if m.partials > MAX_PARTIAL_FRAMES:
                 # a view that stays "partial" for long is the object's real size: accept it
                 boxes[k] = det[d]
-                partial[k] = False
-            if not partial[k] and owner[d] < 0:
-                m.ref = m.ref + REF_RATE * (det[d, 2:4] - m.ref)
+                part[k] = False
+            if not part[k] and owner[d] < 0:
+                m.ref = new_ref[k]
                 if det_hist is not None and det_hist[d].any() and isolated[d]:
                     m.hist = (det_hist[d].copy() if m.hist is None
                               else m.hist + APPEARANCE_RATE * (det_hist[d] - m.hist))
         self.x[ti], self.P[ti] = kalman.update(self.x[ti], self.P[ti], kalman.box_to_z(boxes),
                                                c.measurement_noise)
-        for t, d in zip(ti, di):
+        centres = self.x[ti, :2].tolist()
+        scores = det_scores[di].tolist()
+        for k, (t, d) in enumerate(zip(tl, dl)):
             m = self.meta[t]
             m.hits += 1
             m.tsu = 0
-            m.bridged = bool(d >= n_real)
+            m.bridged = d >= n_real
             if not m.moved:
-                centre = self.x[t, :2]
+                cx, cy = centres[k]
                 if m.origin is None:
-                    m.origin = centre.copy()
-                elif np.hypot(*(centre - m.origin)) > m.ref[1]:
+                    m.origin = (cx, cy)
+                elif math.hypot(cx - m.origin[0], cy - m.origin[1]) > m.ref[1]:
                     m.moved = True
-            m.score = float(det_scores[d])
+            m.score = scores[k]
             if m.state == TrackState.TENTATIVE and m.hits >= c.confirm_hits:
                 m.state = TrackState.CONFIRMED
                 m.tid = self._new_id()
@@ -285,20 +291,17 @@ class MultiObjectTracker:
 
     def _snapshots(self) -> list[Track]:
         out: list[Track] = []
-        boxes = self._boxes()
-        for i, m in enumerate(self.meta):
-            b = boxes[i]
-            m.history.append((float(b[0] + b[2] / 2), float(b[1] + b[3] / 2)))
-            if m.state == TrackState.CONFIRMED and m.tsu == 0:
-                pass
-            elif m.state == TrackState.LOST and self.cfg.output_lost:
-                pass
-            else:
+        boxes = self._boxes().tolist()
+        vel = self.x[:, 4:6].tolist()
+        output_lost = self.cfg.output_lost
+        for m, (x, y, w, h), (vx, vy) in zip(self.meta, boxes, vel):
+            m.history.append((x + w / 2, y + h / 2))
+            if not ((m.state == TrackState.CONFIRMED and m.tsu == 0)
+                    or (m.state == TrackState.LOST and output_lost)):
                 continue
             out.append(Track(
-                id=m.tid, box=Box(float(b[0]), float(b[1]), float(b[2]), float(b[3])), state=m.state,
-                velocity=(float(self.x[i, 4]), float(self.x[i, 5])), hits=m.hits, age=m.age,
-                time_since_update=m.tsu, history=tuple(m.history), score=m.score,
+                id=m.tid, box=Box(x, y, w, h), state=m.state, velocity=(vx, vy), hits=m.hits,
+                age=m.age, time_since_update=m.tsu, history=tuple(m.history), score=m.score,
             ))
         return out
 
