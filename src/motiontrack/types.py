@@ -26,6 +26,7 @@ __all__ = [
     "Frame",
     "FrameResult",
     "Annotations",
+    "INT_LIMIT",
 ]
 
 
@@ -193,6 +194,9 @@ class FrameResult:
     tracks: tuple[Track, ...]
     extras: Mapping[str, object] = field(default_factory=dict, repr=False)
 
+
+#: frame numbers, ids and classes are int64 columns: readers refuse values at or beyond this
+INT_LIMIT = 2**62
 
 _ANN_COLUMNS = ("frames", "ids", "boxes", "scores", "consider", "classes", "visibility", "world")
 

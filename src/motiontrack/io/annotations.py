@@ -29,7 +29,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..errors import ConfigError, InputError
-from ..types import Annotations
+from ..types import INT_LIMIT, Annotations
 
 __all__ = [
     "FORMATS",
@@ -140,10 +140,8 @@ def parse_xml(data: bytes, name: str = "<bytes>") -> XmlNode:
     return handler.root
 
 
-_INT_LIMIT = 2**62  # frame numbers and ids must fit int64 with room to spare
 
-
-def xml_int(node: XmlNode, key: str, name: str, lo: int = -_INT_LIMIT) -> int:
+def xml_int(node: XmlNode, key: str, name: str, lo: int = -INT_LIMIT) -> int:
     """Attribute ``key`` of ``node`` as an integer in ``[lo, 2**62)``, or :class:`InputError`."""
     raw = node.attrib.get(key)
     if raw is None:
@@ -153,7 +151,7 @@ def xml_int(node: XmlNode, key: str, name: str, lo: int = -_INT_LIMIT) -> int:
     except ValueError:
         raise InputError(f"{node.where(name)}: attribute {key}={raw[:40]!r} is not an integer") \
             from None
-    if not lo <= v < _INT_LIMIT:
+    if not lo <= v < INT_LIMIT:
         raise InputError(f"{node.where(name)}: attribute {key}={v} out of range [{lo}, 2**62)")
     return v
 

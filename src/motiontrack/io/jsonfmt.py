@@ -40,14 +40,13 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
-from ..types import Annotations
+from ..types import INT_LIMIT, Annotations
 from .atomic import atomic_open
 
 __all__ = ["read_json", "parse_json", "write_json", "format_json", "FORMAT_NAME", "VERSION"]
 
 FORMAT_NAME = "motiontrack"
 VERSION = 1
-_INT_LIMIT = 2**62
 _TOP_KEYS = {"format", "version", "meta", "tracks"}
 _TRACK_KEYS = {"id", "boxes"}
 _BOX_KEYS = {"frame", "box", "score", "consider", "class", "visibility", "world"}
@@ -69,10 +68,10 @@ def _reject_constant(token: str) -> Any:
     raise ValueError(f"non-finite number {token} is not allowed")
 
 
-def _int(v: Any, where: str, lo: int = -_INT_LIMIT) -> int:
+def _int(v: Any, where: str, lo: int = -INT_LIMIT) -> int:
     if isinstance(v, bool) or not isinstance(v, int):
         raise InputError(f"{where}: expected an integer, got {json.dumps(v)[:40]}")
-    if not lo <= v < _INT_LIMIT:
+    if not lo <= v < INT_LIMIT:
         raise InputError(f"{where}: {v} out of range [{lo}, 2**62)")
     return v
 

@@ -22,10 +22,8 @@ from typing import Iterable
 import numpy as np
 
 from ..errors import InputError
-from ..types import Annotations
+from ..types import INT_LIMIT, Annotations
 from .atomic import atomic_open
-
-_INT_LIMIT = 2.0 ** 62
 
 __all__ = ["read_mot", "parse_mot", "write_mot", "format_mot_rows", "read_seqinfo"]
 
@@ -73,7 +71,7 @@ def _fast_rows(text: str) -> tuple[np.ndarray, int] | None:
     klass = a[:, 7] if a.shape[1] > 7 else np.zeros(len(a))
     ok = (np.isfinite(a).all() and (frame >= 1).all() and (frame == np.floor(frame)).all()
           and (a[:, 4] > 0).all() and (a[:, 5] > 0).all()
-          and (np.abs(np.column_stack([frame, ident, klass])) < _INT_LIMIT).all())
+          and (np.abs(np.column_stack([frame, ident, klass])) < INT_LIMIT).all())
     if not ok:
         return None
     if a.shape[1] < 10:
@@ -105,7 +103,7 @@ def parse_mot(text: str, kind: str = "results", name: str = "<string>") -> Annot
         if not all(np.isfinite(vals)):
             raise InputError(f"{name}:{lineno}: non-finite value in {line[:80]!r}")
         # frame, id and (9-column gt) class become int64: refuse values that cannot be one
-        if any(abs(v) >= _INT_LIMIT for v in (vals[0], vals[1], vals[7] if len(vals) > 7 else 0)):
+        if any(abs(v) >= INT_LIMIT for v in (vals[0], vals[1], vals[7] if len(vals) > 7 else 0)):
             raise InputError(f"{name}:{lineno}: frame, id or class out of range in {line[:80]!r}")
         if vals[0] < 1 or not float(vals[0]).is_integer():
             raise InputError(f"{name}:{lineno}: frame must be an integer >= 1, got {parts[0]!r}")
