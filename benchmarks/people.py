@@ -1,6 +1,7 @@
 """People preset speed and accuracy on the 768x576 PETS clip; target >= 25 frames/s on 2 cores.
 
-Rows (one process): the default pipeline, `--preset people` (heads, head-based splitting, active
+Rows (one process): the default pipeline, the preset without the shape tracker (head-based
+splitting only: detection keeps its worker thread), `--preset people` (heads, head-based splitting, active
 shape tracker), and the preset with shape hypotheses and HOG in motion regions every 5th frame.
 Frames are decoded inside the timing; no video is written.
 
@@ -25,6 +26,7 @@ from motiontrack.types import Annotations
 
 VARIANTS = (
     ("default pipeline", None, ()),
+    ("people, heads only (no shapes)", "people", ("people.shapes=false",)),
     ("--preset people", "people", ()),
     ("people + hypotheses + HOG/5", "people",
      ("people.hypotheses=true", "people.hog=regions", "people.hog_every=5")),

@@ -6,7 +6,9 @@ import cv2
 import numpy as np
 import pytest
 
-from motiontrack.people.heads import detect_heads, height_profile, split_region_by_heads
+from motiontrack.people.heads import (
+    detect_heads, detect_heads_many, height_profile, split_region_by_heads,
+)
 from motiontrack.types import Box, Region
 
 
@@ -95,3 +97,39 @@ def test_split_keeps_a_single_person():
     _person(mask, 60, 110)
     region = _region(mask)
     assert split_region_by_heads(region, mask) == [region]
+
+
+def test_detect_heads_many_equals_one_region_at_a_time():
+    # The batched detector lays all profiles end to end with inf gaps; on random masks, scales,
+    # boxes (partly outside the mask, empty) and parameters it must give exactly what
+    # detect_heads gives region by region.
+    rng = np.random.default_rng(7)
+    found = 0
+    for _ in range(1500):
+        H, W = (int(v) for v in rng.integers(5, 60, 2))
+        mask = np.zeros((H, W), np.uint8)
+        for _k in range(int(rng.integers(0, 6))):
+            x, w, y = int(rng.integers(0, W)), int(rng.integers(1, 15)), int(rng.integers(0, H))
+            mask[y:, x:x + w] = 255
+        mask[rng.random((H, W)) < 0.05] = 0
+        scale = float(rng.choice([0.25, 0.5, 1.0]))
+        boxes = [Box(float(rng.uniform(-5, W / scale)), float(rng.uniform(-5, H / scale)),
+                     float(rng.uniform(1, W / scale)), float(rng.uniform(1, H / scale)))
+                 for _b in range(int(rng.integers(0, 5)))]
+        params = dict(min_width=float(rng.uniform(1, 10)), tolerance=float(rng.uniform(0, 5)),
+                      min_drop=float(rng.uniform(0, 8)))
+        one = [detect_heads(mask, b, scale, **params) for b in boxes]
+        assert detect_heads_many(mask, boxes, scale, **params) == one
+        found += sum(map(len, one))
+    assert found > 500  # the comparison covered many actual heads, not just empty lists
+
+
+@pytest.mark.parametrize("xs, feet, heights", CASES)
+def test_detect_heads_many_on_the_hand_built_people(xs, feet, heights):
+    mask = np.zeros((130, 140), np.uint8)
+    for x, f, h in zip(xs, feet, heights):
+        _person(mask, x, f, h)
+    box = _region(mask).box
+    heads = detect_heads_many(mask, [box, Box(0, 0, 5, 5), box])
+    assert [h.x for h in heads[0]] == pytest.approx(xs, abs=1.0)
+    assert heads[1] == [] and heads[2] == heads[0]

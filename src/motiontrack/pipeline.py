@@ -106,8 +106,10 @@ class Pipeline:
             self.bridge = Bridge(cfg.tracker.bridge, cfg.tracker.bridge_frames)
         self.frames_seen = 0
         #: run detection and tracking in one thread (needed when a later stage reads the
-        #: detector's state, e.g. its background image, for the same frame)
-        self.sequential = self.people is not None
+        #: detector's state, e.g. its background image, for the same frame). Head-based
+        #: splitting needs only the mask: it runs in this thread while the worker detects the
+        #: next frame (measured faster than running it in the worker, which it would slow down).
+        self.sequential = self.people is not None and self.people.needs_tracks
 
     def _frame_gap(self, frame: Frame) -> int:
         """Frame periods since the previous frame, from the timestamps (wall-clock for live

@@ -70,6 +70,33 @@ class PeopleStage:
         return {"min_width": c.head_min_width, "max_width": c.head_max_width,
                 "tolerance": c.head_tolerance, "min_drop": c.head_min_drop}
 
+    @property
+    def needs_tracks(self) -> bool:
+        """Whether any step after :meth:`split_regions` runs (HOG or shapes): those need the
+        frame, the background and the previous tracks, so the pipeline runs them in order."""
+        return self.shape_tracker is not None or self.hog is not None
+
+    def split_regions(self, mask: np.ndarray | None, regions: Sequence[Region], width: int
+                      ) -> tuple[list[Region], list[Any]]:
+        """Step 1 alone: heads in each region and merged regions split between adjacent heads.
+
+        Needs only the mask (processing resolution) and the frame ``width`` (original pixels), not
+        the background or the tracks. Returns ``(regions, heads)``; regions are unchanged when
+        heads are off or there is no mask (external detections)."""
+        from .heads import detect_heads_many, split_region_by_heads
+
+        c = self.cfg
+        if not c.heads or mask is None:
+            return list(regions), []
+        scale = mask.shape[1] / width
+        per_region = detect_heads_many(mask, [r.box for r in regions], scale, **self._head_params())
+        out: list[Region] = []
+        heads: list[Any] = []
+        for r, hs in zip(regions, per_region):
+            heads.extend(hs)
+            out.extend(split_region_by_heads(r, mask, hs, scale) if c.split else [r])
+        return out, heads
+
     def process(self, frame_img: np.ndarray, background: np.ndarray | None, mask: np.ndarray | None,
                 regions: Sequence[Region], tracks: Sequence[Any], work: np.ndarray | None = None
                 ) -> tuple[list[Region], dict[str, Any]]:
@@ -104,24 +131,13 @@ class PeopleStage:
             can apply a hypothesis to that one track without ever starting a new track from it),
             ``hog`` (list of Region).
         """
-        from .heads import detect_heads, split_region_by_heads
-
         c = self.cfg
         H, W = frame_img.shape[:2]
         regions = list(regions)
         extras: dict[str, Any] = {"heads": [], "shapes": [], "hypotheses": [], "hog": [],
                                   "hypotheses_by_track": {}}
         # 1. heads, and splitting merged regions between them.
-        out: list[Region] = []
-        if c.heads and mask is not None:
-            scale = mask.shape[1] / W
-            hp = self._head_params()
-            for r in regions:
-                hs = detect_heads(mask, r.box, scale, **hp)
-                extras["heads"].extend(hs)
-                out.extend(split_region_by_heads(r, mask, hs, scale) if c.split else [r])
-        else:
-            out = regions
+        out, extras["heads"] = self.split_regions(mask, regions, W)
         # 2. HOG, alone or inside motion regions.
         if self.hog is not None:
             if self._frame % c.hog_every == 0:

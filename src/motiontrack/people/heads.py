@@ -26,6 +26,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.ndimage import minimum_filter1d
 
 from ..types import Box, Region
 
@@ -82,9 +83,7 @@ def _running_max_top(top: np.ndarray, r: int) -> np.ndarray:
     """Highest (smallest) top within ``r`` columns either side: ``min(top[x-r:x+r+1])``."""
     if r <= 0 or len(top) == 0:
         return top.copy()
-    padded = np.pad(top, r, mode="constant", constant_values=np.inf)
-    win = np.lib.stride_tricks.sliding_window_view(padded, 2 * r + 1)
-    return win.min(axis=1)
+    return minimum_filter1d(top, 2 * r + 1, mode="constant", cval=np.inf)
 
 
 def detect_heads(mask: np.ndarray, box: Box | None = None, scale: float = 1.0,
@@ -127,8 +126,10 @@ def detect_heads(mask: np.ndarray, box: Box | None = None, scale: float = 1.0,
     # 1. profile, smoothed across 3 columns (single-column mask noise).
     top = height_profile(crop)
     if len(top) >= 3:
-        p = np.pad(top, 1, mode="edge")
-        top = np.median(np.stack([p[:-2], p[1:-1], p[2:]]), axis=0)
+        # median of three neighbours (edges repeated): max(min(a, b), min(max(a, b), c))
+        a = np.concatenate(([top[0]], top[:-1]))
+        c = np.concatenate((top[1:], [top[-1]]))
+        top = np.maximum(np.minimum(a, top), np.minimum(np.maximum(a, top), c))
     h = crop.shape[0]
     wmin = max(1.0, min_width * scale)
     wmax = max(wmin, max_width * scale)
@@ -160,6 +161,83 @@ def detect_heads(mask: np.ndarray, box: Box | None = None, scale: float = 1.0,
         heads.append(Head(x=(x1 + xc + 0.5) / scale - 0.5, y=(y1 + mean_top + width / 2.0) / scale,
                           width=width / scale, top=(y1 + mean_top) / scale))
     return heads
+
+
+def _crop_bounds(box: Box, scale: float, W: int, H: int) -> tuple[int, int, int, int]:
+    return (max(int(np.floor(box.x * scale)), 0), max(int(np.floor(box.y * scale)), 0),
+            min(int(np.ceil(box.x2 * scale)), W), min(int(np.ceil(box.y2 * scale)), H))
+
+
+def detect_heads_many(mask: np.ndarray, boxes, scale: float = 1.0, min_width: float = 6.0,
+                      max_width: float = 40.0, tolerance: float = 3.0,
+                      min_drop: float = 4.0) -> list[list[Head]]:
+    """:func:`detect_heads` for many regions of one mask at once (same results, one list per
+    box in order).
+
+    The profiles of all regions are laid end to end with ``inf`` columns between them (off a
+    region counts as infinitely low, exactly as at a region's edge), so the smoothing, the
+    running maximum and the peak search run once per frame instead of once per region.
+    """
+    m = np.asarray(mask)
+    H, W = m.shape[:2]
+    wmin = max(1.0, min_width * scale)
+    wmax = max(wmin, max_width * scale)
+    tol = tolerance * scale
+    drop = min_drop * scale
+    r = max(1, int(np.ceil(wmin)))
+    gap = np.full(r + 1, np.inf)
+    pieces: list[np.ndarray] = []
+    heights: list[np.ndarray] = []
+    segs: list[tuple[int, int, int, int, int]] = []   # (box index, start, stop, x1, y1)
+    pos = 0
+    for k, box in enumerate(boxes):
+        x1, y1, x2, y2 = _crop_bounds(box, scale, W, H)
+        if x2 <= x1 or y2 <= y1:
+            continue
+        fg = m[y1:y2, x1:x2] > 0
+        h = y2 - y1
+        top = np.where(fg.any(axis=0), fg.argmax(axis=0), h).astype(np.float64)
+        n = len(top)
+        if n >= 3:  # running median of three columns, edges repeated
+            a = np.concatenate(([top[0]], top[:-1]))
+            c = np.concatenate((top[1:], [top[-1]]))
+            top = np.maximum(np.minimum(a, top), np.minimum(np.maximum(a, top), c))
+        pieces += [top, gap]
+        heights += [np.full(n, float(h)), np.zeros(len(gap))]
+        segs.append((k, pos, pos + n, x1, y1))
+        pos += n + len(gap)
+    out: list[list[Head]] = [[] for _ in boxes]
+    if not segs:
+        return out
+    top = np.concatenate(pieces)
+    near = minimum_filter1d(top, 2 * r + 1, mode="constant", cval=np.inf)
+    peak = (top <= near + tol) & (top < np.concatenate(heights))
+    d = np.diff(np.concatenate(([0], peak.astype(np.int8), [0])))
+    starts, stops = np.flatnonzero(d == 1), np.flatnonzero(d == -1)
+    widths = stops - starts
+    ok = (widths >= wmin) & (widths <= wmax)
+    if not ok.any():
+        return out
+    starts, stops, widths = starts[ok], stops[ok], widths[ok]
+    # per-run min and mean: reduceat over [a0, b0, a1, b1, ...] and every other entry (the
+    # profile ends with an inf gap, so every stop is a valid index)
+    bounds = np.column_stack([starts, stops]).ravel()
+    levels = np.minimum.reduceat(top, bounds)[::2]
+    means = np.add.reduceat(top, bounds)[::2] / widths
+    seg_starts = np.array([s[1] for s in segs])
+    reach = int(np.ceil(wmin))
+    for a, b, lv, mt in zip(starts.tolist(), stops.tolist(), levels.tolist(), means.tolist()):
+        # stand out on both sides (the inf gap between regions is "infinitely low")
+        left = top[max(0, a - reach):a]
+        right = top[b:b + reach]
+        if (len(left) and left.min() < lv + drop) or (len(right) and right.min() < lv + drop):
+            continue
+        k, s0, _, x1, y1 = segs[int(np.searchsorted(seg_starts, a, side="right")) - 1]
+        width = b - a
+        xc = (a - s0 + b - s0 - 1) / 2.0
+        out[k].append(Head(x=(x1 + xc + 0.5) / scale - 0.5, y=(y1 + mt + width / 2.0) / scale,
+                           width=width / scale, top=(y1 + mt) / scale))
+    return out
 
 
 def detect_heads_in_regions(mask: np.ndarray, regions, scale: float = 1.0, **params) -> list[list[Head]]:
