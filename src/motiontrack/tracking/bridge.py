@@ -5,7 +5,8 @@ or the mask broke up — a single-object tracker (:mod:`motiontrack.tracking.sin
 started on the track's last reported box in the previous frame. While motion detection does not
 find the track, the single-object tracker's box is offered to the multi-object tracker as a
 measurement that belongs to that track. The bridge ends when motion detection finds the track
-again, when the single-object tracker reports a failure, or after ``max_frames`` frames. Only
+again, when the single-object tracker reports a failure, when its box reaches the image border
+(the object is leaving the view), or after ``max_frames`` frames. Only
 tracks that have travelled at least one body height are bridged, so a ghost (a static blob that
 never moved) is not kept alive.
 """
@@ -26,6 +27,13 @@ __all__ = ["Bridge"]
 class _Carried:
     sot: SingleTracker
     frames: int = 0
+
+
+def _at_border(box: Box, w: int, h: int, margin: float = 2.0) -> bool:
+    """Whether ``box`` reaches the image border: an object there is leaving the view, and a
+    single-object tracker would stay on the background it leaves behind."""
+    return (box.x <= margin or box.y <= margin or box.x2 >= w - margin
+            or box.y2 >= h - margin)
 
 
 class Bridge:
@@ -66,14 +74,15 @@ class Bridge:
                     continue
                 seen = self._last_seen.get(m.tid)
                 start = None if seen is None else clip_box(Box(*map(float, seen[1])), w, h)
-                if start is None or start.w < 4 or start.h < 4:
+                if start is None or start.w < 4 or start.h < 4 or _at_border(start, w, h):
                     continue
                 carried = _Carried(SINGLE_TRACKERS.create(self.method))
                 carried.sot.init(seen[0], start)
                 self._carried[m.tid] = carried
             ok, box, _score = carried.sot.update(image)
             carried.frames += 1
-            if not ok or box is None or carried.frames > self.max_frames:
+            if (not ok or box is None or carried.frames > self.max_frames
+                    or _at_border(box, w, h)):
                 del self._carried[m.tid]
                 self._spent.add(m.tid)
                 continue
