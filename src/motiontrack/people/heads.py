@@ -30,7 +30,8 @@ from scipy.ndimage import minimum_filter1d
 
 from ..types import Box, Region
 
-__all__ = ["Head", "height_profile", "detect_heads", "detect_heads_in_regions", "split_region_by_heads"]
+__all__ = ["Head", "height_profile", "detect_heads", "detect_heads_many", "detect_heads_in_regions",
+           "split_region_by_heads"]
 
 
 @dataclass(frozen=True)
@@ -164,6 +165,7 @@ def detect_heads(mask: np.ndarray, box: Box | None = None, scale: float = 1.0,
 
 
 def _crop_bounds(box: Box, scale: float, W: int, H: int) -> tuple[int, int, int, int]:
+    """``box`` (original pixels) as mask rows/columns ``x1, y1, x2, y2``, clipped to the mask."""
     return (max(int(np.floor(box.x * scale)), 0), max(int(np.floor(box.y * scale)), 0),
             min(int(np.ceil(box.x2 * scale)), W), min(int(np.ceil(box.y2 * scale)), H))
 
@@ -176,10 +178,14 @@ def detect_heads_many(mask: np.ndarray, boxes, scale: float = 1.0, min_width: fl
 
     The profiles of all regions are laid end to end with ``inf`` columns between them (off a
     region counts as infinitely low, exactly as at a region's edge), so the smoothing, the
-    running maximum and the peak search run once per frame instead of once per region.
+    running maximum and the peak search run once per frame instead of once per region. The
+    pipeline uses this; :func:`detect_heads` stays the step-by-step reference it is tested
+    against (``tests/test_heads.py``).
     """
     m = np.asarray(mask)
-    H, W = m.shape[:2]
+    if m.ndim != 2:
+        raise ValueError(f"mask must be 2-D, got shape {m.shape}")
+    H, W = m.shape
     wmin = max(1.0, min_width * scale)
     wmax = max(wmin, max_width * scale)
     tol = tolerance * scale
@@ -242,7 +248,7 @@ def detect_heads_many(mask: np.ndarray, boxes, scale: float = 1.0, min_width: fl
 
 def detect_heads_in_regions(mask: np.ndarray, regions, scale: float = 1.0, **params) -> list[list[Head]]:
     """:func:`detect_heads` for each region; one list per region (same order)."""
-    return [detect_heads(mask, r.box, scale, **params) for r in regions]
+    return detect_heads_many(mask, [r.box for r in regions], scale, **params)
 
 
 def split_region_by_heads(region: Region, mask: np.ndarray, heads: list[Head] | None = None,
