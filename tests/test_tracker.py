@@ -197,3 +197,55 @@ def test_kalman_update_equals_the_textbook_formula():
         K = P[i] @ H.T @ np.linalg.inv(H @ P[i] @ H.T + R)
         assert np.allclose(x2[i], x[i] + K @ (z[i] - H @ x[i]))
         assert np.allclose(P2[i], (np.eye(8) - K @ H) @ P[i])
+
+
+# ----------------------------------------------------------- merged blobs split per track
+def test_split_merged_moves_predictions_inside_the_blob():
+    from motiontrack.tracking.merge import split_merged
+
+    pred = np.array([[100.0, 100, 20, 50], [128, 102, 20, 50]])
+    det = np.array([[98.0, 98, 52, 56], [400, 100, 20, 50]])
+    boxes, origin, owner = split_merged(pred, np.array([True, True]), det)
+    # the far detection is kept first, then one synthetic measurement per track
+    np.testing.assert_allclose(boxes[0], det[1])
+    assert origin.tolist() == [1, 0, 0] and owner.tolist() == [-1, 0, 1]
+    np.testing.assert_allclose(boxes[1], [100, 100, 20, 50])  # already inside: unchanged
+    np.testing.assert_allclose(boxes[2], [128, 102, 20, 50])
+
+
+def test_split_merged_uses_own_boxes_cut_to_the_blob():
+    from motiontrack.tracking.merge import split_merged
+
+    pred = np.array([[100.0, 100, 20, 50], [128, 102, 20, 50], [300, 300, 10, 10]])
+    det = np.array([[98.0, 98, 52, 56]])
+    own = np.array([
+        [90.0, 95, 30, 70],     # reaches out of the blob on the left, top and bottom: cut
+        [np.nan] * 4,           # none: the moved prediction
+        [0.0, 0, 5, 5],         # a track that claims nothing: ignored
+    ])
+    boxes, _, owner = split_merged(pred, np.array([True, True, True]), det, own=own)
+    assert owner.tolist() == [0, 1]
+    np.testing.assert_allclose(boxes[0], [98, 98, 22, 56])  # [90,120]x[95,165] ∩ [98,150]x[98,154]
+    np.testing.assert_allclose(boxes[1], [128, 102, 20, 50])
+    # an own box (almost) outside the blob is no estimate of the share: the prediction is used
+    own2 = np.array([[149.0, 60, 40, 40], [np.nan] * 4, [np.nan] * 4])
+    boxes2, _, _ = split_merged(pred, np.array([True, True, True]), det, own=own2)
+    np.testing.assert_allclose(boxes2[0], [100, 100, 20, 50])
+
+
+def test_tracker_splits_a_merged_blob_along_located_boxes():
+    cfg = TrackerConfig(confirm_hits=1, measurement_noise=0.01)
+    trk = MultiObjectTracker(cfg, image_size=(640, 480))
+    a, b = np.array([100.0, 100, 20, 50]), np.array([140.0, 100, 20, 50])
+    for _ in range(3):
+        out = trk.update(np.array([a, b]))
+    ids = {round(t.box.x): t.id for t in out}
+    blob = np.array([[98.0, 98, 64, 54]])
+    # track 0 is "located" 6 px right of its prediction inside the blob; track 1 is not located
+    out = trk.update(blob, located={0: np.array([106.0, 100, 20, 50])})
+    by_id = {t.id: t.box for t in out}
+    assert set(by_id) == set(ids.values())
+    left = by_id[ids[100]]
+    right = by_id[ids[140]]
+    assert left.x > 103          # pulled towards the located box (measurement noise is small)
+    assert right.x == pytest.approx(140, abs=0.5)  # its moved prediction: where it was

@@ -289,6 +289,8 @@ class PeopleConfig(_Section):
     head_min_drop: float = param(4.0, lo=0.0, hi=200.0, doc="neighbours must be this much lower (px)")
     shapes: bool = param(True, doc="active shape tracker on confirmed tracks")
     shape_model: str = param("", doc="shape model .npz (empty = the shipped default)")
+    shape_split: bool = param(True, doc="split a merged region between the people in it along their "
+                                        "fitted outlines rather than their predicted boxes (needs shapes)")
     hypotheses: bool = param(False, doc="offer the fitted shape's box of a person the motion detector "
                                         "lost to that lost track only (never starts a track)")
     hypothesis_score: float = param(0.5, lo=0.0, hi=1.0, doc="score of shape hypotheses")
@@ -300,6 +302,11 @@ class PeopleConfig(_Section):
     hypothesis_agreement: float = param(0.5, lo=0.0, hi=1.0,
                                         doc="offer a hypothesis only for a shape whose box agreed "
                                             "(IoU) this much with its track when last measured")
+    border_extend: bool = param(True, doc="a region cut off by the image border is extended past it "
+                                          "to its person's fitted outline (needs shapes)")
+    border_support: float = param(0.7, lo=0.0, hi=1.0,
+                                   doc="fraction of an outline's visible sample points that must find "
+                                       "an edge for it to extend a region past the border")
     refine: bool = param(False, doc="replace a region's box by the outline box of the well-fitted "
                                    "shape matched to it (tighter boxes)")
     refine_support: float = param(0.7, lo=0.0, hi=1.0,

@@ -174,8 +174,15 @@ class Pipeline:
             for tid, region in hyps.items():
                 if tid in index and index[tid] not in owned:
                     owned[index[tid]] = region.box.as_array()
+        located = None
+        if extras.get("located_by_track"):
+            # fitted outlines of tracked people: where each one is inside a merged region
+            index = {m.tid: i for i, m in enumerate(self.tracker.meta) if m.tid > 0}
+            located = {index[tid]: box for tid, box in extras["located_by_track"].items()
+                       if tid in index}
         tracks = self.tracker.update(regions, dt=self._frame_gap(frame), owned=owned,
-                                     image=extras.get("small"), mask=mask, scale=self.scale)
+                                     image=extras.get("small"), mask=mask, scale=self.scale,
+                                     located=located)
         if self.bridge is not None:
             self.bridge.remember(frame.image, tracks)
         self._prev_tracks = tuple(tracks)

@@ -154,8 +154,15 @@ class PeopleStage:
             shapes = self.shape_tracker.update(frame_img, background, out, tracks,
                                                heads=extras["heads"], mask=mask, work=work)
             extras["shapes"] = shapes
+            if c.shape_split:
+                # outlines fitted this frame, of people already compared with their track (an
+                # outline never measured against its track's box is not trusted to split)
+                extras["located_by_track"] = {s.track_id: s.box.as_array() for s in shapes
+                                              if s.coasting == 0 and s.agreement >= 0}
             if c.refine and shapes:
                 out = _refine(shapes, out, c.hypothesis_iou, c.refine_support)
+            if c.border_extend and shapes:
+                out = _extend_at_border(shapes, out, W, H, c.border_support)
             if shapes:
                 # Every tracked person no region covers, for a region tracker that can apply a
                 # hypothesis to that one track (never starting a new track from it).
@@ -202,6 +209,55 @@ def _by_track(shapes, regions: list[Region], c: PeopleConfig, W: int, H: int) ->
                 and s.agreement >= c.hypothesis_agreement]
     hyps, ids = _uncovered(eligible, shapes, regions, c.hypothesis_iou, c.hypothesis_score, W, H)
     return dict(zip(ids, hyps))
+
+
+def _extend_at_border(shapes, regions: list[Region], W: int, H: int, min_support: float
+                      ) -> list[Region]:
+    """Regions cut off by the image border take their person's extent beyond it from the outline.
+
+    A motion region touching the border sees only the part of a person inside the image; a fitted
+    outline (a whole-body model) reaches past the border. For a region touching a border that is
+    matched one-to-one (IoU >= 0.5 with the outline's box cut to the image) to a shape fitted this
+    frame whose box reaches past that border, the region's box is extended on that side only, to
+    the outline's edge; its other sides are kept. The shape must have found edges on at least
+    ``min_support`` of its *visible* sample points (``support >= min_support * visible``): the
+    part beyond the border cannot be seen, so plain support would reject every such shape.
+    """
+    from ..tracking.association import assign, association_cost
+    from ..types import Box
+
+    edge = 1.0
+    at_border = [i for i, r in enumerate(regions)
+                 if r.box.x <= edge or r.box.y <= edge or r.box.x2 >= W - edge or r.box.y2 >= H - edge]
+    good = [s for s in shapes if s.coasting == 0 and s.visible > 0
+            and s.support >= min_support * s.visible]
+    if not at_border or not good:
+        return regions
+    sb = np.array([s.box.as_array() for s in good]).reshape(-1, 4)
+    cut = sb.copy()
+    cut[:, 0], cut[:, 1] = np.maximum(sb[:, 0], 0), np.maximum(sb[:, 1], 0)
+    cut[:, 2] = np.minimum(sb[:, 0] + sb[:, 2], W) - cut[:, 0]
+    cut[:, 3] = np.minimum(sb[:, 1] + sb[:, 3], H) - cut[:, 1]
+    rb = np.array([regions[i].box.as_array() for i in at_border]).reshape(-1, 4)
+    matches, _, _ = assign(association_cost(cut, rb, 0.5, 0.0, "iou"))
+    out = list(regions)
+    for si, k in matches:
+        ri = at_border[k]
+        r = regions[ri]
+        x1, y1, x2, y2 = r.box.x, r.box.y, r.box.x2, r.box.y2
+        s = sb[si]
+        if x1 <= edge and s[0] < 0:
+            x1 = float(s[0])
+        if y1 <= edge and s[1] < 0:
+            y1 = float(s[1])
+        if x2 >= W - edge and s[0] + s[2] > W:
+            x2 = float(s[0] + s[2])
+        if y2 >= H - edge and s[1] + s[3] > H:
+            y2 = float(s[1] + s[3])
+        if (x1, y1, x2, y2) != (r.box.x, r.box.y, r.box.x2, r.box.y2):
+            box = Box.from_xyxy(x1, y1, x2, y2)
+            out[ri] = Region(box=box, centroid=box.center, area=r.area, score=r.score)
+    return out
 
 
 def _refine(shapes, regions: list[Region], min_iou: float, min_support: float) -> list[Region]:

@@ -6,6 +6,11 @@ matched to all of them. Following the Reading People Tracker, the predictions ar
 merged prediction that matches the blob, and the blob is split again into one *synthetic
 measurement* per track: the track's predicted box moved (not resized) to lie inside the blob. Each
 identity therefore survives the crossing with its own velocity.
+
+When a better estimate of where each person is inside the blob exists this frame — the active
+shape tracker's outline fitted to the person (``own`` boxes) — the synthetic measurement is that
+box cut to the blob instead of the moved prediction: the prediction only knows where the person
+was going, the outline was fitted to this frame's image.
 """
 
 from __future__ import annotations
@@ -16,7 +21,8 @@ __all__ = ["split_merged", "anchor_partial"]
 
 
 def split_merged(pred: np.ndarray, established: np.ndarray, det: np.ndarray,
-                 max_share: float = 0.85) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                 max_share: float = 0.85, own: np.ndarray | None = None
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Split detections that contain several established tracks' predictions.
 
     Parameters
@@ -29,6 +35,12 @@ def split_merged(pred: np.ndarray, established: np.ndarray, det: np.ndarray,
         Measured boxes.
     max_share : float
         A prediction claims a blob only if its area is at most this fraction of the blob's.
+    own : (N, 4) float64, optional
+        This frame's own box estimate per track (NaN rows where there is none), e.g. fitted
+        shapes. A track that claims a blob and has one gets that box cut to the blob as its
+        synthetic measurement (when the cut is at least 2 px each way); the others get their
+        prediction moved inside the blob. Which tracks claim which blob is decided by the
+        predictions either way.
 
     Returns
     -------
@@ -76,10 +88,24 @@ def split_merged(pred: np.ndarray, established: np.ndarray, det: np.ndarray,
         b[:, 3] = np.minimum(b[:, 3], det[j, 3])
         b[:, 0] = np.clip(b[:, 0], det[j, 0], det[j, 0] + det[j, 2] - b[:, 2])
         b[:, 1] = np.clip(b[:, 1], det[j, 1], det[j, 1] + det[j, 3] - b[:, 3])
+        if own is not None:
+            b = _cut_own(b, own[tracks], det[j])
         boxes.append(b)
         origin.append(np.full(len(tracks), j, np.int64))
         owner.append(tracks.astype(np.int64))
     return np.concatenate(boxes), np.concatenate(origin), np.concatenate(owner)
+
+
+def _cut_own(moved: np.ndarray, own: np.ndarray, blob: np.ndarray) -> np.ndarray:
+    """Rows of ``own`` (x, y, w, h; NaN = none) cut to ``blob`` replace rows of ``moved``."""
+    x1 = np.maximum(own[:, 0], blob[0])
+    y1 = np.maximum(own[:, 1], blob[1])
+    x2 = np.minimum(own[:, 0] + own[:, 2], blob[0] + blob[2])
+    y2 = np.minimum(own[:, 1] + own[:, 3], blob[1] + blob[3])
+    ok = (x2 - x1 >= 2) & (y2 - y1 >= 2)  # False for NaN rows
+    out = moved.copy()
+    out[ok] = np.column_stack([x1, y1, x2 - x1, y2 - y1])[ok]
+    return out
 
 
 def anchor_partial(pred: np.ndarray, det: np.ndarray, ref_size: np.ndarray, min_ratio: float,

@@ -106,7 +106,8 @@ class MultiObjectTracker:
     def update(self, detections: Sequence[Region] | np.ndarray,
                scores: np.ndarray | None = None, dt: int = 1,
                owned: dict[int, np.ndarray] | None = None, image: np.ndarray | None = None,
-               mask: np.ndarray | None = None, scale: float = 1.0) -> list[Track]:
+               mask: np.ndarray | None = None, scale: float = 1.0,
+               located: dict[int, np.ndarray] | None = None) -> list[Track]:
         """One tracking step with this frame's detections (regions or an (M, 4) box array).
 
         ``dt`` is the number of frame periods since the previous update: more than 1 after a gap
@@ -116,6 +117,10 @@ class MultiObjectTracker:
         bridging a detection miss, see :mod:`motiontrack.tracking.bridge`); it is used only when no
         detection matches the track. ``image`` and ``mask`` (processing scale ``scale``) feed the
         appearance model (:mod:`motiontrack.tracking.appearance`) when ``appearance_weight`` > 0.
+        ``located`` maps a track index to its box found in this frame by other means (the active
+        shape tracker's fitted outline): when a merged blob is split, such a track's share is
+        that box cut to the blob rather than its moved prediction (see
+        :func:`~motiontrack.tracking.merge.split_merged`).
 
         Returns the snapshots of the tracks to report this frame: confirmed tracks matched in this
         frame (plus coasting lost tracks when ``output_lost``).
@@ -130,7 +135,7 @@ class MultiObjectTracker:
         self.frame_count += 1
 
         pred = self.predict(dt)
-        det, det_scores, owner, n_real = self._measurements(pred, det, det_scores, owned)
+        det, det_scores, owner, n_real = self._measurements(pred, det, det_scores, owned, located)
         det_hist = (histograms(image, det, mask, scale)
                     if self.cfg.appearance_weight > 0 and image is not None and len(det) else None)
         matches, un_tracks, un_dets = assign(self._cost(pred, det, owner, n_real, det_hist))
@@ -144,14 +149,20 @@ class MultiObjectTracker:
 
     # ------------------------------------------------------------------------ update steps
     def _measurements(self, pred: np.ndarray, det: np.ndarray, det_scores: np.ndarray,
-                      owned: dict[int, np.ndarray] | None):
+                      owned: dict[int, np.ndarray] | None,
+                      located: dict[int, np.ndarray] | None = None):
         """This frame's measurements: merged blobs split per track, then the owned ones.
 
         Returns ``(boxes, scores, owner, n_real)``: ``owner`` is the track index a synthetic
         measurement belongs to (-1 for a detection); rows from ``n_real`` on are owned ones."""
         if self.cfg.split_merged and len(det):
             established = np.array([m.state != TrackState.TENTATIVE for m in self.meta], bool)
-            det, origin, owner = split_merged(pred, established, det)
+            own = None
+            if located:
+                own = np.full((len(pred), 4), np.nan)
+                for t, box in located.items():
+                    own[t] = box
+            det, origin, owner = split_merged(pred, established, det, own=own)
             det_scores = det_scores[origin]
         else:
             owner = np.full(len(det), -1, np.int64)
