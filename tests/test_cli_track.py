@@ -145,3 +145,18 @@ def test_save_intermediate_movies(tmp_path):
 def test_save_unknown_stream_is_an_error(tmp_path, capsys):
     assert main(["track", SCENE, "-o", str(tmp_path / "o"), "--save", "nope"]) == 2
     assert "unknown --save stream" in capsys.readouterr().err
+
+
+def test_frame_loop_ticks_the_bar_and_stops_after_a_complete_frame():
+    from motiontrack.cli._common import FrameLoop, accuracy_line
+
+    counted, asked = [], [False]
+    loop = FrameLoop(counted.append, lambda: asked[0])
+    loop.tick()
+    assert counted == [1]
+    asked[0] = True
+    with pytest.raises(KeyboardInterrupt):
+        loop.tick()
+    assert counted == [1, 1]  # the frame is counted before the stop surfaces
+    assert accuracy_line({"HOTA": 0.5, "MOTA": 0.25, "IDSW": 3.0}) == \
+        "accuracy  HOTA 0.500  MOTA 0.250  IDSW 3"

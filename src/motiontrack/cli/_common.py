@@ -1,10 +1,13 @@
-"""Helpers shared by the command modules (argument types, signals, GT loading)."""
+"""Helpers shared by the command modules (argument types, signals, progress, GT loading)."""
 
 from __future__ import annotations
 
 import signal
+import sys
 from contextlib import contextmanager
-from typing import Iterator
+from dataclasses import dataclass
+from typing import Any, Callable, Iterator, Mapping
+
 from ..errors import ConfigError
 
 
@@ -53,6 +56,40 @@ class GracefulStop:
     def __exit__(self, *exc) -> None:
         for sig, old in self._old.items():
             signal.signal(sig, old)
+
+
+@dataclass(frozen=True)
+class FrameLoop:
+    """What a frame loop of a command needs: ``update(n)`` advances the progress bar, ``stop()``
+    tells whether SIGINT/SIGTERM asked to stop, and ``tick()`` does both after a complete frame,
+    raising ``KeyboardInterrupt`` when a stop was asked (the command then finalises its outputs
+    with the frames done so far)."""
+
+    update: Callable[[int], Any]
+    stop: Callable[[], bool]
+
+    def tick(self) -> None:
+        self.update(1)
+        if self.stop():
+            raise KeyboardInterrupt
+
+
+@contextmanager
+def frame_loop(total: int | None) -> Iterator[FrameLoop]:
+    """:class:`GracefulStop` signal handlers and a frame progress bar on stderr (hidden when
+    stderr is not a terminal) for the duration of a command's frame loop."""
+    from tqdm import tqdm
+
+    with GracefulStop() as stop, tqdm(total=total, unit="frame", disable=None, file=sys.stderr,
+                                      dynamic_ncols=True) as bar:
+        yield FrameLoop(bar.update, stop.stop)
+
+
+def accuracy_line(a: Mapping[str, float],
+                  keys: tuple[str, ...] = ("HOTA", "MOTA", "IDF1", "recall", "precision")) -> str:
+    """The ``accuracy`` line of a command's printed summary."""
+    return ("accuracy  " + "  ".join(f"{k} {a[k]:.3f}" for k in keys if k in a)
+            + (f"  IDSW {int(a['IDSW'])}" if "IDSW" in a else ""))
 
 
 def read_gt(path: str):

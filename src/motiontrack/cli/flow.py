@@ -12,7 +12,6 @@ from __future__ import annotations
 import argparse
 import json
 import logging
-import sys
 import time
 from dataclasses import asdict, fields
 from pathlib import Path
@@ -119,7 +118,6 @@ def _finish(paths: dict[str, Path], summary: dict[str, Any], outcome) -> None:
 
 def _sparse(args, cfg, params, src) -> int:
     import numpy as np
-    from tqdm import tqdm
 
     from ..annotate import annotate_frame
     from ..config import save_config
@@ -129,7 +127,7 @@ def _sparse(args, cfg, params, src) -> int:
     from ..io.video import VideoSink, extension_for
     from ..tracking.flow import SparseFlowTracker, draw_feature_trails
     from ..types import Annotations
-    from ._common import GracefulStop, read_gt
+    from ._common import accuracy_line, frame_loop, read_gt
 
     out = Path(args.out)
     ext = extension_for(cfg.output.codec)
@@ -156,9 +154,7 @@ def _sparse(args, cfg, params, src) -> int:
     n = 0
     outcome = RunOutcome()
     t0 = time.perf_counter()
-    with atomic_open(paths["tracks"]) as fh, GracefulStop() as stop, \
-            tqdm(total=src.expected_frames(), unit="frame", disable=None, file=sys.stderr,
-                 dynamic_ncols=True) as bar:
+    with atomic_open(paths["tracks"]) as fh, frame_loop(src.expected_frames()) as loop:
         try:
             with outcome:
                 for frame in src:
@@ -181,9 +177,7 @@ def _sparse(args, cfg, params, src) -> int:
                     if mask_video is not None and tracker.last_mask is not None:
                         mask_video.write(tracker.last_mask)
                     n += 1
-                    bar.update(1)
-                    if stop.stop():  # SIGINT/SIGTERM: finish this frame, then finalise the outputs
-                        raise KeyboardInterrupt
+                    loop.tick()  # SIGINT/SIGTERM: stop here, then finalise the outputs
         finally:
             for sink in (video, mask_video):
                 if sink is not None:
@@ -208,23 +202,18 @@ def _sparse(args, cfg, params, src) -> int:
     lines = [f"frames    {n} in {seconds:.2f} s ({summary['fps']:.1f} fps)",
              f"tracks    {summary['tracks']}"]
     if "accuracy" in summary:
-        a = summary["accuracy"]
-        lines.append("accuracy  " + "  ".join(f"{k} {a[k]:.3f}" for k in ("HOTA", "MOTA", "IDF1")
-                                              if k in a)
-                     + (f"  IDSW {int(a['IDSW'])}" if "IDSW" in a else ""))
+        lines.append(accuracy_line(summary["accuracy"], ("HOTA", "MOTA", "IDF1")))
     lines.append(f"outputs   {', '.join(summary['outputs'].values())}")
     print("\n".join(lines))
     return 0
 
 
 def _dense(args, cfg, src) -> int:
-    from tqdm import tqdm
-
     from ..errors import RunOutcome
     from ..io.atomic import check_writable
     from ..io.video import extension_for
     from ..motion.dense_flow import write_flow_videos
-    from ._common import GracefulStop
+    from ._common import frame_loop
 
     out = Path(args.out)
     ext = extension_for(cfg.output.codec)
@@ -237,14 +226,12 @@ def _dense(args, cfg, src) -> int:
     out.mkdir(parents=True, exist_ok=True)
     stats = None
     t0 = time.perf_counter()
-    with GracefulStop() as stop, tqdm(total=src.expected_frames(), unit="frame", disable=None,
-                                      file=sys.stderr, dynamic_ncols=True) as bar, \
-            RunOutcome() as outcome:
+    with frame_loop(src.expected_frames()) as loop, RunOutcome() as outcome:
         stats = write_flow_videos(src, paths["flow_video"], info.fps or 25.0,
                                   mask_path=paths.get("mask_video"), codec=cfg.output.codec,
                                   params=cfg.motion.farneback,
-                                  max_magnitude=args.max_magnitude, progress=bar.update,
-                                  should_stop=stop.stop)
+                                  max_magnitude=args.max_magnitude, progress=loop.update,
+                                  should_stop=loop.stop)
         if stats.stopped:
             raise KeyboardInterrupt
     seconds = time.perf_counter() - t0

@@ -5,7 +5,6 @@ from __future__ import annotations
 import argparse
 import json
 import logging
-import sys
 import time
 from pathlib import Path
 from typing import Any
@@ -68,7 +67,6 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def cmd_follow(args) -> int:
     import numpy as np
-    from tqdm import tqdm
 
     from ..annotate import annotate_frame, draw_label
     from ..errors import ConfigError, RunOutcome, SourceError
@@ -78,7 +76,7 @@ def cmd_follow(args) -> int:
     from ..io.video import CODECS, VideoSink, extension_for
     from ..tracking.single import create_single_tracker, follow, follow_accuracy, parse_box
     from ..types import Annotations, Track, TrackState
-    from ._common import GracefulStop, read_gt
+    from ._common import frame_loop, read_gt
 
     box = parse_box(args.box)
     tracker = create_single_tracker(args.tracker, **parse_params(args.params, "--param"))
@@ -106,9 +104,7 @@ def cmd_follow(args) -> int:
     last_index = args.start - 1
     outcome = RunOutcome()
     t0 = time.perf_counter()
-    with atomic_open(paths["tracks"]) as fh, GracefulStop() as stop, \
-            tqdm(total=src.expected_frames(), unit="frame", disable=None, file=sys.stderr,
-                 dynamic_ncols=True) as bar:
+    with atomic_open(paths["tracks"]) as fh, frame_loop(src.expected_frames()) as loop:
         try:
             with outcome:
                 for index, image, ok, b, score in follow(src, tracker, box):
@@ -129,9 +125,7 @@ def cmd_follow(args) -> int:
                         video.write(img)
                     n += 1
                     last_index = index
-                    bar.update(1)
-                    if stop.stop():  # SIGINT/SIGTERM: finish this frame, then finalise the outputs
-                        raise KeyboardInterrupt
+                    loop.tick()  # SIGINT/SIGTERM: stop here, then finalise the outputs
         finally:
             if video is not None:
                 video.close()

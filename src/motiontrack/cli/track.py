@@ -5,7 +5,6 @@ from __future__ import annotations
 import argparse
 import json
 import logging
-import sys
 
 log = logging.getLogger("motiontrack")
 
@@ -93,11 +92,9 @@ def _viewer():
 
 
 def cmd_track(args) -> int:
-    from tqdm import tqdm
-
     from ..io.mot import read_mot
     from ..pipeline import TrackJob
-    from ._common import GracefulStop, read_gt
+    from ._common import frame_loop, read_gt
 
     cfg = _build_config(args)
     gt = read_gt(args.gt) if args.gt else None
@@ -109,9 +106,8 @@ def cmd_track(args) -> int:
     job = TrackJob(args.source, cfg, args.out, force=args.force, gt=gt, detections=det,
                    show=_viewer() if args.show else None, save=args.save)
     log.info("source %s", job.src.info.describe())
-    with GracefulStop() as stop, tqdm(total=job.expected_frames(), unit="frame", disable=None,
-                                      file=sys.stderr, dynamic_ncols=True) as bar:
-        summary = job.run(progress=bar.update, should_stop=stop.stop)
+    with frame_loop(job.expected_frames()) as loop:
+        summary = job.run(progress=loop.update, should_stop=loop.stop)
     _print_summary(summary)
     return 0
 
@@ -121,9 +117,8 @@ def _print_summary(s) -> None:
              f"tracks    {s.tracks}",
              f"status    {s.status}" + (" (input truncated)" if s.truncated else "")]
     if s.accuracy:
-        a = s.accuracy
-        lines.append("accuracy  " + "  ".join(
-            f"{k} {a[k]:.3f}" for k in ("HOTA", "MOTA", "IDF1", "recall", "precision") if k in a)
-            + (f"  IDSW {int(a['IDSW'])}" if "IDSW" in a else ""))
+        from ._common import accuracy_line
+
+        lines.append(accuracy_line(s.accuracy))
     lines.append(f"outputs   {', '.join(s.outputs.values())}")
     print("\n".join(lines))
