@@ -76,3 +76,24 @@ def test_no_frames_no_file(tmp_path):
     with VideoSink(tmp_path / "a.webm", 25, "vp80"):
         pass
     assert list(tmp_path.iterdir()) == []
+
+
+def test_outputs_get_the_usual_permissions_not_mkstemps_0600(tmp_path):
+    import importlib
+    import os
+    import stat
+
+    import motiontrack.io.atomic as atomic
+
+    old = os.umask(0o022)
+    try:
+        importlib.reload(atomic)  # FILE_MODE is taken from the umask at import (same module dict)
+        assert atomic.FILE_MODE == 0o644
+        atomic.atomic_write_text(tmp_path / "a.txt", "x\n")
+        with VideoSink(tmp_path / "v.webm", 10.0, "vp80") as sink:
+            sink.write(_frames(1, 32, 32)[0])
+    finally:
+        os.umask(old)
+        importlib.reload(atomic)
+    assert stat.S_IMODE((tmp_path / "a.txt").stat().st_mode) == 0o644
+    assert stat.S_IMODE((tmp_path / "v.webm").stat().st_mode) == 0o644

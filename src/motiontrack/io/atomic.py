@@ -14,10 +14,30 @@ from typing import IO, Iterator
 from ..errors import InputError
 
 
-def _tmp_path(path: Path) -> Path:
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part", dir=path.parent)
-    os.close(fd)
+def _current_umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+#: permissions of finished outputs: what ``open()`` would give a new file (0o666 minus the umask)
+#: rather than the 0o600 of ``mkstemp``, so other users and web servers can read them as usual
+FILE_MODE = 0o666 & ~_current_umask()
+
+
+def _mkstemp(path: Path, prefix: str, suffix: str) -> Path:
+    fd, tmp = tempfile.mkstemp(prefix=prefix, suffix=suffix, dir=path.parent)
+    try:
+        os.fchmod(fd, FILE_MODE)
+    except (AttributeError, OSError):  # pragma: no cover - no fchmod (Windows)
+        pass
+    finally:
+        os.close(fd)
     return Path(tmp)
+
+
+def _tmp_path(path: Path) -> Path:
+    return _mkstemp(path, f".{path.name}.", ".part")
 
 
 @contextlib.contextmanager
@@ -53,9 +73,7 @@ def temp_path_for(path: str | Path) -> Path:
     ``cv2.VideoWriter`` that need a real file name); rename it with :func:`commit_temp`."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=f".part{path.suffix}", dir=path.parent)
-    os.close(fd)
-    return Path(tmp)
+    return _mkstemp(path, f".{path.stem}.", f".part{path.suffix}")
 
 
 def commit_temp(tmp: str | Path, path: str | Path) -> None:
