@@ -13,6 +13,7 @@ and for the other codecs, OpenCV writes the file.
 from __future__ import annotations
 
 import logging
+import os
 from fractions import Fraction
 from pathlib import Path
 
@@ -73,7 +74,7 @@ class _PyAVWriter:
             self._stream.pix_fmt = "yuv420p"
             self._stream.bit_rate = PYAV_MAX_BITRATE
             self._stream.options = dict(PYAV_OPTIONS, **({"row-mt": "1"} if codec == "vp90" else {}))
-            self._stream.thread_count = 2
+            self._stream.thread_count = max(1, min(8, os.cpu_count() or 1))
         except BaseException:
             self._out.close()
             raise
