@@ -11,19 +11,16 @@ Run: .venv/bin/python benchmarks/people.py [--frames 300] [--repeat 3]
 
 from __future__ import annotations
 
-import argparse
-import os
-import sys
 import time
-from pathlib import Path
 
 import numpy as np
 
 from motiontrack.config import load_config
 from motiontrack.evaluate.mot import evaluate_tracking
-from motiontrack.io.mot import read_mot
 from motiontrack.pipeline import run
 from motiontrack.types import Annotations
+
+from _pets import pets_args  # benchmarks/ is on sys.path when a script here runs
 
 VARIANTS = (
     ("default pipeline", None, ()),
@@ -35,16 +32,7 @@ VARIANTS = (
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--data", default=os.environ.get("MOTIONTRACK_DATA",
-                                                     Path(__file__).resolve().parents[2] / "shared" / "data"))
-    ap.add_argument("--frames", type=int, default=300)
-    ap.add_argument("--repeat", type=int, default=3, help="runs per row; the fastest counts")
-    args = ap.parse_args()
-    video = Path(args.data) / "pets09-s2l1" / "video.avi"
-    if not video.is_file():
-        sys.exit(f"PETS clip not found: {video} (set MOTIONTRACK_DATA or --data)")
-    gt = read_mot(video.parent / "gt_mot15.txt", kind="gt")
+    args, video, gt = pets_args(__doc__)
     gt = gt.select(gt.frames <= args.frames)
     print(f"PETS09-S2L1, {args.frames} frames of 768x576")
     print(f"{'variant':<30}{'fps':>8}  {'recall':>7}{'prec':>7}{'MOTA':>7}{'IDF1':>7}{'HOTA':>7}")

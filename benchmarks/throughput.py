@@ -20,9 +20,6 @@ Run: .venv/bin/python benchmarks/throughput.py [--data ../shared/data] [--frames
 
 from __future__ import annotations
 
-import argparse
-import os
-import sys
 import tempfile
 import time
 from pathlib import Path
@@ -32,12 +29,13 @@ import numpy as np
 
 from motiontrack.config import PipelineConfig
 from motiontrack.evaluate.mot import evaluate_tracking
-from motiontrack.io.mot import read_mot
 from motiontrack.motion import create_detector
 from motiontrack.motion.cleanup import clean_mask
 from motiontrack.pipeline import TrackJob, run
 from motiontrack.preprocess import preprocess
 from motiontrack.types import Annotations
+
+from _pets import pets_args  # benchmarks/ is on sys.path when a script here runs
 
 
 def decode_only(video: Path, n: int) -> tuple[float, None]:
@@ -131,16 +129,7 @@ def score(gt: Annotations, pred: Annotations | None, n: int) -> dict[str, float]
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--data", default=os.environ.get("MOTIONTRACK_DATA",
-                                                     Path(__file__).resolve().parents[2] / "shared" / "data"))
-    ap.add_argument("--frames", type=int, default=300)
-    ap.add_argument("--repeat", type=int, default=3, help="runs per row; the fastest counts")
-    args = ap.parse_args()
-    video = Path(args.data) / "pets09-s2l1" / "video.avi"
-    if not video.is_file():
-        sys.exit(f"PETS clip not found: {video} (set MOTIONTRACK_DATA or --data)")
-    gt = read_mot(video.parent / "gt_mot15.txt", kind="gt")
+    args, video, gt = pets_args(__doc__)
     cfg = PipelineConfig()
     n = args.frames
 
