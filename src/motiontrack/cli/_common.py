@@ -92,6 +92,19 @@ def accuracy_line(a: Mapping[str, float],
             + (f"  IDSW {int(a['IDSW'])}" if "IDSW" in a else ""))
 
 
+def run_overrides(args) -> list[str]:
+    """``--set`` overrides plus those implied by ``--start``, ``--max-frames`` and ``--codec``
+    (the options ``track`` and ``flow`` share), in that order."""
+    overrides = list(args.overrides)
+    if args.start is not None:
+        overrides.append(f"source.start={args.start}")
+    if args.max_frames is not None:
+        overrides.append(f"source.max_frames={args.max_frames}")
+    if args.codec:
+        overrides.append(f'output.codec="{args.codec}"')
+    return overrides
+
+
 def read_gt(path: str):
     """Read a ground-truth file in any supported annotation format (MOT CSV read as gt)."""
     from ..io.annotations import read_annotations

@@ -75,15 +75,9 @@ def sparse_params(items: list[str]):
 
 def _config(args):
     from ..config import load_config
+    from ._common import run_overrides
 
-    overrides = list(args.overrides)
-    if args.start is not None:
-        overrides.append(f"source.start={args.start}")
-    if args.max_frames is not None:
-        overrides.append(f"source.max_frames={args.max_frames}")
-    if args.codec:
-        overrides.append(f'output.codec="{args.codec}"')
-    return load_config(args.config, overrides)
+    return load_config(args.config, run_overrides(args))
 
 
 def cmd_flow(args) -> int:

@@ -43,20 +43,15 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def _build_config(args):
     from ..config import load_config
+    from ._common import run_overrides
 
-    overrides = list(args.overrides)
-    if args.start is not None:
-        overrides.append(f"source.start={args.start}")
-    if args.max_frames is not None:
-        overrides.append(f"source.max_frames={args.max_frames}")
+    overrides = run_overrides(args)
     if args.no_video:
         overrides.append("output.video=false")
     if args.mask_video:
         overrides.append("output.mask_video=true")
     if args.camera:
         overrides.append(f"measure.camera={json.dumps(args.camera)}")
-    if args.codec:
-        overrides.append(f'output.codec="{args.codec}"')
     return load_config(args.config, overrides, preset=args.preset)
 
 
