@@ -133,3 +133,23 @@ def test_detect_heads_many_on_the_hand_built_people(xs, feet, heights):
     heads = detect_heads_many(mask, [box, Box(0, 0, 5, 5), box])
     assert [h.x for h in heads[0]] == pytest.approx(xs, abs=1.0)
     assert heads[1] == [] and heads[2] == heads[0]
+
+
+@pytest.mark.parametrize("scale", [0.4, 0.5, 0.55, 0.6, 0.75, 1.0])
+def test_heads_found_at_any_processing_scale(scale):
+    # min_drop (4 px) is a fraction of a mask row at most scales; it is rounded to whole rows, so
+    # the walker's head is found whatever the scale (before: 0 heads at 0.55 and 0.6, where the
+    # head's 2-row flank fell short of a 2.2 / 2.4-row drop).
+    from motiontrack.config import load_config
+    from motiontrack.pipeline import run
+
+    cfg = load_config(None, ["people.enabled=true", "people.shapes=false",
+                             f"preprocess.scale={scale}"])
+    with_region = with_head = 0
+    for r in run("synth:walker?n_frames=100", cfg):
+        inside = [g for g in r.regions if 40 < g.box.x and g.box.x2 < 600]  # fully in view
+        if len(inside) == 1:
+            with_region += 1
+            with_head += len(r.extras["heads"]) == 1
+    assert with_region > 30
+    assert with_head >= 0.9 * with_region

@@ -14,6 +14,10 @@ neighbours on both sides (the shoulders, or the gap to the next person). Steps, 
    ``max_width`` is dropped;
 4. the interval must stand out: on each side, the highest top within ``min_width`` columns
    beyond its edge lies at least ``min_drop`` px lower (off the region counts as infinitely low);
+   tops are whole mask rows, so ``min_drop`` is rounded to whole mask pixels (at least 1): a head
+   whose flank is 2 mask rows below its top then stands out the same way at scale 0.5 (2 rows =
+   the 4 px default) and 0.6 (2.4 rows), instead of vanishing at scales where the drop falls
+   between two rows;
 5. the head is at ``x`` = interval centre and ``y`` = the interval's mean top + half the interval
    width (the head's centre, assuming a round head as wide as the interval).
 
@@ -135,7 +139,7 @@ def detect_heads(mask: np.ndarray, box: Box | None = None, scale: float = 1.0,
     wmin = max(1.0, min_width * scale)
     wmax = max(wmin, max_width * scale)
     tol = tolerance * scale
-    drop = min_drop * scale
+    drop = _drop_px(min_drop, scale)
     # 2. peak columns: within tol of the highest top within one (smallest) head width.
     r = max(1, int(np.ceil(wmin)))
     near = _running_max_top(top, r)
@@ -164,6 +168,13 @@ def detect_heads(mask: np.ndarray, box: Box | None = None, scale: float = 1.0,
     return heads
 
 
+def _drop_px(min_drop: float, scale: float) -> float:
+    """``min_drop`` (original px) in whole mask rows (nearest, at least 1 when positive)."""
+    if min_drop <= 0:
+        return 0.0
+    return float(max(1, int(np.floor(min_drop * scale + 0.5))))
+
+
 def _crop_bounds(box: Box, scale: float, W: int, H: int) -> tuple[int, int, int, int]:
     """``box`` (original pixels) as mask rows/columns ``x1, y1, x2, y2``, clipped to the mask."""
     return (max(int(np.floor(box.x * scale)), 0), max(int(np.floor(box.y * scale)), 0),
@@ -189,7 +200,7 @@ def detect_heads_many(mask: np.ndarray, boxes, scale: float = 1.0, min_width: fl
     wmin = max(1.0, min_width * scale)
     wmax = max(wmin, max_width * scale)
     tol = tolerance * scale
-    drop = min_drop * scale
+    drop = _drop_px(min_drop, scale)
     r = max(1, int(np.ceil(wmin)))
     gap = np.full(r + 1, np.inf)
     pieces: list[np.ndarray] = []
