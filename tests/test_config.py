@@ -2,10 +2,11 @@
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
-from motiontrack.config import (MotionConfig, PipelineConfig, RegionsConfig, apply_overrides,
-                                load_config, save_config, to_dict)
+from motiontrack.config import (MotionConfig, PipelineConfig, PreprocessConfig, RegionsConfig,
+                                apply_overrides, load_config, save_config, to_dict)
 from motiontrack.errors import ConfigError, InputError
 
 
@@ -72,3 +73,20 @@ def test_sections_validate_directly():
         RegionsConfig(max_size=2.0)
     assert MotionConfig().params_for("mog2")["history"] == 500
     assert to_dict(PipelineConfig())["motion"]["method"] == "mog2"
+
+
+@pytest.mark.parametrize("size, scale", [
+    ((768, 576), 0.5),      # PETS: half size, as always
+    ((1920, 1080), 0.5),    # larger frames are never reduced below half size
+    ((640, 480), 0.6),      # smaller frames keep about 384 x 288 pixels
+    ((320, 240), 1.0),      # ... up to full size
+    ((160, 120), 1.0),      # never enlarged
+])
+def test_automatic_processing_scale(size, scale):
+    from motiontrack.preprocess import preprocess, resolve_scale
+
+    assert resolve_scale(0.0, *size) == pytest.approx(scale)
+    assert resolve_scale(0.3, *size) == 0.3  # an explicit scale is kept
+    img = np.zeros((size[1], size[0], 3), np.uint8)
+    out = preprocess(img, PreprocessConfig())
+    assert out.shape[:2] == (round(size[1] * scale), round(size[0] * scale))

@@ -230,7 +230,7 @@ def test_shape_tracker_raises_recall_on_column_and_crossing(scene):
     # Issue 7's evidence: with the people preset, switching the active shape tracker on raises
     # recall (CLEAR, IoU 0.5) and costs at most 0.02 precision on synthetic types 3 and 4.
     # Measured: column 0.986 -> 0.993 (the person entering across the border is extended past it
-    # by the outline), crossing 0.966 -> 0.989 (the merged blob is split along the outlines).
+    # by the outline), crossing 0.970 -> 0.993 (the merged blob is split along the outlines).
     from motiontrack.config import load_config
     from motiontrack.evaluate.mot import evaluate_tracking
     from motiontrack.pipeline import run

@@ -292,7 +292,7 @@ def test_intermediate_writer_with_the_pipeline(tmp_path):
     ok, img = cap.read()
     cap.release()
     assert n == 12 and ok
-    assert img.shape[:2] == (240, 320)          # processing scale 0.5 of 640x480
+    assert img.shape[:2] == (288, 384)          # automatic processing scale 0.6 of 640x480
 
 
 def test_interrupted_sweep_keeps_finished_runs(tmp_path, monkeypatch, capsys):

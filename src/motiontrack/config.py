@@ -90,14 +90,26 @@ class SourceConfig(_Section):
     reconnect_backoff_max: float = param(8.0, lo=0.0, hi=600.0, doc="live sources: longest back-off (s)")
 
 
+#: smallest explicit processing scale
+MIN_SCALE = 0.05
+
+
 @dataclass(frozen=True)
 class PreprocessConfig(_Section):
     grayscale: bool = param(False, doc="detect motion on the gray image (colour keeps clothing contrast)")
     blur: str = param("gaussian", choices=("none", "gaussian", "median"))
     blur_kernel: int = param(5, lo=0, hi=51, odd=True)
-    scale: float = param(0.5, lo=0.05, hi=1.0,
-                         doc="processing scale: detect on a smaller image, boxes reported in original pixels")
+    scale: float = param(0.0, lo=0.0, hi=1.0,
+                         doc="processing scale: detect on a smaller image, boxes reported in original "
+                             "pixels; 0 = automatic: 0.5 for frames of 768x576 and larger, up to 1 for "
+                             "smaller ones so that about 384x288 pixels are processed")
     roi: str = param("", doc="path to a region-of-interest mask image (non-zero = keep); empty = whole frame")
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if 0 < self.scale < MIN_SCALE:
+            raise ConfigError(f"PreprocessConfig.scale must be 0 (automatic) or in [{MIN_SCALE}, 1.0], "
+                              f"got {self.scale!r}")
 
 
 @dataclass(frozen=True)

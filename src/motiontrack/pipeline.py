@@ -13,7 +13,7 @@ from __future__ import annotations
 import json
 import logging
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Callable, Iterable, Iterator
 
@@ -29,7 +29,7 @@ from .io.sources import Source, open_source, prefetch
 from .io.video import VideoSink, extension_for
 from .motion import create_detector
 from .motion.cleanup import clean_mask
-from .preprocess import load_roi, preprocess, scaled_size
+from .preprocess import load_roi, preprocess, resolve_scale, scaled_size
 from .regions import find_regions
 from .tracking.tracker import TRACKERS
 from .types import Annotations, Box, Frame, FrameResult, Region
@@ -80,16 +80,14 @@ class Pipeline:
         self._min_gap: float | None = None   # shortest time between frames seen: one period
         self._last_ts: float | None = None
         self.image_size = image_size
-        self.scale = cfg.preprocess.scale
+        self.scale = resolve_scale(cfg.preprocess.scale, *image_size)
         self.detections = detections
         self._det_index = detections.by_frame() if detections is not None else None
         self.detector = create_detector(cfg.motion) if detections is None else None
         pre = cfg.preprocess
         if self.detector is not None and self.detector.wants_color and pre.grayscale:
-            from dataclasses import replace
-
             pre = replace(pre, grayscale=False)
-        self.pre_cfg = pre
+        self.pre_cfg = replace(pre, scale=self.scale)  # the resolved (automatic) scale
         pw, ph = scaled_size(image_size[0], image_size[1], self.scale)
         self.roi = load_roi(pre.roi, pw, ph) if pre.roi else None
         self.tracker = TRACKERS.get(cfg.tracker.method)(cfg.tracker, image_size, fps)

@@ -10,7 +10,23 @@ import numpy as np
 from .config import PreprocessConfig
 from .errors import InputError
 
-__all__ = ["preprocess", "load_roi", "scaled_size"]
+__all__ = ["preprocess", "load_roi", "scaled_size", "resolve_scale", "AUTO_PIXELS", "AUTO_MIN_SCALE"]
+
+#: automatic processing scale: about this many pixels are processed (384 x 288) ...
+AUTO_PIXELS = 384 * 288
+#: ... but frames are never reduced below half size (768 x 576 and larger frames get 0.5)
+AUTO_MIN_SCALE = 0.5
+
+
+def resolve_scale(scale: float, width: int, height: int) -> float:
+    """The processing scale for frames of ``width`` x ``height``: ``scale`` itself, or when it is
+    0 (automatic) ``min(1, max(0.5, sqrt(384*288 / (width*height))))`` — half size for PETS-sized
+    and larger frames, up to full size for small ones (a 320x240 frame at half size leaves
+    cars a few pixels wide)."""
+    if scale > 0:
+        return float(scale)
+    area = max(1, int(width) * int(height))
+    return float(min(1.0, max(AUTO_MIN_SCALE, (AUTO_PIXELS / area) ** 0.5)))
 
 
 def scaled_size(width: int, height: int, scale: float) -> tuple[int, int]:
@@ -28,11 +44,13 @@ def preprocess(image: np.ndarray, cfg: PreprocessConfig) -> np.ndarray:
 
     Returns
     -------
-    (h, w) or (h, w, 3) uint8 at ``cfg.scale`` of the input size.
+    (h, w) or (h, w, 3) uint8 at ``cfg.scale`` of the input size (see :func:`resolve_scale`
+    for the automatic scale 0).
     """
     out = image
-    if cfg.scale != 1.0:
-        w, h = scaled_size(image.shape[1], image.shape[0], cfg.scale)
+    scale = resolve_scale(cfg.scale, image.shape[1], image.shape[0])
+    if scale != 1.0:
+        w, h = scaled_size(image.shape[1], image.shape[0], scale)
         out = cv2.resize(out, (w, h), interpolation=cv2.INTER_AREA)
     if cfg.grayscale and out.ndim == 3:
         out = cv2.cvtColor(out, cv2.COLOR_BGR2GRAY)
