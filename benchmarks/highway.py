@@ -1,0 +1,102 @@
+"""Cars on CDnet 2014 baseline/highway (320x240): detection of the default pipeline at its automatic
+processing scale, at the old fixed scale 0.5, and the tutorial baseline, side by side.
+
+Ground-truth boxes: connected components (8-connected, >= 200 px) of the gt masks' foreground
+(value 255) in the temporal ROI, frames 470-1000. Touching cars form one component, so the numbers
+are a lower bound for every row alike. Per frame, boxes are matched one-to-one (Hungarian) at
+IoU >= 0.5; recall = matched / gt boxes, precision = matched / output boxes (tracks for the
+pipeline rows, contours for the baseline). The baseline is the recipe of benchmarks/throughput.py
+with its minimum contour area (500 px at 768x576) scaled to this frame size (87 px).
+
+Run: .venv/bin/python benchmarks/highway.py [--data ../shared/data]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+from pathlib import Path
+
+import cv2
+import numpy as np
+from scipy.optimize import linear_sum_assignment
+
+from motiontrack.config import load_config
+from motiontrack.pipeline import run
+from motiontrack.tracking.association import iou_matrix
+
+FIRST, LAST = 470, 1000
+MIN_GT_AREA = 200
+
+
+def gt_boxes(folder: Path, frame: int) -> np.ndarray:
+    g = cv2.imread(str(folder / "groundtruth" / f"gt{frame:06d}.png"), cv2.IMREAD_GRAYSCALE)
+    n, _, stats, _ = cv2.connectedComponentsWithStats((g == 255).astype(np.uint8), connectivity=8)
+    return np.array([stats[i, :4] for i in range(1, n) if stats[i, 4] >= MIN_GT_AREA],
+                    float).reshape(-1, 4)
+
+
+def matched(gt: np.ndarray, pred: np.ndarray) -> int:
+    iou = iou_matrix(gt, pred)
+    if not iou.size:
+        return 0
+    r, c = linear_sum_assignment(-iou)
+    return int((iou[r, c] >= 0.5).sum())
+
+
+def score(folder: Path, boxes_by_frame) -> tuple[float, float]:
+    tp = n_gt = n_pred = 0
+    for frame, pred in boxes_by_frame:
+        if FIRST <= frame <= LAST:
+            g = gt_boxes(folder, frame)
+            tp += matched(g, pred)
+            n_gt += len(g)
+            n_pred += len(pred)
+    return tp / max(n_gt, 1), tp / max(n_pred, 1)
+
+
+def pipeline_boxes(folder: Path, overrides: list[str]):
+    cfg = load_config(None, [f"source.max_frames={LAST}", *overrides])
+    for res in run(str(folder / "input" / "*.jpg"), cfg):
+        yield res.index + 1, np.array([t.box.as_array() for t in res.tracks]).reshape(-1, 4)
+
+
+def baseline_boxes(folder: Path):
+    sub = cv2.createBackgroundSubtractorMOG2(500, 16, True)
+    k3 = np.ones((3, 3), np.uint8)
+    min_area = 500 * (320 * 240) / (768 * 576)
+    for k, name in enumerate(sorted((folder / "input").glob("in*.jpg"))[:LAST]):
+        frame = cv2.imread(str(name))
+        gray = cv2.GaussianBlur(cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY), (5, 5), 0)
+        _, fg = cv2.threshold(sub.apply(gray), 254, 255, cv2.THRESH_BINARY)
+        fg = cv2.dilate(cv2.erode(fg, k3, iterations=1), k3, iterations=3)
+        contours, _ = cv2.findContours(fg, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+        yield k + 1, np.array([cv2.boundingRect(c) for c in contours
+                               if cv2.contourArea(c) >= min_area], float).reshape(-1, 4)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--data", default=os.environ.get("MOTIONTRACK_DATA",
+                                                     Path(__file__).resolve().parents[2] / "shared" / "data"))
+    args = ap.parse_args()
+    folder = Path(args.data) / "cdnet-highway"
+    if not (folder / "input").is_dir():
+        sys.exit(f"CDnet highway not found: {folder} (set MOTIONTRACK_DATA or --data)")
+    rows = [
+        ("tutorial baseline", lambda: baseline_boxes(folder)),
+        ("pipeline, scale 0.5 (old default)", lambda: pipeline_boxes(folder, ["preprocess.scale=0.5"])),
+        ("pipeline, automatic scale (1.0 here)", lambda: pipeline_boxes(folder, [])),
+    ]
+    print(f"CDnet highway 320x240, frames {FIRST}-{LAST}, cars = gt mask components >= {MIN_GT_AREA} px")
+    print(f"{'run':<38}{'recall':>8}{'prec':>8}{'s':>7}")
+    for name, boxes in rows:
+        t = time.perf_counter()
+        rec, prec = score(folder, boxes())
+        print(f"{name:<38}{rec:>8.3f}{prec:>8.3f}{time.perf_counter() - t:>7.1f}")
+
+
+if __name__ == "__main__":
+    main()
