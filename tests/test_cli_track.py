@@ -28,6 +28,7 @@ def test_track_writes_every_output(tmp_path, capsys):
         assert (out / name).is_file(), name
     summary = json.loads((out / "summary.json").read_text())
     assert summary["frames"] == 60 and summary["interrupted"] is False
+    assert summary["processing_scale"] == 0.6  # automatic: 640x480 keeps about 384x288 pixels
     assert summary["status"] == "complete" and summary["tracks"] >= 1
     assert 0.0 <= summary["accuracy"]["MOTA"] <= 1.0
     tracks = read_mot(out / "tracks.txt")

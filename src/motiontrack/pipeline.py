@@ -328,6 +328,11 @@ class TrackJob:
         save_config(cfg, self.paths["config"])
         fps = info.fps or 25.0
         summary = JobSummary(source=info.name, width=info.width, height=info.height, source_fps=info.fps)
+        if self.detections is None:
+            # the scale detection ran at (``preprocess.scale = 0`` is resolved per frame size)
+            summary.extra["processing_scale"] = round(self.pipe.scale, 4)
+            log.info("processing at scale %.3g (%dx%d)", self.pipe.scale,
+                     *scaled_size(info.width, info.height, self.pipe.scale))
         video = VideoSink(self.paths["video"], fps, cfg.output.codec) if "video" in self.paths else None
         mask_video = (VideoSink(self.paths["mask_video"], fps, cfg.output.codec)
                       if "mask_video" in self.paths else None)
