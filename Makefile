@@ -11,8 +11,9 @@ $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install -q --upgrade pip
 
+# the video extra (PyAV: fast WebM) is optional: without a wheel for this platform, OpenCV writes
 $(VENV)/.installed: pyproject.toml | $(BIN)/python
-	$(BIN)/python -m pip install -q -e ".[video]"
+	$(BIN)/python -m pip install -q -e ".[video]" || $(BIN)/python -m pip install -q -e .
 	touch $@
 
 $(VENV)/.dev-installed: pyproject.toml | $(BIN)/python
