@@ -141,11 +141,17 @@ def parse_xml(data: bytes, name: str = "<bytes>") -> XmlNode:
 
 
 
-def xml_int(node: XmlNode, key: str, name: str, lo: int = -INT_LIMIT) -> int:
-    """Attribute ``key`` of ``node`` as an integer in ``[lo, 2**62)``, or :class:`InputError`."""
+def _xml_attr(node: XmlNode, key: str, name: str) -> str:
+    """Attribute ``key`` of ``node`` (raw text), or :class:`InputError` when it is missing."""
     raw = node.attrib.get(key)
     if raw is None:
         raise InputError(f"{node.where(name)}: missing attribute {key!r}")
+    return raw
+
+
+def xml_int(node: XmlNode, key: str, name: str, lo: int = -INT_LIMIT) -> int:
+    """Attribute ``key`` of ``node`` as an integer in ``[lo, 2**62)``, or :class:`InputError`."""
+    raw = _xml_attr(node, key, name)
     try:
         v = int(raw.strip())
     except ValueError:
@@ -158,9 +164,7 @@ def xml_int(node: XmlNode, key: str, name: str, lo: int = -INT_LIMIT) -> int:
 
 def xml_float(node: XmlNode, key: str, name: str) -> float:
     """Attribute ``key`` of ``node`` as a finite float, or :class:`InputError`."""
-    raw = node.attrib.get(key)
-    if raw is None:
-        raise InputError(f"{node.where(name)}: missing attribute {key!r}")
+    raw = _xml_attr(node, key, name)
     try:
         v = float(raw.strip())
     except ValueError:
