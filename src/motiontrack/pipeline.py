@@ -164,20 +164,22 @@ class Pipeline:
             extras = {**extras, **people_extras}
         owned = self.bridge.measurements(self.tracker, frame.image) if self.bridge else None
         hyps = extras.get("hypotheses_by_track") if self.cfg.people.hypotheses else None
+        outlines = extras.get("located_by_track")
+        located = None
+        if hyps or outlines:
+            meta = self.tracker.meta
+            index = {m.tid: i for i, m in enumerate(meta) if m.tid > 0}  # public id -> track index
         if hyps:
             # the shape tracker's box of a person the motion detector lost is a hypothesis for
             # that one (lost) track only; it never starts a track (thesis §4.5)
-            index = {m.tid: i for i, m in enumerate(self.tracker.meta) if m.tid > 0 and m.tsu > 0}
             owned = dict(owned or {})
             for tid, region in hyps.items():
-                if tid in index and index[tid] not in owned:
-                    owned[index[tid]] = region.box.as_array()
-        located = None
-        if extras.get("located_by_track"):
+                i = index.get(tid)
+                if i is not None and meta[i].tsu > 0 and i not in owned:
+                    owned[i] = region.box.as_array()
+        if outlines:
             # fitted outlines of tracked people: where each one is inside a merged region
-            index = {m.tid: i for i, m in enumerate(self.tracker.meta) if m.tid > 0}
-            located = {index[tid]: box for tid, box in extras["located_by_track"].items()
-                       if tid in index}
+            located = {index[tid]: box for tid, box in outlines.items() if tid in index}
         tracks = self.tracker.update(regions, dt=self._frame_gap(frame), owned=owned,
                                      image=extras.get("small"), mask=mask, scale=self.scale,
                                      located=located)
