@@ -140,3 +140,18 @@ def test_contour_and_labelled_components_agree():
         assert [x[0] for x in a] == [x[0] for x in b]
         assert np.allclose([x[1] for x in a], [x[1] for x in b])
         assert np.allclose([x[2] for x in a], [x[2] for x in b])
+
+
+@pytest.mark.parametrize("args, message", [
+    ((0, 0, 0, 5), "w > 0 and h > 0"),
+    ((0, 0, 5, -1), "w > 0 and h > 0"),
+    ((float("nan"), 0, 5, 5), "x must be finite"),
+    ((0, float("inf"), 5, 5), "y must be finite"),
+    ((0, 0, float("nan"), 5), "w must be finite"),
+    ((0, 0, 5, float("inf")), "h must be finite"),
+    ((1e308, 1e308, 5, 5), "too large"),
+])
+def test_box_rejects_bad_values(args, message):
+    with pytest.raises(ValueError, match=message):
+        Box(*args)
+    assert Box(0.5, -3, 1e-3, 2).w == 1e-3   # tiny, negative corner: valid

@@ -33,13 +33,14 @@ def test_kalman_constant_velocity_converges():
         x, P = kalman.predict(x, P, Q)
         x, P = kalman.update(x, P, kalman.box_to_z(np.array([[3.0 * t, 1.0 * t, 10, 20]])), 0.05)
     assert x[0, 4:6] == pytest.approx([3.0, 1.0], abs=0.05)
-    assert np.allclose(P[0], P[0].T)
+    full = kalman.full_covariance(P)[0]
+    assert np.allclose(full, full.T) and np.all(np.linalg.eigvalsh(full) > 0)
 
 
 def test_kalman_batch_empty():
-    x, P = np.zeros((0, 8)), np.zeros((0, 8, 8))
-    x2, P2 = kalman.predict(x, P, np.zeros((0, 8, 8)))
-    assert x2.shape == (0, 8) and P2.shape == (0, 8, 8)
+    x, P = np.zeros((0, 8)), np.zeros((0, 3, 4))
+    x2, P2 = kalman.predict(x, P, np.zeros((0, 2, 4)))
+    assert x2.shape == (0, 8) and P2.shape == (0, 3, 4)
     assert kalman.update(x, P, np.zeros((0, 4)), 0.05)[0].shape == (0, 8)
 
 
@@ -182,21 +183,33 @@ def test_histograms_and_distance():
     assert histograms(img, np.zeros((0, 4))).shape == (0, 64)
 
 
-def test_kalman_update_equals_the_textbook_formula():
-    # K = P Hᵀ (H P Hᵀ + R)⁻¹, x' = x + K (z − H x), P' = (I − K H) P, one track at a time
+def test_kalman_blocks_equal_the_textbook_filter_on_full_matrices():
+    # x' = F x, P' = F P Fᵀ + Q; K = P Hᵀ (H P Hᵀ + R)⁻¹, x' = x + K (z − H x), P' = (I − K H) P
+    # on the full 8x8 covariance, one track at a time, against the 2x2-block filter
     rng = np.random.default_rng(1)
-    x = rng.normal(50, 10, (5, 8))
-    x[:, 3] = np.abs(x[:, 3]) + 20
-    A = rng.normal(0, 1, (5, 8, 8))
-    P = A @ A.transpose(0, 2, 1) + np.eye(8)
-    z = x[:, :4] + rng.normal(0, 1, (5, 4))
-    x2, P2 = kalman.update(x, P, z, 0.05)
+    n = 6
+    x, P = kalman.initiate(rng.uniform([0, 0, 10, 30], [700, 500, 40, 90], (n, 4)), 0.05, 0.00625)
+    xf, Pf = x.copy(), kalman.full_covariance(P)
     H = kalman.H
-    for i in range(5):
-        R = np.eye(4) * (0.05 * x[i, 3]) ** 2
-        K = P[i] @ H.T @ np.linalg.inv(H @ P[i] @ H.T + R)
-        assert np.allclose(x2[i], x[i] + K @ (z[i] - H @ x[i]))
-        assert np.allclose(P2[i], (np.eye(8) - K @ H) @ P[i])
+    for step in range(25):
+        dt = 1.0 + step % 3            # steps over gaps too
+        Q = kalman.process_noise(x, 0.05, 0.00625) * dt
+        x, P = kalman.predict(x, P, Q, dt)
+        Fd = np.eye(8)
+        Fd[:4, 4:] = dt * np.eye(4)
+        for i in range(n):
+            xf[i] = Fd @ xf[i]
+            Pf[i] = Fd @ Pf[i] @ Fd.T + np.diag(np.concatenate([Q[i, 0], Q[i, 1]]))
+        assert np.allclose(x, xf) and np.allclose(kalman.full_covariance(P), Pf, rtol=1e-9)
+        z = x[:, :4] + rng.normal(0, 1, (n, 4))
+        upd = rng.random(n) < 0.7           # some tracks miss this frame
+        x[upd], P[upd] = kalman.update(x[upd], P[upd], z[upd], 0.05)
+        for i in np.flatnonzero(upd):
+            R = np.eye(4) * (0.05 * max(xf[i, 3], 1.0)) ** 2
+            K = Pf[i] @ H.T @ np.linalg.inv(H @ Pf[i] @ H.T + R)
+            xf[i] = xf[i] + K @ (z[i] - H @ xf[i])
+            Pf[i] = (np.eye(8) - K @ H) @ Pf[i]
+        assert np.allclose(x, xf) and np.allclose(kalman.full_covariance(P), Pf, rtol=1e-9)
 
 
 # ----------------------------------------------------------- merged blobs split per track

@@ -40,11 +40,16 @@ class Box:
     h: float
 
     def __post_init__(self) -> None:
+        # one cheap test on the common path (boxes are made for every region and track of every
+        # frame); the message is worked out only for a bad box
+        if self.w > 0 and self.h > 0 and math.isfinite(self.x + self.y + self.w + self.h):
+            return
         for name, v in (("x", self.x), ("y", self.y), ("w", self.w), ("h", self.h)):
             if not math.isfinite(v):
                 raise ValueError(f"box {name} must be finite, got {name}={v!r}")
-        if self.w <= 0 or self.h <= 0:
+        if not (self.w > 0 and self.h > 0):
             raise ValueError(f"box must have w > 0 and h > 0, got w={self.w}, h={self.h}")
+        raise ValueError(f"box coordinates too large: {self}")
 
     @property
     def x2(self) -> float:

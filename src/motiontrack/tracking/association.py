@@ -34,7 +34,7 @@ def center_distance_matrix(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     b = np.asarray(b, np.float64).reshape(-1, 4)
     ca = a[:, :2] + a[:, 2:] / 2
     cb = b[:, :2] + b[:, 2:] / 2
-    d = np.linalg.norm(ca[:, None, :] - cb[None, :, :], axis=2)
+    d = np.hypot(ca[:, 0:1] - cb[:, 0], ca[:, 1:2] - cb[:, 1])
     diag = np.hypot(a[:, 2], a[:, 3])[:, None]
     return d / np.maximum(diag, 1e-9)
 
@@ -52,7 +52,8 @@ def association_cost(pred: np.ndarray, det: np.ndarray, min_iou: float,
     n, m = len(pred), len(det)
     if n == 0 or m == 0:
         return np.zeros((n, m))
-    max_distance = np.broadcast_to(np.asarray(max_distance, np.float64).reshape(-1, 1), (n, 1))
+    # a scalar, or one value per prediction as a column (broadcasts against the (N, M) matrices)
+    max_distance = np.reshape(max_distance, (-1, 1)) if np.ndim(max_distance) else max_distance
     if mode == "center":
         dist = center_distance_matrix(pred, det)
         return np.where(dist < max_distance, dist, INF_COST)

@@ -79,7 +79,7 @@ class MultiObjectTracker:
         #: frames a lost track may coast (``max_lost_s`` at ``fps``; 25 fps when unknown)
         self.max_lost = int(round(self.cfg.max_lost_s * (fps or 25.0)))
         self.x = np.zeros((0, 8))
-        self.P = np.zeros((0, 8, 8))
+        self.P = np.zeros((0, 3, 4))  # covariance as 2x2 blocks (see kalman)
         self.meta: list[_TrackState] = []
         self.next_id = 1
         self.frame_count = 0
@@ -254,6 +254,8 @@ class MultiObjectTracker:
 
     def _miss(self, un_tracks: np.ndarray, dt: int) -> None:
         """Unmatched tracks: tentative ones are dropped, confirmed ones coast, old ones go."""
+        if not len(un_tracks):
+            return
         c = self.cfg
         keep = np.ones(len(self.meta), bool)
         boxes = self._boxes()
@@ -269,7 +271,8 @@ class MultiObjectTracker:
             self.x[t, 6:8] = 0.0
             if m.tsu > self.max_lost or self._outside(boxes[t]):
                 keep[t] = False
-        self._keep(keep)
+        if not keep.all():
+            self._keep(keep)
 
     def _spawn(self, rows: np.ndarray, det: np.ndarray, det_scores: np.ndarray,
                det_hist: np.ndarray | None) -> None:
