@@ -56,12 +56,12 @@ def components(mask: np.ndarray, connectivity: int = 8, scale: float = 1.0,
     overlap = ((x1[:, None] < x2[None, :]) & (x1[None, :] < x2[:, None])
                & (y1[:, None] < y2[None, :]) & (y1[None, :] < y2[:, None]))
     np.fill_diagonal(overlap, False)
+    overlapped = overlap.any(axis=1).tolist()
     inv = 1.0 / scale
     out: list[Region] = []
-    for i, c in enumerate(contours):
-        x, y, w, h = (int(v) for v in rects[i])
+    for c, (x, y, w, h), crossed in zip(contours, rects.tolist(), overlapped):
         roi = mask[y:y + h, x:x + w]
-        if overlap[i].any():
+        if crossed:
             filled = np.zeros((h, w), np.uint8)
             cv2.drawContours(filled, [c], -1, 255, -1, offset=(-x, -y))
             roi = cv2.bitwise_and(roi, filled)
