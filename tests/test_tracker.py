@@ -195,8 +195,7 @@ def test_kalman_blocks_equal_the_textbook_filter_on_full_matrices():
         dt = 1.0 + step % 3            # steps over gaps too
         Q = kalman.process_noise(x, 0.05, 0.00625) * dt
         x, P = kalman.predict(x, P, Q, dt)
-        Fd = np.eye(8)
-        Fd[:4, 4:] = dt * np.eye(4)
+        Fd = np.eye(8) + dt * (kalman.F - np.eye(8))   # F for a step of dt frames
         for i in range(n):
             xf[i] = Fd @ xf[i]
             Pf[i] = Fd @ Pf[i] @ Fd.T + np.diag(np.concatenate([Q[i, 0], Q[i, 1]]))

@@ -22,6 +22,8 @@ from __future__ import annotations
 import numpy as np
 
 NDIM = 4
+# the model's transition and measurement matrices, for reference (the functions below work on
+# the 2x2 blocks and never multiply by them)
 F = np.eye(2 * NDIM)
 F[:NDIM, NDIM:] = np.eye(NDIM)  # x_{t+1} = x_t + v_t (dt = 1 frame)
 H = np.eye(NDIM, 2 * NDIM)
