@@ -80,35 +80,34 @@ def baseline(video: Path, n: int) -> tuple[float, Annotations]:
     return fps, Annotations.from_columns(a[:, 0], a[:, 1], a[:, 2:6])
 
 
-def mask_only(video: Path, n: int, cfg: PipelineConfig) -> tuple[float, None]:
-    cap = cv2.VideoCapture(str(video))
-    det = create_detector(cfg.motion)
-    t = time.perf_counter()
-    k = 0
-    while k < n:
-        ok, frame = cap.read()
-        if not ok:
-            break
-        clean_mask(det.apply(preprocess(frame, cfg.preprocess)), cfg.cleanup)
-        k += 1
-    return k / (time.perf_counter() - t), None
-
-
-def detector_only(video: Path, n: int, cfg: PipelineConfig) -> tuple[float, None]:
-    """``Pipeline.detect`` on every frame (mask and regions), decoding in the same thread."""
-    cap = cv2.VideoCapture(str(video))
-    size = (int(cap.get(cv2.CAP_PROP_FRAME_WIDTH)), int(cap.get(cv2.CAP_PROP_FRAME_HEIGHT)))
-    fps = cap.get(cv2.CAP_PROP_FPS) or 25.0
-    pipe = Pipeline(cfg, size, None, fps)
+def _fps(cap: cv2.VideoCapture, n: int, step) -> float:
+    """Frames per second of ``step(k, image)`` over the first ``n`` frames of ``cap``, decoding
+    in the same thread (inside the timing)."""
     t = time.perf_counter()
     k = 0
     while k < n:
         ok, image = cap.read()
         if not ok:
             break
-        pipe.detect(Frame(index=k, timestamp=k / fps, image=image), k)
+        step(k, image)
         k += 1
-    return k / (time.perf_counter() - t), None
+    return k / (time.perf_counter() - t)
+
+
+def mask_only(video: Path, n: int, cfg: PipelineConfig) -> tuple[float, None]:
+    det = create_detector(cfg.motion)
+    return _fps(cv2.VideoCapture(str(video)), n, lambda k, image: clean_mask(
+        det.apply(preprocess(image, cfg.preprocess)), cfg.cleanup)), None
+
+
+def detector_only(video: Path, n: int, cfg: PipelineConfig) -> tuple[float, None]:
+    """``Pipeline.detect`` on every frame (mask and regions)."""
+    cap = cv2.VideoCapture(str(video))
+    size = (int(cap.get(cv2.CAP_PROP_FRAME_WIDTH)), int(cap.get(cv2.CAP_PROP_FRAME_HEIGHT)))
+    fps = cap.get(cv2.CAP_PROP_FPS) or 25.0
+    pipe = Pipeline(cfg, size, None, fps)
+    return _fps(cap, n, lambda k, image: pipe.detect(
+        Frame(index=k, timestamp=k / fps, image=image), k)), None
 
 
 def pipeline_tracks(video: Path, n: int, cfg: PipelineConfig) -> tuple[float, Annotations]:
