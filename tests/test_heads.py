@@ -153,3 +153,60 @@ def test_heads_found_at_any_processing_scale(scale):
             with_head += len(r.extras["heads"]) == 1
     assert with_region > 30
     assert with_head >= 0.9 * with_region
+
+
+# ------------------------------------------------ people.auto_split (the default pipeline)
+def _auto_split(mask: np.ndarray, settings: list[str] = ()) -> list[list[Region]]:
+    """Regions of ``mask`` after the pipeline's automatic head splitting, over 30 frames of
+    the same mask (the scene gate is a running mean over frames)."""
+    from motiontrack.config import load_config
+    from motiontrack.pipeline import Pipeline
+    from motiontrack.regions import find_regions
+
+    cfg = load_config(None, list(settings))
+    pipe = Pipeline(cfg, (mask.shape[1], mask.shape[0]))
+    assert pipe.scale == 1.0
+    regions = find_regions(mask, cfg.regions, 1.0, (mask.shape[1], mask.shape[0]))
+    return [pipe._split_upright(mask, list(regions), {}) for _ in range(30)]
+
+
+def _street(people: bool) -> np.ndarray:
+    """Three lone people and a merged pair (upright scene), or the same four as cars: wide
+    blobs, one of them with two roof bumps that look like heads to the height profile."""
+    mask = np.zeros((240, 320), np.uint8)
+    if people:
+        for x in (30, 80, 130):
+            _person(mask, x, 110)
+        _person(mask, 200, 220)
+        _person(mask, 222, 220)            # merged with the previous one
+    else:
+        for x in (10, 90, 170):
+            cv2.rectangle(mask, (x, 70), (x + 60, 110), 255, -1)
+        cv2.rectangle(mask, (170, 180), (290, 220), 255, -1)
+        cv2.rectangle(mask, (180, 168), (200, 180), 255, -1)   # two bumps on a wide blob
+        cv2.rectangle(mask, (250, 168), (270, 180), 255, -1)
+    return mask
+
+
+def test_auto_split_separates_a_merged_pair_in_an_upright_scene():
+    frames = _auto_split(_street(people=True))
+    # every frame: the three lone people untouched (upright: no head search) and the pair split
+    for regions in frames:
+        assert len(regions) == 5
+        pair = sorted(r.centroid[0] for r in regions if r.box.y > 120)
+        assert pair == [pytest.approx(200, abs=4), pytest.approx(222, abs=4)]
+
+
+def test_auto_split_leaves_a_scene_of_wide_objects_alone():
+    mask = _street(people=False)
+    from motiontrack.people.heads import detect_heads
+
+    big = _region(np.where(np.arange(240)[:, None] > 150, mask, 0))
+    assert len(detect_heads(mask, big.box)) == 2    # the detector alone would split the car
+    for regions in _auto_split(mask):
+        assert len(regions) == 4
+
+
+def test_auto_split_can_be_switched_off():
+    for settings in (["people.auto_split=false"], ["people.split=false"], ["people.heads=false"]):
+        assert all(len(r) == 4 for r in _auto_split(_street(people=True), settings))

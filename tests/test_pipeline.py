@@ -104,14 +104,16 @@ def test_pets09_well_above_the_tutorial_baseline(data):
     r = evaluate_tracking(gt, pred, ignore_zero_marked=True)
     recall = r["TP"] / (r["TP"] + r["FN"])
     precision = r["TP"] / (r["TP"] + r["FP"])
-    assert recall >= 0.63 and precision >= 0.72
-    assert r["MOTA"] >= 0.4 and r["IDF1"] >= 0.62 and r["HOTA"] >= 0.42
+    # measured: recall 0.742, precision 0.856, MOTA 0.612, IDF1 0.770, HOTA 0.532 (before the
+    # automatic head splitting of merged regions: 0.671, 0.765, 0.456, 0.654, 0.463)
+    assert recall >= 0.70 and precision >= 0.82
+    assert r["MOTA"] >= 0.57 and r["IDF1"] >= 0.72 and r["HOTA"] >= 0.5
 
 
 @pytest.mark.data
 def test_pets09_people_preset_splits_groups_by_heads(data):
     # head-based splitting separates people walking together: measured MOTA 0.61, IDF1 0.76,
-    # HOTA 0.53 on these 300 frames (default pipeline: 0.46, 0.65, 0.46)
+    # HOTA 0.53 on these 300 frames
     video = data("pets09-s2l1", "video.avi")
     gt = read_mot(data("pets09-s2l1", "gt_mot15.txt"), kind="gt")
     rows = []

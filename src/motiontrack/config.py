@@ -293,6 +293,12 @@ class PeopleConfig(_Section):
     """
 
     enabled: bool = param(False, doc="run the people stage at all")
+    auto_split: bool = param(True, doc="with the stage off: still split merged motion regions between "
+                                       "adjacent heads while the scene's regions are upright (people, "
+                                       "not cars): only regions wider than one upright person")
+    upright_ratio: float = param(1.5, lo=0.0, hi=100.0,
+                                 doc="auto_split: height/width from which a region counts as upright "
+                                     "(scene: running mean of each frame's median region)")
     heads: bool = param(True, doc="detect heads in motion regions (thesis 4.3)")
     split: bool = param(True, doc="split merged regions between adjacent heads (needs heads)")
     head_min_width: float = param(6.0, lo=1.0, hi=500.0, doc="narrowest head interval (px)")

@@ -96,6 +96,15 @@ class Pipeline:
             from .people import PeopleStage
 
             self.people = PeopleStage(cfg.people)
+        #: head detector settings for ``people.auto_split`` (None = off): merged regions are split
+        #: between heads, with the people stage off, while the scene's regions are upright
+        self.auto_heads: dict[str, float] | None = None
+        if (not cfg.people.enabled and cfg.people.auto_split and cfg.people.heads
+                and cfg.people.split and self.detector is not None):
+            from .people import head_params
+
+            self.auto_heads = head_params(cfg.people)
+        self._upright: float | None = None   # running mean of the frames' median region h/w
         self._prev_tracks: tuple = ()
         self.bridge = None
         if cfg.tracker.bridge != "none":
@@ -152,7 +161,41 @@ class Pipeline:
         mask = clean_mask(raw, cfg.cleanup)
         regions = ([] if index < cfg.motion.warmup
                    else find_regions(mask, cfg.regions, self.scale, self.image_size))
-        return mask, regions, {"raw_mask": raw, "small": small}
+        extras = {"raw_mask": raw, "small": small}
+        if regions:
+            regions = self._split_upright(mask, regions, extras)
+        return mask, regions, extras
+
+    def _split_upright(self, mask: np.ndarray, regions: list[Region], extras: dict[str, Any]
+                       ) -> list[Region]:
+        """``people.auto_split``: while the scene's regions are upright (a running mean of each
+        frame's median height/width at least ``people.upright_ratio``: people, not cars), split
+        every region clearly wider than that typical shape between the heads found in it."""
+        if self.auto_heads is None:
+            return regions
+        ratio = self.cfg.people.upright_ratio
+        shapes = [r.box.h / r.box.w for r in regions]
+        shape = float(np.median(shapes))
+        self._upright = shape if self._upright is None else 0.95 * self._upright + 0.05 * shape
+        if self._upright < ratio:
+            return regions
+        # searched for heads: regions a third wider than the scene's typical one (a lone person
+        # is left alone; two people side by side are twice as wide)
+        wide = [k for k, s in enumerate(shapes) if s < 0.75 * self._upright]
+        if not wide:
+            return regions
+        from .people.heads import detect_heads_many, split_region_by_heads
+
+        scale = mask.shape[1] / self.image_size[0]
+        found = detect_heads_many(mask, [regions[k].box for k in wide], scale,
+                                  **self.auto_heads)
+        heads = dict(zip(wide, found))
+        extras["heads"] = [h for hs in found for h in hs]
+        out: list[Region] = []
+        for k, r in enumerate(regions):
+            hs = heads.get(k)
+            out.extend(split_region_by_heads(r, mask, hs, scale) if hs and len(hs) >= 2 else [r])
+        return out
 
     def track(self, frame: Frame, mask: np.ndarray | None, regions: list[Region],
               extras: dict[str, Any]) -> FrameResult:

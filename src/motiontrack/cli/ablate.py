@@ -13,7 +13,7 @@ import sys
 
 #: rows of the table: label → overrides (cumulative, as in the thesis)
 ROWS: tuple[tuple[str, tuple[str, ...]], ...] = (
-    ("motion + regions only", ("people.enabled=false",)),
+    ("motion + regions only", ("people.enabled=false", "people.auto_split=false")),
     ("+ head detector", ("people.enabled=true", "people.heads=true", "people.split=false",
                          "people.shapes=false")),
     ("+ head-based splitting", ("people.enabled=true", "people.heads=true", "people.split=true",
@@ -25,6 +25,8 @@ ROWS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("+ HOG in regions", ("people.enabled=true", "people.heads=true", "people.split=true",
                           "people.shapes=true", "people.hypotheses=true", "people.hog=regions",
                           "people.hog_every=5")),
+    # not cumulative: the default pipeline, whose regions are split between heads in upright scenes
+    ("default (automatic head splitting)", ("people.enabled=false", "people.auto_split=true")),
 )
 
 

@@ -33,7 +33,13 @@ from ..types import Region
 
 log = logging.getLogger(__name__)
 
-__all__ = ["PeopleConfig", "PeopleStage"]
+__all__ = ["PeopleConfig", "PeopleStage", "head_params"]
+
+
+def head_params(c: PeopleConfig) -> dict[str, float]:
+    """The head detector's keyword arguments from the people settings."""
+    return {"min_width": c.head_min_width, "max_width": c.head_max_width,
+            "tolerance": c.head_tolerance, "min_drop": c.head_min_drop}
 
 
 class PeopleStage:
@@ -66,9 +72,7 @@ class PeopleStage:
         self._hog_cache: list[Region] = []
 
     def _head_params(self) -> dict[str, float]:
-        c = self.cfg
-        return {"min_width": c.head_min_width, "max_width": c.head_max_width,
-                "tolerance": c.head_tolerance, "min_drop": c.head_min_drop}
+        return head_params(self.cfg)
 
     @property
     def needs_tracks(self) -> bool:
