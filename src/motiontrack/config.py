@@ -295,7 +295,8 @@ class PeopleConfig(_Section):
     enabled: bool = param(False, doc="run the people stage at all")
     auto_split: bool = param(True, doc="with the stage off: still split merged motion regions between "
                                        "adjacent heads while the scene's regions are upright (people, "
-                                       "not cars): only regions wider than one upright person")
+                                       "not cars), searching only regions a third wider than the scene's "
+                                       "typical one")
     upright_ratio: float = param(1.5, lo=0.0, hi=100.0,
                                  doc="auto_split: height/width from which a region counts as upright "
                                      "(scene: running mean of each frame's median region)")

@@ -39,6 +39,12 @@ log = logging.getLogger(__name__)
 __all__ = ["Pipeline", "run", "TrackJob", "JobSummary", "resolve_config"]
 
 
+#: ``people.auto_split``: weight of each frame's median region height/width in the scene's
+#: running mean, and the fraction of that mean below which a region is searched for heads
+_SCENE_RATE = 0.05
+_WIDE = 0.75
+
+
 def resolve_config(config: PipelineConfig | str | Path | None) -> PipelineConfig:
     if config is None:
         return PipelineConfig()
@@ -176,12 +182,13 @@ class Pipeline:
         ratio = self.cfg.people.upright_ratio
         shapes = [r.box.h / r.box.w for r in regions]
         shape = float(np.median(shapes))
-        self._upright = shape if self._upright is None else 0.95 * self._upright + 0.05 * shape
+        self._upright = (shape if self._upright is None
+                         else (1 - _SCENE_RATE) * self._upright + _SCENE_RATE * shape)
         if self._upright < ratio:
             return regions
         # searched for heads: regions a third wider than the scene's typical one (a lone person
         # is left alone; two people side by side are twice as wide)
-        wide = [k for k, s in enumerate(shapes) if s < 0.75 * self._upright]
+        wide = [k for k, s in enumerate(shapes) if s < _WIDE * self._upright]
         if not wide:
             return regions
         from .people.heads import detect_heads_many, split_region_by_heads
