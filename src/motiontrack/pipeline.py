@@ -188,21 +188,14 @@ class Pipeline:
             return regions
         # searched for heads: regions a third wider than the scene's typical one (a lone person
         # is left alone; two people side by side are twice as wide)
-        wide = [k for k, s in enumerate(shapes) if s < _WIDE * self._upright]
-        if not wide:
+        wide = [s < _WIDE * self._upright for s in shapes]
+        if not any(wide):
             return regions
-        from .people.heads import detect_heads_many, split_region_by_heads
+        from .people.heads import split_regions_by_heads
 
-        scale = mask.shape[1] / self.image_size[0]
-        found = detect_heads_many(mask, [regions[k].box for k in wide], scale,
-                                  **self.auto_heads)
-        heads = dict(zip(wide, found))
-        extras["heads"] = [h for hs in found for h in hs]
-        out: list[Region] = []
-        for k, r in enumerate(regions):
-            hs = heads.get(k)
-            out.extend(split_region_by_heads(r, mask, hs, scale) if hs and len(hs) >= 2 else [r])
-        return out
+        regions, extras["heads"] = split_regions_by_heads(
+            mask, regions, mask.shape[1] / self.image_size[0], search=wide, **self.auto_heads)
+        return regions
 
     def track(self, frame: Frame, mask: np.ndarray | None, regions: list[Region],
               extras: dict[str, Any]) -> FrameResult:

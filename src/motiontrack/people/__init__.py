@@ -87,19 +87,13 @@ class PeopleStage:
         Needs only the mask (processing resolution) and the frame ``width`` (original pixels), not
         the background or the tracks. Returns ``(regions, heads)``; regions are unchanged when
         heads are off or there is no mask (external detections)."""
-        from .heads import detect_heads_many, split_region_by_heads
+        from .heads import split_regions_by_heads
 
         c = self.cfg
         if not c.heads or mask is None:
             return list(regions), []
-        scale = mask.shape[1] / width
-        per_region = detect_heads_many(mask, [r.box for r in regions], scale, **self._head_params())
-        out: list[Region] = []
-        heads: list[Any] = []
-        for r, hs in zip(regions, per_region):
-            heads.extend(hs)
-            out.extend(split_region_by_heads(r, mask, hs, scale) if c.split else [r])
-        return out, heads
+        return split_regions_by_heads(mask, list(regions), mask.shape[1] / width, split=c.split,
+                                      **self._head_params())
 
     def process(self, frame_img: np.ndarray, background: np.ndarray | None, mask: np.ndarray | None,
                 regions: Sequence[Region], tracks: Sequence[Any], work: np.ndarray | None = None

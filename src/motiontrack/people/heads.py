@@ -28,6 +28,7 @@ Widths are given in original-frame pixels and converted with the mask ``scale``.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Sequence
 
 import numpy as np
 from scipy.ndimage import minimum_filter1d
@@ -35,7 +36,7 @@ from scipy.ndimage import minimum_filter1d
 from ..types import Box, Region
 
 __all__ = ["Head", "height_profile", "detect_heads", "detect_heads_many", "detect_heads_in_regions",
-           "split_region_by_heads"]
+           "split_region_by_heads", "split_regions_by_heads"]
 
 
 @dataclass(frozen=True)
@@ -316,3 +317,23 @@ def split_region_by_heads(region: Region, mask: np.ndarray, heads: list[Head] | 
         parts.append(Region(box=Box.from_xyxy(bx1, by1, bx2, by2), centroid=(cx, cy),
                             area=cnt / (scale * scale), score=region.score))
     return parts if len(parts) >= 2 else [region]
+
+
+def split_regions_by_heads(mask: np.ndarray, regions: Sequence[Region], scale: float = 1.0,
+                           search: Sequence[bool] | None = None, split: bool = True, **params
+                           ) -> tuple[list[Region], list[Head]]:
+    """Heads in the regions of one mask (:func:`detect_heads_many`) and each region split between
+    its heads (:func:`split_region_by_heads`), in order.
+
+    ``search`` (one flag per region, default all) picks the regions searched for heads; the others
+    pass unchanged. With ``split`` false the heads are found but no region is split. Returns
+    ``(regions, heads)``.
+    """
+    picked = range(len(regions)) if search is None else [k for k, s in enumerate(search) if s]
+    found = detect_heads_many(mask, [regions[k].box for k in picked], scale, **params)
+    heads = dict(zip(picked, found))
+    out: list[Region] = []
+    for k, r in enumerate(regions):
+        hs = heads.get(k)
+        out.extend(split_region_by_heads(r, mask, hs, scale) if split and hs else [r])
+    return out, [h for hs in found for h in hs]
