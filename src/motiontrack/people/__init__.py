@@ -71,9 +71,6 @@ class PeopleStage:
         self._hyp_active: set[int] = set()
         self._hog_cache: list[Region] = []
 
-    def _head_params(self) -> dict[str, float]:
-        return head_params(self.cfg)
-
     @property
     def needs_tracks(self) -> bool:
         """Whether any step after :meth:`split_regions` runs (HOG or shapes): those need the
@@ -93,7 +90,7 @@ class PeopleStage:
         if not c.heads or mask is None:
             return list(regions), []
         return split_regions_by_heads(mask, list(regions), mask.shape[1] / width, split=c.split,
-                                      **self._head_params())
+                                      **head_params(c))
 
     def process(self, frame_img: np.ndarray, background: np.ndarray | None, mask: np.ndarray | None,
                 regions: Sequence[Region], tracks: Sequence[Any], work: np.ndarray | None = None
