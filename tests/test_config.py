@@ -72,7 +72,7 @@ def test_sections_validate_directly():
     with pytest.raises(ConfigError, match="RegionsConfig.max_size"):
         RegionsConfig(max_size=2.0)
     assert MotionConfig().params_for("mog2")["history"] == 500
-    assert to_dict(PipelineConfig())["motion"]["method"] == "mog2"
+    assert to_dict(PipelineConfig())["motion"]["method"] == "knn"
 
 
 @pytest.mark.parametrize("size, scale", [

@@ -98,7 +98,7 @@ MIN_SCALE = 0.05
 class PreprocessConfig(_Section):
     grayscale: bool = param(False, doc="detect motion on the gray image (colour keeps clothing contrast)")
     blur: str = param("gaussian", choices=("none", "gaussian", "median"))
-    blur_kernel: int = param(5, lo=0, hi=51, odd=True)
+    blur_kernel: int = param(3, lo=0, hi=51, odd=True)
     scale: float = param(0.0, lo=0.0, hi=1.0,
                          doc="processing scale: detect on a smaller image, boxes reported in original "
                              "pixels; 0 = automatic: 0.5 for frames of 768x576 and larger, up to 1 for "
@@ -134,7 +134,7 @@ class MOG2Params(_Section):
 @dataclass(frozen=True)
 class KNNParams(_Section):
     history: int = param(500, lo=1)
-    dist2_threshold: float = param(400.0, lo=0.0)
+    dist2_threshold: float = param(300.0, lo=0.0)
     detect_shadows: bool = param(True)
     learning_rate: float = param(-1.0, lo=-1.0, hi=1.0)
     protect: bool = param(False, doc="selective update: pixels of tracked objects that have moved are not "
@@ -193,7 +193,7 @@ class FarnebackParams(_Section):
 
 @dataclass(frozen=True)
 class MotionConfig(_Section):
-    method: str = param("mog2", doc="motion detector: see `motiontrack list`")
+    method: str = param("knn", doc="motion detector: see `motiontrack list`")
     warmup: int = param(0, lo=0, doc="frames whose detections are ignored while the model settles")
     frame_diff: FrameDiffParams = field(default_factory=FrameDiffParams)
     mog2: MOG2Params = field(default_factory=MOG2Params)
@@ -264,7 +264,7 @@ class TrackerConfig(_Section):
                                  doc="re-detection window growth per unseen frame (fraction of max_distance)")
     split_merged: bool = param(True, doc="split a blob holding several tracks' predictions into "
                                       "one synthetic measurement per track (people crossing)")
-    appearance_weight: float = param(0.0, lo=0.0, hi=10.0,
+    appearance_weight: float = param(0.5, lo=0.0, hi=10.0,
                                      doc="weight of the colour-histogram (Bhattacharyya) distance in the "
                                          "association cost (0 = no appearance model)")
     appearance_gate: float = param(0.6, lo=0.0, hi=1.0,

@@ -77,6 +77,8 @@ class _SelectiveSubtractor(_OpenCVSubtractor):
     """
 
     BG_REFRESH = 10
+    #: the subtractor draws from OpenCV's thread-local random generator (KNN's sample updates)
+    uses_rng = False
 
     def __init__(self, subtractor, learning_rate: float = -1.0, protect: bool = False,
                  protect_threshold: int = 30) -> None:
@@ -88,6 +90,11 @@ class _SelectiveSubtractor(_OpenCVSubtractor):
 
     def apply(self, image: np.ndarray, protect: np.ndarray | None = None) -> np.ndarray:
         self._frames += 1
+        if self.uses_rng:
+            # OpenCV's random generator is per thread and shared with everything else that runs
+            # there: seeded per frame, the model's random choices (and so the masks) are the same
+            # in whatever thread, and after whatever else, the detector runs.
+            cv2.setRNGSeed(self._frames)
         if protect is None or self._frames < 3 or not protect.any():
             if self._frames % self.BG_REFRESH == 0:
                 self._bg = None
@@ -124,6 +131,8 @@ class MOG2(_SelectiveSubtractor):
 @DETECTORS.register("knn")
 class KNN(_SelectiveSubtractor):
     """K-nearest-neighbours background (Zivkovic & van der Heijden 2006), OpenCV's KNN."""
+
+    uses_rng = True
 
     def __init__(self, history: int = 500, dist2_threshold: float = 400.0, detect_shadows: bool = True,
                  learning_rate: float = -1.0, protect: bool = False, protect_threshold: int = 30) -> None:

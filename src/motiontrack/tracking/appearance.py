@@ -32,17 +32,18 @@ def histograms(image: np.ndarray, boxes: np.ndarray, mask: np.ndarray | None = N
         return out
     h, w = image.shape[:2]
     colour = image.ndim == 3
-    hsv = cv2.cvtColor(image, cv2.COLOR_BGR2HSV) if colour else image
     for i, (x, y, bw, bh) in enumerate(boxes * scale):
         x1, y1 = max(0, int(x)), max(0, int(y))
         x2, y2 = min(w, int(np.ceil(x + bw))), min(h, int(np.ceil(y + bh)))
         if x2 - x1 < 2 or y2 - y1 < 2:
             continue
-        crop = hsv[y1:y2, x1:x2]
         m = None if mask is None else mask[y1:y2, x1:x2]
         if m is not None and cv2.countNonZero(m) < min_pixels:
             continue
+        crop = image[y1:y2, x1:x2]
         if colour:
+            # converting only the boxes costs less than the whole frame when they cover little of it
+            crop = cv2.cvtColor(crop, cv2.COLOR_BGR2HSV)
             hist = cv2.calcHist([crop], [0, 1], m, [HUE_BINS, SAT_BINS], [0, 180, 0, 256]).ravel()
         else:
             hist = np.zeros(BINS, np.float32)
