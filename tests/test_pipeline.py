@@ -282,3 +282,30 @@ def test_bridge_lets_go_of_an_object_at_the_image_border(border_rule, monkeypatc
         assert min(xs) > 2.0                      # ... but never onto the border
     else:
         assert min(xs) <= 2.0
+
+
+def test_knn_masks_do_not_depend_on_the_threads_random_state():
+    # OpenCV's KNN draws from the calling thread's random generator; unseeded, a second run in
+    # the same thread (or one after anything else used the generator) gave other masks. The
+    # detector seeds it per frame, so every run is the same, in any thread.
+    import threading
+
+    import cv2
+
+    from motiontrack.io.sources import open_source
+
+    frames = [f.image for f in open_source("synth:crossing?n_frames=40")]
+
+    def masks() -> list[bytes]:
+        det = DETECTORS.create("knn")
+        return [det.apply(img).tobytes() for img in frames]
+
+    first = masks()
+    cv2.randu(np.zeros((50, 50)), 0, 1)     # move this thread's generator on
+    again = masks()
+    other: list = []
+    t = threading.Thread(target=lambda: other.append(masks()))
+    t.start()
+    t.join()
+    assert first == again == other[0]
+    assert any(np.frombuffer(m, np.uint8).any() for m in first)  # the walkers are detected
