@@ -443,7 +443,6 @@ class TrackJob:
         outcome.reraise()  # everything is written; an interrupt or a failed source still surfaces
         return summary
 
-
     def _write_frame(self, res: FrameResult, tracks_fh, video: VideoSink | None,
                      mask_video: VideoSink | None, inter: IntermediateWriter | None,
                      ids: set[int]) -> bool:

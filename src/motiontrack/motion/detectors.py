@@ -134,7 +134,7 @@ class KNN(_SelectiveSubtractor):
 
     uses_rng = True
 
-    def __init__(self, history: int = 500, dist2_threshold: float = 400.0, detect_shadows: bool = True,
+    def __init__(self, history: int = 500, dist2_threshold: float = 300.0, detect_shadows: bool = True,
                  learning_rate: float = -1.0, protect: bool = False, protect_threshold: int = 30) -> None:
         super().__init__(cv2.createBackgroundSubtractorKNN(int(history), float(dist2_threshold),
                                                            bool(detect_shadows)), learning_rate,
