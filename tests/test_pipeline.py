@@ -95,28 +95,34 @@ def test_pets09_well_above_the_tutorial_baseline(data):
     # these 300 frames with no identities at all
     video = data("pets09-s2l1", "video.avi")
     gt = read_mot(data("pets09-s2l1", "gt_mot15.txt"), kind="gt")
-    cfg = PipelineConfig()
-    rows = []
-    for res in motiontrack.track(str(video), cfg):
-        rows += [(res.index + 1, t.id, *t.box.as_array()) for t in res.tracks]
-    a = np.array(rows, float)
-    pred = Annotations.from_columns(a[:, 0], a[:, 1], a[:, 2:6])
-    r = evaluate_tracking(gt, pred, ignore_zero_marked=True)
-    recall = r["TP"] / (r["TP"] + r["FN"])
-    precision = r["TP"] / (r["TP"] + r["FP"])
-    # measured: recall 0.822, precision 0.886, MOTA 0.709, IDF1 0.799, HOTA 0.579 (KNN seeded per
-    # frame, so this is exact; four other seeds give MOTA 0.627-0.739, IDF1 0.729-0.776, HOTA
-    # 0.540-0.565). With MOG2 and no appearance model it was 0.742, 0.856, 0.612, 0.770, 0.532;
-    # before the automatic head splitting 0.671, 0.765, 0.456, 0.654, 0.463.
-    assert recall >= 0.78 and precision >= 0.85
-    assert r["MOTA"] >= 0.66 and r["IDF1"] >= 0.74 and r["HOTA"] >= 0.54
+    scores = []
+    for seed in range(3):
+        rows = []
+        for res in motiontrack.track(str(video), load_config(None, [f"motion.knn.seed={seed}"])):
+            rows += [(res.index + 1, t.id, *t.box.as_array()) for t in res.tracks]
+        a = np.array(rows, float)
+        pred = Annotations.from_columns(a[:, 0], a[:, 1], a[:, 2:6])
+        r = evaluate_tracking(gt, pred, ignore_zero_marked=True)
+        scores.append({"recall": r["TP"] / (r["TP"] + r["FN"]),
+                       "precision": r["TP"] / (r["TP"] + r["FP"]),
+                       "MOTA": r["MOTA"], "IDF1": r["IDF1"], "HOTA": r["HOTA"]})
+    mean = {k: float(np.mean([s[k] for s in scores])) for k in scores[0]}
+    # The identity scores of one run hang on a swap or two inside the group at the sign post, so
+    # the floors hold the mean of three seeds of the KNN model (benchmarks/cold_start.py).
+    # Measured (seeds 0, 1, 2): recall 0.834, precision 0.883, MOTA 0.716, IDF1 0.782, HOTA 0.559
+    # (seed 0 alone: 0.837, 0.896, 0.732, 0.767, 0.541). Session 6 (seed 0, before the KNN
+    # priming and the ghost filter): 0.822, 0.886, 0.709, 0.799, 0.579; with MOG2 and no
+    # appearance model 0.742, 0.856, 0.612, 0.770, 0.532.
+    assert mean["recall"] >= 0.80 and mean["precision"] >= 0.86
+    assert mean["MOTA"] >= 0.69 and mean["IDF1"] >= 0.75 and mean["HOTA"] >= 0.54
 
 
 @pytest.mark.data
 def test_pets09_people_preset_splits_groups_by_heads(data):
-    # head-based splitting separates people walking together: measured MOTA 0.705, IDF1 0.619,
-    # HOTA 0.478 on these 300 frames. The identity scores hang on one or two swaps: with other
-    # seeds of KNN's random generator MOTA 0.687-0.714, IDF1 0.555-0.755, HOTA 0.441-0.549
+    # head-based splitting separates people walking together: measured MOTA 0.755, IDF1 0.751,
+    # HOTA 0.545 on these 300 frames (session 6, before the KNN priming and the ghost filter:
+    # 0.705, 0.619, 0.478). The identity scores hang on one or two swaps: with other seeds of
+    # KNN's random generator (session 6) MOTA 0.687-0.714, IDF1 0.555-0.755, HOTA 0.441-0.549
     # (MOG2 without the appearance model: 0.602, 0.763, 0.526).
     video = data("pets09-s2l1", "video.avi")
     gt = read_mot(data("pets09-s2l1", "gt_mot15.txt"), kind="gt")
@@ -309,3 +315,21 @@ def test_knn_masks_do_not_depend_on_the_threads_random_state():
     t.join()
     assert first == again == other[0]
     assert any(np.frombuffer(m, np.uint8).any() for m in first)  # the walkers are detected
+
+
+def test_knn_seed_gives_another_draw_that_repeats():
+    from motiontrack.io.sources import open_source
+
+    frames = [f.image for f in open_source("synth:crossing?n_frames=40")]
+
+    def masks(seed: int) -> list[bytes]:
+        det = DETECTORS.create("knn", seed=seed)
+        return [det.apply(img).tobytes() for img in frames]
+
+    zero, seven = masks(0), masks(7)
+    assert masks(7) == seven
+    assert zero != seven
+    # a draw, not another detector: the masks differ in a few pixels only
+    diff = np.mean([np.mean(np.frombuffer(a, np.uint8) != np.frombuffer(b, np.uint8))
+                    for a, b in zip(zero, seven)])
+    assert 0 < diff < 0.01

@@ -142,6 +142,9 @@ class KNNParams(_Section):
     protect_threshold: int = param(30, lo=1, hi=255,
                                    doc="inside tracked objects (not learnt): difference from the "
                                        "background that counts as foreground")
+    seed: int = param(0, lo=0, hi=1_000_000,
+                      doc="seed of the model's random sample updates: a run repeats exactly for a "
+                          "given seed; other seeds show the spread of the scores")
 
 
 @dataclass(frozen=True)
@@ -195,6 +198,10 @@ class FarnebackParams(_Section):
 class MotionConfig(_Section):
     method: str = param("knn", doc="motion detector: see `motiontrack list`")
     warmup: int = param(0, lo=0, doc="frames whose detections are ignored while the model settles")
+    ghost_ratio: float = param(0.7, lo=0.0, hi=10.0,
+                               doc="drop ghost regions (where a still object left): image gradient "
+                                   "along a region's outline in the frame over that in the "
+                                   "background below this (0 = off)")
     frame_diff: FrameDiffParams = field(default_factory=FrameDiffParams)
     mog2: MOG2Params = field(default_factory=MOG2Params)
     knn: KNNParams = field(default_factory=KNNParams)

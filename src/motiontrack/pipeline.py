@@ -111,6 +111,11 @@ class Pipeline:
 
             self.auto_heads = head_params(cfg.people)
         self._upright: float | None = None   # running mean of the frames' median region h/w
+        self.ghosts = None
+        if cfg.motion.ghost_ratio > 0 and self.detector is not None:
+            from .motion.ghosts import GhostFilter
+
+            self.ghosts = GhostFilter(cfg.motion.ghost_ratio)
         self._prev_tracks: tuple = ()
         self.bridge = None
         if cfg.tracker.bridge != "none":
@@ -176,11 +181,18 @@ class Pipeline:
         scene is upright (``people.auto_split``)."""
         if mask is None:
             return None, extras["detections"], {}
-        regions = ([] if index < self.cfg.motion.warmup
-                   else find_regions(mask, self.cfg.regions, self.scale, self.image_size))
+        if self.ghosts is not None:
+            mask, regions = self.ghosts.regions(extras["small"], mask, self._find, self.scale)
+            if index < self.cfg.motion.warmup:
+                regions = []
+        else:
+            regions = [] if index < self.cfg.motion.warmup else self._find(mask)
         if regions:
             regions = self._split_upright(mask, regions, extras)
         return mask, regions, extras
+
+    def _find(self, mask: np.ndarray) -> list[Region]:
+        return find_regions(mask, self.cfg.regions, self.scale, self.image_size)
 
     def _split_upright(self, mask: np.ndarray, regions: list[Region], extras: dict[str, Any]
                        ) -> list[Region]:

@@ -8,6 +8,10 @@ import numpy as np
 
 from .base import DETECTORS, MotionDetector
 
+#: the random generator is seeded with ``seed * _SEED_STRIDE + frame``: seeds do not share
+#: sequences for videos shorter than this many frames
+_SEED_STRIDE = 1_000_003
+
 SHADOW_VALUE = 127  # MOG2/KNN mark shadows with 127; only 255 is foreground
 
 
@@ -79,6 +83,10 @@ class _SelectiveSubtractor(_OpenCVSubtractor):
     BG_REFRESH = 10
     #: the subtractor draws from OpenCV's thread-local random generator (KNN's sample updates)
     uses_rng = False
+    seed = 0
+    #: times the first frame is learnt before it is classified: a model that needs several
+    #: matching samples (KNN) otherwise reports every pixel as foreground for that many frames
+    prime = 0
 
     def __init__(self, subtractor, learning_rate: float = -1.0, protect: bool = False,
                  protect_threshold: int = 30) -> None:
@@ -94,7 +102,10 @@ class _SelectiveSubtractor(_OpenCVSubtractor):
             # OpenCV's random generator is per thread and shared with everything else that runs
             # there: seeded per frame, the model's random choices (and so the masks) are the same
             # in whatever thread, and after whatever else, the detector runs.
-            cv2.setRNGSeed(self._frames)
+            cv2.setRNGSeed(self.seed * _SEED_STRIDE + self._frames)
+        if self._frames == 1:
+            for _ in range(self.prime):
+                self.sub.apply(image, learningRate=self.learning_rate)
         if protect is None or self._frames < 3 or not protect.any():
             if self._frames % self.BG_REFRESH == 0:
                 self._bg = None
@@ -133,9 +144,13 @@ class KNN(_SelectiveSubtractor):
     """K-nearest-neighbours background (Zivkovic & van der Heijden 2006), OpenCV's KNN."""
 
     uses_rng = True
+    # OpenCV's KNN marks everything foreground until its first samples agree (four frames)
+    prime = 4
 
     def __init__(self, history: int = 500, dist2_threshold: float = 300.0, detect_shadows: bool = True,
-                 learning_rate: float = -1.0, protect: bool = False, protect_threshold: int = 30) -> None:
+                 learning_rate: float = -1.0, protect: bool = False, protect_threshold: int = 30,
+                 seed: int = 0) -> None:
+        self.seed = int(seed)
         super().__init__(cv2.createBackgroundSubtractorKNN(int(history), float(dist2_threshold),
                                                            bool(detect_shadows)), learning_rate,
                          protect, protect_threshold)

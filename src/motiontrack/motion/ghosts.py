@@ -1,0 +1,135 @@
+"""Ghost regions: foreground left where a still object was learnt into the background and then
+moved away (a person standing in the first frames of a video, a car that drives off).
+
+A background subtractor keeps reporting such a place as foreground until its model relearns it,
+which takes as long as the object stood there. The test tells the two kinds of region apart by
+their outline (the edge-based test used for removed objects in surveillance systems): a real object
+has image edges along its outline in the *current* frame, a ghost has them in the *background*
+image (where the departed object still is) and none in the current frame, which shows plain
+ground there. The score is
+
+    ratio = mean edge(current) / mean edge(background)   over the region's outline pixels
+
+where edge is the local contrast (3×3 maximum − minimum) and the outline is the band of pixels
+on both sides of the mask's boundary.
+A region whose ratio is below the threshold is a ghost. The background image is our own: a
+running average of the gray frames, updated only where the mask is background, so it holds what
+the subtractor believes is behind a foreground region.
+"""
+
+from __future__ import annotations
+
+from typing import Callable
+
+import cv2
+import numpy as np
+
+from ..types import Region
+
+__all__ = ["GhostFilter", "outline_ratio", "edge_strength"]
+
+#: weight of each new frame in the running background, where the mask is background
+RATE = 0.05
+#: edge strength (gray levels) added to both means: a region whose outline is flat in both images
+#: scores about 1 (kept) instead of a ratio of two noise values
+FLAT = 1.0
+_K3 = np.ones((3, 3), np.uint8)
+
+
+def edge_strength(image: np.ndarray) -> np.ndarray:
+    """Morphological gradient (3×3 max − min) of each channel: the local contrast, the height of
+    a step edge on both of its sides."""
+    return cv2.morphologyEx(image, cv2.MORPH_GRADIENT, _K3)
+
+
+def outline_ratio(current: np.ndarray, background: np.ndarray, mask: np.ndarray) -> float:
+    """Edge strength along the outline of ``mask``'s foreground in ``current`` over the same in
+    ``background`` (all three the same (h, w) crop; gray uint8 images, mask 0/255)."""
+    # one morphology call for all three: the mask's own gradient is the outline band
+    edges = edge_strength(cv2.merge([current, background, mask]))
+    cur, bg, _, _ = cv2.mean(edges, mask=cv2.extractChannel(edges, 2))
+    return (cur + FLAT) / (bg + FLAT)
+
+
+class GhostFilter:
+    """Finds ghost regions (see the module notes) and keeps them out of the regions.
+
+    A region found to be a ghost is remembered pixel by pixel with the gray value the frame shows
+    there (the uncovered ground). On later frames those pixels are taken out of the mask while
+    the frame still shows that ground, so a person walking over the ghost is still foreground and
+    is not merged with it; a pixel is forgotten once the detector itself calls it background.
+
+    Parameters
+    ----------
+    ratio : a region whose outline ratio (current / background gradient) is below this is a ghost.
+    """
+
+    #: gray levels within which a remembered ghost pixel still shows the same ground
+    SAME = 20
+    #: the background is learnt every this many frames (it only has to follow slow changes)
+    EVERY = 4
+
+    def __init__(self, ratio: float) -> None:
+        self.ratio = float(ratio)
+        self._bg: np.ndarray | None = None     # running background (float32 gray)
+        self._bg8: np.ndarray | None = None    # the same in uint8
+        self._ghost: np.ndarray | None = None  # ground seen at remembered ghost pixels, or -1
+        self._remembered = False
+        self._frames = 0
+        self.dropped = 0
+
+    def regions(self, image: np.ndarray, mask: np.ndarray,
+                find: Callable[[np.ndarray], list[Region]], scale: float
+                ) -> tuple[np.ndarray, list[Region]]:
+        """``(mask, regions)`` of one frame without its ghosts, then learn the frame's background.
+
+        ``image`` and ``mask`` are at processing resolution (``image`` gray or BGR); ``find``
+        turns a mask into regions (boxes in original-frame pixels; ``scale`` converts them)."""
+        self._frames += 1
+        gray = None
+        if self._bg is None or self._bg.shape != mask.shape:
+            gray = _gray(image)
+            self._bg = gray.astype(np.float32)
+            self._bg8 = gray.copy()
+            self._ghost = np.full(gray.shape, -1, np.int16)
+            self._remembered = False
+            return mask, find(mask)
+        detected = mask
+        if self._remembered:
+            gray = _gray(image)
+            # forget what the detector no longer reports; hide what still shows the same ground
+            self._ghost[mask == 0] = -1
+            remembered = self._ghost >= 0
+            self._remembered = bool(remembered.any())
+            same = remembered & (np.abs(gray.astype(np.int16) - self._ghost) < self.SAME)
+            if same.any():
+                mask = mask.copy()
+                mask[same] = 0
+        regions = find(mask)
+        keep = []
+        h, w = mask.shape
+        for r in regions:
+            x, y, bw, bh = r.box.as_array() * scale
+            # two pixels of margin: the outline's outer side and the 3x3 support
+            x1, y1 = max(0, int(x) - 2), max(0, int(y) - 2)
+            x2, y2 = min(w, int(np.ceil(x + bw)) + 2), min(h, int(np.ceil(y + bh)) + 2)
+            cur = _gray(image[y1:y2, x1:x2])
+            crop = mask[y1:y2, x1:x2]
+            if outline_ratio(cur, self._bg8[y1:y2, x1:x2], crop) >= self.ratio:
+                keep.append(r)
+                continue
+            self.dropped += 1
+            on = crop > 0
+            self._ghost[y1:y2, x1:x2][on] = cur[on]
+            self._remembered = True
+        if self._frames % self.EVERY == 0:
+            # learn where the detector reports background: elsewhere the model still holds
+            # whatever was there (a standing person, the object that left a ghost)
+            cv2.accumulateWeighted(_gray(image) if gray is None else gray, self._bg,
+                                   1 - (1 - RATE) ** self.EVERY, mask=cv2.bitwise_not(detected))
+            self._bg8 = cv2.convertScaleAbs(self._bg)
+        return mask, keep
+
+
+def _gray(image: np.ndarray) -> np.ndarray:
+    return cv2.cvtColor(image, cv2.COLOR_BGR2GRAY) if image.ndim == 3 else image
