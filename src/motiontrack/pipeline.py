@@ -181,12 +181,12 @@ class Pipeline:
         scene is upright (``people.auto_split``)."""
         if mask is None:
             return None, extras["detections"], {}
-        if self.ghosts is not None:
+        if self.ghosts is not None:   # it learns its background in the warm-up frames too
             mask, regions = self.ghosts.regions(extras["small"], mask, self._find, self.scale)
-            if index < self.cfg.motion.warmup:
-                regions = []
         else:
-            regions = [] if index < self.cfg.motion.warmup else self._find(mask)
+            regions = self._find(mask)
+        if index < self.cfg.motion.warmup:
+            regions = []
         if regions:
             regions = self._split_upright(mask, regions, extras)
         return mask, regions, extras
