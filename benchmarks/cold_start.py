@@ -19,10 +19,7 @@ Run: .venv/bin/python benchmarks/cold_start.py [--data ../shared/data] [--starts
 from __future__ import annotations
 
 import argparse
-import os
-import sys
 from concurrent.futures import ProcessPoolExecutor
-from pathlib import Path
 
 import numpy as np
 
@@ -31,6 +28,8 @@ from motiontrack.evaluate.mot import evaluate_tracking
 from motiontrack.io.mot import read_mot
 from motiontrack.pipeline import run
 from motiontrack.types import Annotations
+
+from _pets import add_data_argument, pets_video  # benchmarks/ is on sys.path when a script here runs
 
 KEYS = ("HOTA", "MOTA", "IDF1", "recall", "precision", "IDSW")
 
@@ -51,16 +50,13 @@ def one(video: str, gt_path: str, start: int, seed: int, overrides: list[str]) -
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--data", default=os.environ.get("MOTIONTRACK_DATA",
-                                                     Path(__file__).resolve().parents[2] / "shared" / "data"))
+    add_data_argument(ap)
     ap.add_argument("--starts", default="0,50,100,150", help="0-based first frames")
     ap.add_argument("--seeds", type=int, default=5, help="KNN seeds 0 .. N-1")
     ap.add_argument("--set", dest="overrides", action="append", default=[], metavar="STAGE.PARAM=VALUE")
     ap.add_argument("--jobs", type=int, default=2)
     args = ap.parse_args()
-    video = Path(args.data) / "pets09-s2l1" / "video.avi"
-    if not video.is_file():
-        sys.exit(f"PETS clip not found: {video} (set MOTIONTRACK_DATA or --data)")
+    video = pets_video(args.data)
     gt = video.parent / "gt_mot15.txt"
     starts = [int(s) for s in args.starts.split(",")]
     cases = [(s, k) for s in starts for k in range(args.seeds)]
