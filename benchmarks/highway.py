@@ -1,5 +1,6 @@
 """Cars on CDnet 2014 baseline/highway (320x240): detection of the default pipeline at its automatic
-processing scale, at the old fixed scale 0.5, and the tutorial baseline, side by side.
+processing scale, at the old fixed scale 0.5, with the ``fast`` preset's smaller KNN model, and
+the tutorial baseline, side by side.
 
 Ground-truth boxes: connected components (8-connected, >= 200 px) of the gt masks' foreground
 (value 255) in the temporal ROI, frames 470-1000. Touching cars form one component, so the numbers
@@ -57,8 +58,8 @@ def score(folder: Path, boxes_by_frame) -> tuple[float, float]:
     return tp / max(n_gt, 1), tp / max(n_pred, 1)
 
 
-def pipeline_boxes(folder: Path, overrides: list[str]):
-    cfg = load_config(None, [f"source.max_frames={LAST}", *overrides])
+def pipeline_boxes(folder: Path, overrides: list[str], preset: str | None = None):
+    cfg = load_config(None, [f"source.max_frames={LAST}", *overrides], preset=preset)
     for res in run(str(folder / "input" / "*.jpg"), cfg):
         yield res.index + 1, np.array([t.box.as_array() for t in res.tracks]).reshape(-1, 4)
 
@@ -89,6 +90,7 @@ def main() -> None:
         ("tutorial baseline", lambda: baseline_boxes(folder)),
         ("pipeline, scale 0.5 (old default)", lambda: pipeline_boxes(folder, ["preprocess.scale=0.5"])),
         ("pipeline, automatic scale (1.0 here)", lambda: pipeline_boxes(folder, [])),
+        ("pipeline, --preset fast", lambda: pipeline_boxes(folder, [], "fast")),
     ]
     print(f"CDnet highway 320x240, frames {FIRST}-{LAST}, cars = gt mask components >= {MIN_GT_AREA} px")
     print(f"{'run':<38}{'recall':>8}{'prec':>8}{'s':>7}")

@@ -209,7 +209,7 @@ def test_unknown_preset(capsys):
     from motiontrack.cli import main
 
     assert main(["track", "synth:walker?n_frames=5", "--preset", "nope"]) == 2
-    assert "unknown preset 'nope'; valid presets: people" in capsys.readouterr().err
+    assert "unknown preset 'nope'; valid presets: fast, people" in capsys.readouterr().err
 
 
 def test_ablate_prints_one_row_per_configuration(capsys, tmp_path):
@@ -333,3 +333,23 @@ def test_knn_seed_gives_another_draw_that_repeats():
     diff = np.mean([np.mean(np.frombuffer(a, np.uint8) != np.frombuffer(b, np.uint8))
                     for a, b in zip(zero, seven)])
     assert 0 < diff < 0.01
+
+
+def test_knn_model_size_reaches_opencv_and_the_fast_preset_keeps_identities():
+    from motiontrack.errors import ConfigError
+
+    det = DETECTORS.create("knn", n_samples=3, knn_samples=1)
+    assert (det.sub.getNSamples(), det.sub.getkNNSamples()) == (3, 1)
+    default = DETECTORS.create("knn")
+    assert (default.sub.getNSamples(), default.sub.getkNNSamples()) == (7, 2)  # OpenCV's own
+    fast = load_config(None, preset="fast").motion.knn
+    assert (fast.n_samples, fast.knn_samples) == (3, 1)
+    # the smaller model still follows both people through the crossing
+    spec = "synth:crossing"
+    pred, _ = run_scene(spec, ["motion.knn.n_samples=3", "motion.knn.knn_samples=1"])
+    res = evaluate_tracking(parse_synth_spec(spec).ground_truth(), pred, ignore_zero_marked=True)
+    assert res["IDSW"] == 0 and res["MOTA"] >= 0.9
+    with pytest.raises(ConfigError, match="knn_samples must be at most n_samples"):
+        load_config(None, ["motion.knn.n_samples=3", "motion.knn.knn_samples=4"])
+    with pytest.raises(ConfigError, match="knn_samples"):
+        DETECTORS.create("knn", n_samples=3, knn_samples=5)

@@ -137,6 +137,12 @@ class KNNParams(_Section):
     dist2_threshold: float = param(300.0, lo=0.0)
     detect_shadows: bool = param(True)
     learning_rate: float = param(-1.0, lo=-1.0, hi=1.0)
+    n_samples: int = param(7, lo=1, hi=50,
+                           doc="samples kept per pixel in each of the model's three time scales "
+                               "(fewer is faster: see docs/pipeline.md)")
+    knn_samples: int = param(2, lo=1, hi=50,
+                             doc="matching samples within dist2_threshold that make a pixel "
+                                 "background, at most n_samples")
     protect: bool = param(False, doc="selective update: pixels of tracked objects that have moved are not "
                                      "learnt, so people who stop stay foreground")
     protect_threshold: int = param(30, lo=1, hi=255,
@@ -145,6 +151,12 @@ class KNNParams(_Section):
     seed: int = param(0, lo=0, hi=1_000_000,
                       doc="seed of the model's random sample updates: a run repeats exactly for a "
                           "given seed; other seeds show the spread of the scores")
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.knn_samples > self.n_samples:
+            raise ConfigError(f"KNNParams.knn_samples must be at most n_samples ({self.n_samples}), "
+                              f"got {self.knn_samples}")
 
 
 @dataclass(frozen=True)

@@ -17,7 +17,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("source", help="video file, camera index (0), rtsp/http URL, image folder or glob "
                                   "('input/*.jpg'), or synth:NAME (see `motiontrack list`)")
     p.add_argument("-o", "--out", default="out", help="output folder (default: out)")
-    p.add_argument("--preset", help="shipped settings to start from, e.g. people (see `motiontrack list`)")
+    p.add_argument("--preset", help="shipped settings to start from: people, fast (see `motiontrack list`)")
     p.add_argument("--config", help="TOML config file (applied after --preset)")
     p.add_argument("--set", dest="overrides", action="append", default=[], metavar="STAGE.PARAM=VALUE",
                    help="override one config field, e.g. --set motion.method=knn (repeatable)")
