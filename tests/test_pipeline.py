@@ -109,12 +109,14 @@ def test_pets09_well_above_the_tutorial_baseline(data):
     mean = {k: float(np.mean([s[k] for s in scores])) for k in scores[0]}
     # The identity scores of one run hang on a swap or two inside the group at the sign post, so
     # the floors hold the mean of three seeds of the KNN model (benchmarks/cold_start.py).
-    # Measured (seeds 0, 1, 2): recall 0.834, precision 0.883, MOTA 0.716, IDF1 0.782, HOTA 0.559
-    # (seed 0 alone: 0.837, 0.896, 0.732, 0.767, 0.541). Session 6 (seed 0, before the KNN
-    # priming and the ghost filter): 0.822, 0.886, 0.709, 0.799, 0.579; with MOG2 and no
-    # appearance model 0.742, 0.856, 0.612, 0.770, 0.532.
+    # Measured (seeds 0, 1, 2): recall 0.836, precision 0.890, MOTA 0.725, IDF1 0.811, HOTA 0.575
+    # (seed 0 alone: 0.837, 0.898, 0.735, 0.802, 0.564). Session 7, before overlap matches went
+    # first (assign_in_stages): 0.834, 0.883, 0.716, 0.782, 0.559. Session 6 (seed 0, before
+    # the KNN priming and the ghost filter): 0.822, 0.886, 0.709, 0.799, 0.579; with MOG2 and no
+    # appearance model 0.742, 0.856, 0.612, 0.770, 0.532. The floors are the targets
+    # for MOTA and HOTA.
     assert mean["recall"] >= 0.80 and mean["precision"] >= 0.86
-    assert mean["MOTA"] >= 0.69 and mean["IDF1"] >= 0.75 and mean["HOTA"] >= 0.54
+    assert mean["MOTA"] >= 0.70 and mean["IDF1"] >= 0.77 and mean["HOTA"] >= 0.55
 
 
 @pytest.mark.data

@@ -7,7 +7,8 @@ import pytest
 
 from motiontrack.config import TrackerConfig
 from motiontrack.tracking import kalman
-from motiontrack.tracking.association import INF_COST, assign, association_cost, iou_matrix
+from motiontrack.tracking.association import (INF_COST, assign, assign_in_stages, association_cost,
+                                              iou_matrix)
 from motiontrack.tracking.tracker import MultiObjectTracker
 from motiontrack.types import TrackState
 
@@ -54,6 +55,42 @@ def test_association_gates_and_fallback():
     matches, un_t, un_d = assign(cost)
     assert matches.tolist() == [[0, 0], [1, 1]]
     assert un_t.tolist() == [] and un_d.tolist() == [2]
+
+
+def test_overlap_matches_go_before_distance_rescues():
+    # PETS frame 81 (seed 0), reduced: track 0 overlaps detection 0 (cost 0.21); a lost track 1
+    # and a fragment (detection 1) are each only within the other pairs' distance gates. One
+    # assignment over every allowed pair maximises the number of matches: it pairs the tracks
+    # crosswise (2.09 + 2.19) and hands the walking person's box to the lost track.
+    cost = np.array([[0.21, 2.19], [2.09, INF_COST]])
+    first = cost < 1.0
+    assert assign(cost)[0].tolist() == [[0, 1], [1, 0]]
+    matches, un_t, un_d = assign_in_stages(cost, first)
+    assert matches.tolist() == [[0, 0]]
+    assert un_t.tolist() == [1] and un_d.tolist() == [1]
+    # the second stage still rescues what the first left over
+    cost2 = np.array([[0.3, INF_COST, INF_COST], [INF_COST, 1.5, INF_COST]])
+    matches, un_t, un_d = assign_in_stages(cost2, cost2 < 1.0)
+    assert sorted(matches.tolist()) == [[0, 0], [1, 1]]
+    assert un_t.tolist() == [] and un_d.tolist() == [2]
+
+
+def test_tracker_keeps_the_overlapping_detection_for_the_track_that_overlaps_it():
+    # A walks right; B stands at x = 90 and is then unseen (lost). Next frame A's box (which B's
+    # widened search window also reaches) and a fragment behind A (within A's distance gate, out
+    # of B's) are detected: A must keep its own box, B stays lost, the fragment starts a track.
+    trk = MultiObjectTracker(TrackerConfig(confirm_hits=3), image_size=(640, 480), fps=10.0)
+    b = [90.0, 50.0, 20.0, 40.0]
+    for t in range(10):
+        trk.update(np.array([walk(t), b]))
+    for t in (10, 11):
+        (tr,) = trk.update(np.array([walk(t)]))
+        assert tr.id == 1
+    tracks = trk.update(np.array([walk(12), [25.0, 60.0, 10.0, 20.0]]))
+    assert [t.id for t in tracks] == [1]
+    assert tracks[0].box.x == pytest.approx(walk(12)[0], abs=1.0)
+    assert [m.state for m in trk.meta[:2]] == [TrackState.CONFIRMED, TrackState.LOST]
+    assert len(trk.meta) == 3 and trk.meta[2].state == TrackState.TENTATIVE
 
 
 def test_assign_empty():

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-__all__ = ["iou_matrix", "center_distance_matrix", "association_cost", "assign"]
+__all__ = ["iou_matrix", "center_distance_matrix", "association_cost", "assign", "assign_in_stages"]
 
 #: cost given to forbidden pairs (never chosen)
 INF_COST = 1e6
@@ -86,3 +86,26 @@ def assign(cost: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     matches = np.empty((len(rows), 2), np.int64)
     matches[:, 0], matches[:, 1] = rows, cols
     return matches, np.flatnonzero(free_r), np.flatnonzero(free_c)
+
+
+def assign_in_stages(cost: np.ndarray, first: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`assign` in two stages: the pairs marked ``first`` (e.g. boxes that overlap) are
+    matched among themselves, then the rows and columns left over with all their allowed pairs.
+
+    One minimum-cost assignment over every allowed pair maximises the *number* of matches before
+    their cost (a forbidden pair costs more than any sum of allowed ones), so two poor pairs win
+    over one good pair: a lost track near a person's fragment and a far-off detection take that
+    person's box from the track that overlaps it. Matching the first-stage pairs first keeps a
+    good match from being traded for two poor ones.
+    """
+    n, m = cost.shape
+    first = np.asarray(first, bool)
+    if n == 0 or m == 0 or first.all() or not first.any():
+        return assign(cost)
+    m1, rows1, cols1 = assign(np.where(first, cost, INF_COST))
+    if not len(rows1) or not len(cols1):
+        return m1, rows1, cols1
+    m2, r2, c2 = assign(cost[np.ix_(rows1, cols1)])
+    matches = np.concatenate([m1, np.column_stack([rows1[m2[:, 0]], cols1[m2[:, 1]]])])
+    return matches, rows1[r2], cols1[c2]
+

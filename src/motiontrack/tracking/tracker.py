@@ -33,7 +33,7 @@ from ..registry import Registry
 from ..types import Box, Region, Track, TrackState
 from . import kalman
 from .appearance import bhattacharyya, histograms
-from .association import INF_COST, assign, association_cost, iou_matrix
+from .association import INF_COST, assign_in_stages, association_cost, iou_matrix
 from .merge import anchor_partial, split_merged
 
 __all__ = ["TRACKERS", "MultiObjectTracker"]
@@ -138,7 +138,7 @@ class MultiObjectTracker:
         det, det_scores, owner, n_real = self._measurements(pred, det, det_scores, owned, located)
         det_hist = (histograms(image, det, mask, scale)
                     if self.cfg.appearance_weight > 0 and image is not None and len(det) else None)
-        matches, un_tracks, un_dets = assign(self._cost(pred, det, owner, n_real, det_hist))
+        matches, un_tracks, un_dets = assign_in_stages(*self._cost(pred, det, owner, n_real, det_hist))
         self._correct(matches, pred, det, det_scores, owner, n_real, det_hist)
         self._miss(un_tracks, dt)
         for m in self.meta:
@@ -175,12 +175,17 @@ class MultiObjectTracker:
         return det, det_scores, owner, n_real
 
     def _cost(self, pred: np.ndarray, det: np.ndarray, owner: np.ndarray, n_real: int,
-              det_hist: np.ndarray | None) -> np.ndarray:
+              det_hist: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+        """The association cost matrix, and which pairs are matched in the first stage: boxes
+        that overlap (IoU cost) and split measurements, before the distance rescues and the
+        owned (bridge) measurements."""
         c = self.cfg
         # the search window around an unseen track's prediction grows with the time it is unseen
         tsu = np.array([m.tsu for m in self.meta], np.float64)
         cost = association_cost(pred, det, c.min_iou, c.max_distance * (1.0 + c.search_growth * tsu),
                                 c.cost)
+        # IoU costs are below 1, the centre-distance rescue of non-overlapping boxes 1 + distance
+        first = cost < 1.0 if c.cost == "iou" else np.ones(cost.shape, bool)
         if det_hist is not None and len(self.meta):
             have = [i for i, m in enumerate(self.meta) if m.hist is not None]
             if have:
@@ -198,7 +203,8 @@ class MultiObjectTracker:
         if len(synth):
             cost[:, synth] = INF_COST
             cost[owner[synth], synth] = np.where(synth >= n_real, 2.0, 0.0)
-        return cost
+            first[:, synth] = synth < n_real
+        return cost, first
 
     def _correct(self, matches: np.ndarray, pred: np.ndarray, det: np.ndarray,
                  det_scores: np.ndarray, owner: np.ndarray, n_real: int,
