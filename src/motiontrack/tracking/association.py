@@ -94,9 +94,9 @@ def assign_in_stages(cost: np.ndarray, first: np.ndarray) -> tuple[np.ndarray, n
 
     One minimum-cost assignment over every allowed pair maximises the *number* of matches before
     their cost (a forbidden pair costs more than any sum of allowed ones), so two poor pairs win
-    over one good pair: a lost track near a person's fragment and a far-off detection take that
-    person's box from the track that overlaps it. Matching the first-stage pairs first keeps a
-    good match from being traded for two poor ones.
+    over one good pair: a lost track takes a walker's box, and the walker's track a fragment
+    nearby, because each is within the other's distance gate. Matching the first-stage pairs first
+    keeps a good match from being traded for two poor ones.
     """
     n, m = cost.shape
     first = np.asarray(first, bool)
@@ -108,4 +108,3 @@ def assign_in_stages(cost: np.ndarray, first: np.ndarray) -> tuple[np.ndarray, n
     m2, r2, c2 = assign(cost[np.ix_(rows1, cols1)])
     matches = np.concatenate([m1, np.column_stack([rows1[m2[:, 0]], cols1[m2[:, 1]]])])
     return matches, rows1[r2], cols1[c2]
-
