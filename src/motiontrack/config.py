@@ -154,9 +154,15 @@ class KNNParams(_Section):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        if self.knn_samples > self.n_samples:
-            raise ConfigError(f"KNNParams.knn_samples must be at most n_samples ({self.n_samples}), "
-                              f"got {self.knn_samples}")
+        check_knn_samples(self.n_samples, self.knn_samples)
+
+
+def check_knn_samples(n_samples: int, knn_samples: int) -> None:
+    """KNN's background vote needs ``1 <= knn_samples <= n_samples`` (the config and the
+    detector, which can be built without a config, both check it here)."""
+    if not 1 <= knn_samples <= n_samples:
+        raise ConfigError(f"KNN: knn_samples must be at most n_samples ({n_samples}) and at least "
+                          f"1, got {knn_samples}")
 
 
 @dataclass(frozen=True)

@@ -6,7 +6,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from ..errors import ConfigError
+from ..config import check_knn_samples
 from .base import DETECTORS, MotionDetector
 
 #: the random generator is seeded with ``seed * _SEED_STRIDE + frame``: seeds do not share
@@ -151,9 +151,7 @@ class KNN(_SelectiveSubtractor):
     def __init__(self, history: int = 500, dist2_threshold: float = 300.0, detect_shadows: bool = True,
                  learning_rate: float = -1.0, protect: bool = False, protect_threshold: int = 30,
                  seed: int = 0, n_samples: int = 7, knn_samples: int = 2) -> None:
-        if not 1 <= int(knn_samples) <= int(n_samples):
-            raise ConfigError(f"KNN: knn_samples must be between 1 and n_samples ({n_samples}), "
-                              f"got {knn_samples}")
+        check_knn_samples(int(n_samples), int(knn_samples))
         self.seed = int(seed)
         sub = cv2.createBackgroundSubtractorKNN(int(history), float(dist2_threshold),
                                                 bool(detect_shadows))
