@@ -230,23 +230,27 @@ def test_shape_tracker_raises_recall_on_column_and_crossing(scene):
     # Issue 7's evidence: with the people preset, switching the active shape tracker on raises
     # recall (CLEAR, IoU 0.5) and costs at most 0.02 precision on synthetic types 3 and 4.
     # Measured: column 0.986 -> 0.993 (the person entering across the border is extended past it
-    # by the outline), crossing 0.970 -> 0.995 (the merged blob is split along the outlines).
-    # The column case uses MOG2 with the 5x5 blur, which cuts the entering person at the border;
-    # the default KNN detector sees all of them there (recall 0.993 with or without shapes).
+    # by the outline). The column case uses MOG2 with the 5x5 blur, which cuts the entering
+    # person at the border; the default KNN detector sees all of them there (recall 0.993 with or
+    # without shapes). Crossing, mean of seeds 0-2 (the merged blob is split along the outlines):
+    # 0.983 -> 0.990, precision 0.993 -> 0.997. Since the tracker holds each share's size
+    # (session 9) seed 0 alone no longer shows it (0.995 either way; seed 1: 0.964 -> 0.989).
     from motiontrack.config import load_config
     from motiontrack.evaluate.mot import evaluate_tracking
     from motiontrack.pipeline import run
     from motiontrack.synth import parse_synth_spec
     from motiontrack.types import Annotations
 
-    gt = parse_synth_spec(f"synth:{scene}").ground_truth()
+    specs = ([f"synth:{scene}"] if scene == "column"
+             else [f"synth:{scene}?seed={k}" for k in range(3)])
 
-    def score(shapes: bool) -> tuple[float, float]:
+    def score(spec: str, shapes: bool) -> tuple[float, float]:
+        gt = parse_synth_spec(spec).ground_truth()
         detector = (["motion.method=mog2", "preprocess.blur_kernel=5"] if scene == "column"
                     else [])
         cfg = load_config(None, ["people.enabled=true", f"people.shapes={str(shapes).lower()}",
                                  *detector])
-        rows = [(r.index + 1, t.id, *t.box.as_array()) for r in run(f"synth:{scene}", cfg)
+        rows = [(r.index + 1, t.id, *t.box.as_array()) for r in run(spec, cfg)
                 for t in r.tracks]
         a = np.array(rows, float)
         res = evaluate_tracking(gt, Annotations.from_columns(a[:, 0], a[:, 1], a[:, 2:6]),
@@ -254,6 +258,7 @@ def test_shape_tracker_raises_recall_on_column_and_crossing(scene):
         tp, fp, fn = res["TP"], res["FP"], res["FN"]
         return tp / (tp + fn), tp / (tp + fp)
 
-    (r0, p0), (r1, p1) = score(False), score(True)
+    (r0, p0), (r1, p1) = (np.mean([score(s, shapes) for s in specs], axis=0)
+                          for shapes in (False, True))
     assert r1 > r0
     assert p1 >= p0 - 0.02

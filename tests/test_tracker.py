@@ -298,3 +298,36 @@ def test_tracker_splits_a_merged_blob_along_located_boxes():
     right = by_id[ids[140]]
     assert left.x > 103          # pulled towards the located box (measurement noise is small)
     assert right.x == pytest.approx(140, abs=0.5)  # its moved prediction: where it was
+
+
+def test_split_merged_gives_each_share_the_size_it_is_told():
+    from motiontrack.tracking.merge import split_merged
+
+    pred = np.array([[100.0, 100, 20, 50], [128, 102, 20, 50]])
+    det = np.array([[98.0, 98, 52, 56]])
+    size = np.array([[24.0, 50], [10, 40]])
+    boxes, _, owner = split_merged(pred, np.array([True, True]), det, size=size)
+    assert owner.tolist() == [0, 1]
+    np.testing.assert_allclose(boxes[0], [98, 100, 24, 50])   # centred on the prediction (110, 125)
+    np.testing.assert_allclose(boxes[1], [133, 107, 10, 40])  # centre (138, 127)
+
+
+def test_tracks_sharing_a_blob_keep_their_size():
+    """Two people walk side by side; the left one's box shrinks for a few frames (turning side
+    on), then both are one motion blob for 30 frames. Each share of the blob repeats the track's
+    prediction, so with the predicted size the shrinking went on for as long as the blob lasted
+    (down to a box 1 px wide); the held size keeps the person's width."""
+    trk = MultiObjectTracker(TrackerConfig(confirm_hits=2), image_size=(640, 480))
+    for t in range(10):
+        a = [100 + 2 * t, 100, 30 - t, 60]        # 30 px wide, shrinking to 21
+        b = [150 + 2 * t, 100, 20, 60]
+        out = trk.update(np.array([a, b], float))
+    ids = {round(tr.box.x) < 140: tr.id for tr in out}
+    for t in range(10, 40):
+        blob = [100 + 2 * t, 98, 72, 64]          # both people, from a's left to b's right edge
+        out = trk.update(np.array([blob], float))
+        by_id = {tr.id: tr.box for tr in out}
+        assert set(by_id) == set(ids.values())    # both identities reported through the merge
+    left, right = by_id[ids[True]], by_id[ids[False]]
+    assert 20 <= left.w <= 31 and 19 <= right.w <= 21
+    assert left.x < right.x

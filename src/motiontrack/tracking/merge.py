@@ -5,7 +5,11 @@ clearly larger than each of them — people walking together or crossing — the
 matched to all of them. Following the Reading People Tracker, the predictions are treated as one
 merged prediction that matches the blob, and the blob is split again into one *synthetic
 measurement* per track: the track's predicted box moved (not resized) to lie inside the blob. Each
-identity therefore survives the crossing with its own velocity.
+identity therefore survives the crossing with its own velocity. The tracker gives each share the
+track's size held from before the merge (the larger of its last estimate and its reference size),
+not the predicted one: a measurement equal to the prediction never corrects the prediction's size
+velocity, so a track kept by shares of a blob would otherwise shrink (or grow) at its last rate
+for as long as the blob lasts — down to a box one pixel wide.
 
 When a better estimate of where each person is inside the blob exists this frame — the active
 shape tracker's outline fitted to the person (``own`` boxes) — the synthetic measurement is that
@@ -21,7 +25,8 @@ __all__ = ["split_merged", "anchor_partial"]
 
 
 def split_merged(pred: np.ndarray, established: np.ndarray, det: np.ndarray,
-                 max_share: float = 0.85, own: np.ndarray | None = None
+                 max_share: float = 0.85, own: np.ndarray | None = None,
+                 size: np.ndarray | None = None
                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Split detections that contain several established tracks' predictions.
 
@@ -41,6 +46,11 @@ def split_merged(pred: np.ndarray, established: np.ndarray, det: np.ndarray,
         synthetic measurement (when the cut is at least 2 px each way); the others get their
         prediction moved inside the blob. Which tracks claim which blob is decided by the
         predictions either way.
+    size : (N, 2) float64, optional
+        The size (w, h) of each track's synthetic measurement, centred on its prediction
+        (default: the predicted size). A share of a blob says nothing about the size of the
+        object in it, and a measurement that repeats the prediction never corrects the
+        prediction's size velocity: the tracker passes sizes that do not follow it.
 
     Returns
     -------
@@ -83,6 +93,9 @@ def split_merged(pred: np.ndarray, established: np.ndarray, det: np.ndarray,
     for j in np.flatnonzero(split):
         tracks = np.flatnonzero(claim[:, j])
         b = pred[tracks].copy()
+        if size is not None:
+            b[:, :2] += (b[:, 2:] - size[tracks]) / 2
+            b[:, 2:] = size[tracks]
         # move each predicted box inside the blob (sizes kept unless larger than the blob)
         b[:, 2] = np.minimum(b[:, 2], det[j, 2])
         b[:, 3] = np.minimum(b[:, 3], det[j, 3])

@@ -134,8 +134,10 @@ class MultiObjectTracker:
             det_scores = np.array([r.score for r in detections], np.float64)
         self.frame_count += 1
 
+        held = self.x[:, 2:4].copy()   # sizes before this step's size velocity (merged blobs)
         pred = self.predict(dt)
-        det, det_scores, owner, n_real = self._measurements(pred, det, det_scores, owned, located)
+        det, det_scores, owner, n_real = self._measurements(pred, det, det_scores, owned, located,
+                                                            held)
         det_hist = (histograms(image, det, mask, scale)
                     if self.cfg.appearance_weight > 0 and image is not None and len(det) else None)
         matches, un_tracks, un_dets = assign_in_stages(*self._cost(pred, det, owner, n_real, det_hist))
@@ -150,8 +152,12 @@ class MultiObjectTracker:
     # ------------------------------------------------------------------------ update steps
     def _measurements(self, pred: np.ndarray, det: np.ndarray, det_scores: np.ndarray,
                       owned: dict[int, np.ndarray] | None,
-                      located: dict[int, np.ndarray] | None = None):
+                      located: dict[int, np.ndarray] | None = None,
+                      held: np.ndarray | None = None):
         """This frame's measurements: merged blobs split per track, then the owned ones.
+
+        A track's share of a merged blob gets the larger of its size before this frame's
+        prediction (``held``, (N, 2)) and its reference size: a share is no measurement of size.
 
         Returns ``(boxes, scores, owner, n_real)``: ``owner`` is the track index a synthetic
         measurement belongs to (-1 for a detection); rows from ``n_real`` on are owned ones."""
@@ -162,7 +168,10 @@ class MultiObjectTracker:
                 own = np.full((len(pred), 4), np.nan)
                 for t, box in located.items():
                     own[t] = box
-            det, origin, owner = split_merged(pred, established, det, own=own)
+            size = np.array([m.ref for m in self.meta], np.float64).reshape(-1, 2)
+            if held is not None:
+                size = np.maximum(size, held)
+            det, origin, owner = split_merged(pred, established, det, own=own, size=size)
             det_scores = det_scores[origin]
         else:
             owner = np.full(len(det), -1, np.int64)
