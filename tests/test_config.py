@@ -90,3 +90,26 @@ def test_automatic_processing_scale(size, scale):
     img = np.zeros((size[1], size[0], 3), np.uint8)
     out = preprocess(img, PreprocessConfig())
     assert out.shape[:2] == (round(size[1] * scale), round(size[0] * scale))
+
+
+def test_pixel_window_scales_widens_and_cuts_a_box():
+    from motiontrack.preprocess import pixel_window
+
+    # (10.5, 20, 7, 9) at scale 0.5 is x 5.25..8.75, y 10..14.5: whole pixels 5..9, 10..15
+    assert pixel_window((10.5, 20, 7, 9), 0.5, (100, 200)) == (5, 10, 9, 15)
+    assert pixel_window((10.5, 20, 7, 9), 0.5, (100, 200, 3), margin=2) == (3, 8, 11, 17)
+    # cut to the image; a box outside it is an empty window
+    assert pixel_window((-4, 190, 10, 30), 1.0, (200, 100)) == (0, 190, 6, 200)
+    x1, y1, x2, y2 = pixel_window((150, 10, 5, 5), 1.0, (200, 100))
+    assert x2 <= x1
+
+
+def test_to_gray_converts_colour_and_passes_gray_through():
+    from motiontrack.preprocess import to_gray
+
+    bgr = np.zeros((4, 5, 3), np.uint8)
+    bgr[..., 2] = 200                      # pure red
+    g = to_gray(bgr)
+    assert g.shape == (4, 5) and int(g[0, 0]) == round(0.299 * 200)
+    gray = np.full((4, 5), 7, np.uint8)
+    assert to_gray(gray) is gray

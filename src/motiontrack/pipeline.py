@@ -29,7 +29,7 @@ from .io.sources import Source, open_source, prefetch
 from .io.video import VideoSink, extension_for
 from .motion import create_detector
 from .motion.cleanup import clean_mask
-from .preprocess import load_roi, preprocess, resolve_scale, scaled_size
+from .preprocess import load_roi, pixel_window, preprocess, resolve_scale, scaled_size
 from .regions import find_regions
 from .tracking.tracker import TRACKERS
 from .types import Annotations, Box, Frame, FrameResult, Region
@@ -149,11 +149,9 @@ class Pipeline:
         boxes = self.tracker.moving_boxes()
         if not len(boxes):
             return None
-        h, w = shape
-        mask = np.zeros((h, w), bool)
-        for x, y, bw, bh in boxes * self.scale:
-            x1, y1 = max(0, int(x)), max(0, int(y))
-            x2, y2 = min(w, int(np.ceil(x + bw))), min(h, int(np.ceil(y + bh)))
+        mask = np.zeros(shape, bool)
+        for box in boxes:
+            x1, y1, x2, y2 = pixel_window(box, self.scale, shape)
             if x2 > x1 and y2 > y1:
                 mask[y1:y2, x1:x2] = True
         return mask

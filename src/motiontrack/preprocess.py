@@ -10,7 +10,7 @@ import numpy as np
 from .config import PreprocessConfig
 from .errors import InputError
 
-__all__ = ["preprocess", "load_roi", "scaled_size", "resolve_scale", "AUTO_PIXELS", "AUTO_MIN_SCALE"]
+__all__ = ["preprocess", "to_gray", "pixel_window", "load_roi", "scaled_size", "resolve_scale", "AUTO_PIXELS", "AUTO_MIN_SCALE"]
 
 #: automatic processing scale: about this many pixels are processed (384 x 288) ...
 AUTO_PIXELS = 384 * 288
@@ -32,6 +32,23 @@ def resolve_scale(scale: float, width: int, height: int) -> float:
 def scaled_size(width: int, height: int, scale: float) -> tuple[int, int]:
     """Processing size ``(w, h)`` for ``scale`` (at least 1 px each way)."""
     return max(1, int(round(width * scale))), max(1, int(round(height * scale)))
+
+
+def pixel_window(box, scale: float, shape: tuple[int, ...], margin: int = 0
+                 ) -> tuple[int, int, int, int]:
+    """The pixels ``(x1, y1, x2, y2)`` (end exclusive) that a box ``x, y, w, h`` in original-frame
+    pixels covers in an image of ``shape`` (h, w, ...) at processing scale ``scale``: the scaled
+    box widened to whole pixels, plus ``margin`` pixels on each side, cut to the image (empty
+    when ``x2 <= x1`` or ``y2 <= y1``)."""
+    x, y, bw, bh = (float(v) * scale for v in box)
+    h, w = shape[:2]
+    return (max(0, int(x) - margin), max(0, int(y) - margin),
+            min(w, int(np.ceil(x + bw)) + margin), min(h, int(np.ceil(y + bh)) + margin))
+
+
+def to_gray(image: np.ndarray) -> np.ndarray:
+    """A BGR image in gray; a gray (2-D) image as it is (not copied)."""
+    return cv2.cvtColor(image, cv2.COLOR_BGR2GRAY) if image.ndim == 3 else image
 
 
 def preprocess(image: np.ndarray, cfg: PreprocessConfig) -> np.ndarray:

@@ -25,6 +25,7 @@ import numpy as np
 
 from ..errors import ConfigError, InputError
 from ..io.atomic import commit_temp, temp_path_for
+from ..preprocess import to_gray
 from .tsai import _as_pixels, _as_world, _intersect_plane
 
 log = logging.getLogger(__name__)
@@ -232,7 +233,7 @@ def calibrate_chessboard(images: Sequence[np.ndarray], pattern: tuple[int, int],
     obj_pts, img_pts, used, skipped = [], [], [], []
     size = None
     for img, name in zip(images, names):
-        gray = img if img.ndim == 2 else cv2.cvtColor(img, cv2.COLOR_BGR2GRAY)
+        gray = to_gray(img)
         s = (gray.shape[1], gray.shape[0])
         if size is not None and s != size:
             raise InputError(f"{name}: image size {s[0]}x{s[1]} differs from {size[0]}x{size[1]}")

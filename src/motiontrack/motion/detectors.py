@@ -7,6 +7,7 @@ import cv2
 import numpy as np
 
 from ..config import check_knn_samples
+from ..preprocess import to_gray
 from .base import DETECTORS, MotionDetector
 
 #: the random generator is seeded with ``seed * _SEED_STRIDE + frame``: seeds do not share
@@ -14,10 +15,6 @@ from .base import DETECTORS, MotionDetector
 _SEED_STRIDE = 1_000_003
 
 SHADOW_VALUE = 127  # MOG2/KNN mark shadows with 127; only 255 is foreground
-
-
-def _to_gray(image: np.ndarray) -> np.ndarray:
-    return cv2.cvtColor(image, cv2.COLOR_BGR2GRAY) if image.ndim == 3 else image
 
 
 def _absdiff_max(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -283,7 +280,7 @@ class FarnebackMotion(MotionDetector):
         self._erode = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1)) if r else None
 
     def apply(self, image: np.ndarray, protect: np.ndarray | None = None) -> np.ndarray:
-        gray = _to_gray(image)
+        gray = to_gray(image)
         if self._prev is None or self._prev.shape != gray.shape:
             self._prev = gray.copy()
             self.last_flow = np.zeros(gray.shape + (2,), np.float32)

@@ -25,7 +25,7 @@ import cv2
 import numpy as np
 
 from ..types import Region
-from .detectors import _to_gray
+from ..preprocess import pixel_window, to_gray
 
 __all__ = ["GhostFilter", "outline_ratio", "edge_strength"]
 
@@ -89,7 +89,7 @@ class GhostFilter:
         self._frames += 1
         gray = None
         if self._bg is None or self._bg.shape != mask.shape:
-            gray = _to_gray(image)
+            gray = to_gray(image)
             self._bg = gray.astype(np.float32)
             self._bg8 = gray.copy()
             self._ghost = np.full(gray.shape, -1, np.int16)
@@ -97,7 +97,7 @@ class GhostFilter:
             return mask, find(mask)
         detected = mask
         if self._remembered:
-            gray = _to_gray(image)
+            gray = to_gray(image)
             # forget what the detector no longer reports; hide what still shows the same ground
             self._ghost[mask == 0] = -1
             remembered = self._ghost >= 0
@@ -108,13 +108,10 @@ class GhostFilter:
                 mask[same] = 0
         regions = find(mask)
         keep = []
-        h, w = mask.shape
         for r in regions:
-            x, y, bw, bh = r.box.as_array() * scale
             # two pixels of margin: the outline's outer side and the 3x3 support
-            x1, y1 = max(0, int(x) - 2), max(0, int(y) - 2)
-            x2, y2 = min(w, int(np.ceil(x + bw)) + 2), min(h, int(np.ceil(y + bh)) + 2)
-            cur = (_to_gray(image[y1:y2, x1:x2]) if gray is None  # only the crop is needed
+            x1, y1, x2, y2 = pixel_window(r.box.as_array(), scale, mask.shape, margin=2)
+            cur = (to_gray(image[y1:y2, x1:x2]) if gray is None  # only the crop is needed
                    else gray[y1:y2, x1:x2])
             crop = mask[y1:y2, x1:x2]
             if outline_ratio(cur, self._bg8[y1:y2, x1:x2], crop) >= self.ratio:
@@ -127,7 +124,7 @@ class GhostFilter:
         if self._frames % self.EVERY == 0:
             # learn where the detector reports background: elsewhere the model still holds
             # whatever was there (a standing person, the object that left a ghost)
-            cv2.accumulateWeighted(_to_gray(image) if gray is None else gray, self._bg,
+            cv2.accumulateWeighted(to_gray(image) if gray is None else gray, self._bg,
                                    1 - (1 - RATE) ** self.EVERY, mask=cv2.bitwise_not(detected))
             self._bg8 = cv2.convertScaleAbs(self._bg)
         return mask, keep

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from ..preprocess import to_gray
 from ..types import Box, Region
 
 __all__ = ["nms", "HOGParams", "HOGPeopleDetector"]
@@ -161,15 +162,11 @@ class HOGPeopleDetector:
             out.append(Region(box=box, centroid=box.center, area=box.area, score=float(scores[i])))
         return out
 
-    @staticmethod
-    def _gray(image: np.ndarray) -> np.ndarray:
-        return cv2.cvtColor(image, cv2.COLOR_BGR2GRAY) if image.ndim == 3 else image
-
     # ----------------------------------------------------------------- public
     def detect(self, image: np.ndarray) -> list[Region]:
         """People in the whole frame ``(H, W[, 3]) uint8``; boxes in frame pixels."""
         s = self.params.upscale
-        img = self._gray(image)
+        img = to_gray(image)
         if s != 1.0:
             img = cv2.resize(img, None, fx=s, fy=s, interpolation=cv2.INTER_LINEAR)
         b, w = self._raw(img)
@@ -185,7 +182,7 @@ class HOGPeopleDetector:
         """
         p = self.params
         H, W = image.shape[:2]
-        gray = self._gray(image)
+        gray = to_gray(image)
         all_b, all_w = [], []
         for r in regions:
             bx = r.box

@@ -32,6 +32,7 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
+from ..preprocess import to_gray
 from ..types import Box
 from . import bspline
 from .shape_model import ShapeModel, apply_similarity, fit_similarity, invert_similarity
@@ -450,15 +451,14 @@ class ShapeTracker:
                     img = cv2.GaussianBlur(img, (5, 5), 0)
             bg = background
             if img.ndim != bg.ndim:
-                img = cv2.cvtColor(img, cv2.COLOR_BGR2GRAY) if img.ndim == 3 else img
-                bg = cv2.cvtColor(bg, cv2.COLOR_BGR2GRAY) if bg.ndim == 3 else bg
+                img, bg = to_gray(img), to_gray(bg)
             diff_pair = (img, bg)
         elif mask is not None:
             h, w = mask.shape[:2]
             diff_pair = (mask, np.zeros_like(mask))
         else:
             h, w = H, W
-            gray = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY) if frame.ndim == 3 else frame
+            gray = to_gray(frame)
             diff_pair = (gray, np.zeros_like(gray))
         sx, sy = w / W, h / H
         fg_full = None

@@ -11,6 +11,8 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from ..preprocess import pixel_window
+
 __all__ = ["histograms", "bhattacharyya", "BINS"]
 
 HUE_BINS, SAT_BINS, GRAY_BINS = 16, 4, 32
@@ -30,11 +32,9 @@ def histograms(image: np.ndarray, boxes: np.ndarray, mask: np.ndarray | None = N
     out = np.zeros((len(boxes), BINS))
     if len(boxes) == 0:
         return out
-    h, w = image.shape[:2]
     colour = image.ndim == 3
-    for i, (x, y, bw, bh) in enumerate(boxes * scale):
-        x1, y1 = max(0, int(x)), max(0, int(y))
-        x2, y2 = min(w, int(np.ceil(x + bw))), min(h, int(np.ceil(y + bh)))
+    for i, box in enumerate(boxes):
+        x1, y1, x2, y2 = pixel_window(box, scale, image.shape)
         if x2 - x1 < 2 or y2 - y1 < 2:
             continue
         m = None if mask is None else mask[y1:y2, x1:x2]

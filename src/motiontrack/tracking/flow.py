@@ -37,6 +37,7 @@ import numpy as np
 
 from ..config import CleanupConfig, MotionConfig, PreprocessConfig, RegionsConfig
 from ..errors import ConfigError
+from ..preprocess import preprocess, to_gray
 from ..types import Box, Track, TrackState
 
 log = logging.getLogger(__name__)
@@ -227,7 +228,6 @@ class SparseFlowTracker:
     # ------------------------------------------------------------------------------ helpers
     def _motion_mask(self, image: np.ndarray) -> np.ndarray:
         from ..motion import clean_mask
-        from ..preprocess import preprocess
 
         small = preprocess(image, self.pre) if self.pre is not None else image
         mask = clean_mask(self.detector.apply(small), self.cleanup)
@@ -307,7 +307,7 @@ class SparseFlowTracker:
             raise ConfigError(f"frame size {image.shape[1]}x{image.shape[0]} differs from the "
                               f"tracker's {self.width}x{self.height}")
         p = self.p
-        gray = cv2.cvtColor(image, cv2.COLOR_BGR2GRAY) if image.ndim == 3 else image
+        gray = to_gray(image)
         # 1. motion mask and blobs
         mask = self._motion_mask(image)
         self.last_mask = mask
