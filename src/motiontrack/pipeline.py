@@ -377,7 +377,9 @@ class TrackJob:
         # build every stage now: a bad plug-in name or ROI fails before anything is written
         self.pipe = Pipeline(cfg, (self.src.info.width, self.src.info.height), detections,
                              self.src.info.fps)
-        self.pipe.sequential = "background" in self.save
+        # saving the background reads the detector's model after each frame, as the people
+        # stage's shapes and HOG do: detection of the next frame must not run meanwhile
+        self.pipe.sequential = self.pipe.sequential or "background" in self.save
 
     def expected_frames(self) -> int | None:
         return self.src.expected_frames()
