@@ -109,21 +109,22 @@ def test_pets09_well_above_the_tutorial_baseline(data):
     mean = {k: float(np.mean([s[k] for s in scores])) for k in scores[0]}
     # The identity scores of one run hang on a swap or two inside the group at the sign post, so
     # the floors hold the mean of three seeds of the KNN model (benchmarks/cold_start.py).
-    # Measured (seeds 0, 1, 2): recall 0.836, precision 0.890, MOTA 0.725, IDF1 0.811, HOTA 0.575
-    # (seed 0 alone: 0.837, 0.898, 0.735, 0.802, 0.564). Session 7, before overlap matches went
-    # first (assign_in_stages): 0.834, 0.883, 0.716, 0.782, 0.559. Session 6 (seed 0, before
-    # the KNN priming and the ghost filter): 0.822, 0.886, 0.709, 0.799, 0.579; with MOG2 and no
-    # appearance model 0.742, 0.856, 0.612, 0.770, 0.532. The floors are the targets
-    # for MOTA and HOTA.
-    assert mean["recall"] >= 0.80 and mean["precision"] >= 0.86
-    assert mean["MOTA"] >= 0.70 and mean["IDF1"] >= 0.77 and mean["HOTA"] >= 0.55
+    # Measured (seeds 0, 1, 2): recall 0.841, precision 0.896, MOTA 0.735, IDF1 0.812, HOTA 0.579
+    # (seed 0 alone: 0.845, 0.902, 0.746, 0.815, 0.581). Session 8, before a track's share of a
+    # merged blob held its size: 0.836, 0.890, 0.725, 0.811, 0.575. Session 7, before overlap
+    # matches went first (assign_in_stages): 0.834, 0.883, 0.716, 0.782, 0.559. Session 6 (seed
+    # 0, before the KNN priming and the ghost filter): 0.822, 0.886, 0.709, 0.799, 0.579; with
+    # MOG2 and no appearance model 0.742, 0.856, 0.612, 0.770, 0.532. The floors sit 0.01-0.02
+    # under the measured means, above the targets (0.70 / 0.65 / 0.55).
+    assert mean["recall"] >= 0.82 and mean["precision"] >= 0.88
+    assert mean["MOTA"] >= 0.72 and mean["IDF1"] >= 0.79 and mean["HOTA"] >= 0.565
 
 
 @pytest.mark.data
 def test_pets09_people_preset_splits_groups_by_heads(data):
-    # head-based splitting separates people walking together: measured MOTA 0.755, IDF1 0.751,
-    # HOTA 0.545 on these 300 frames (session 6, before the KNN priming and the ghost filter:
-    # 0.705, 0.619, 0.478). The identity scores hang on one or two swaps: with other seeds of
+    # head-based splitting separates people walking together: measured MOTA 0.767, IDF1 0.846,
+    # HOTA 0.595 on these 300 frames (session 9; session 7 0.755, 0.751, 0.545; session 6, before
+    # the KNN priming and the ghost filter: 0.705, 0.619, 0.478). The identity scores hang on one or two swaps: with other seeds of
     # KNN's random generator (session 6) MOTA 0.687-0.714, IDF1 0.555-0.755, HOTA 0.441-0.549
     # (MOG2 without the appearance model: 0.602, 0.763, 0.526).
     video = data("pets09-s2l1", "video.avi")
@@ -134,7 +135,7 @@ def test_pets09_people_preset_splits_groups_by_heads(data):
     a = np.array(rows, float)
     r = evaluate_tracking(gt, Annotations.from_columns(a[:, 0], a[:, 1], a[:, 2:6]),
                           ignore_zero_marked=True)
-    assert r["MOTA"] >= 0.65 and r["IDF1"] >= 0.58 and r["HOTA"] >= 0.45
+    assert r["MOTA"] >= 0.72 and r["IDF1"] >= 0.75 and r["HOTA"] >= 0.55
 
 
 def test_single_object_tracker_bridges_detection_misses():
