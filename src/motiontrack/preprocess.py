@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Sequence
 
 import cv2
 import numpy as np
@@ -10,7 +11,8 @@ import numpy as np
 from .config import PreprocessConfig
 from .errors import InputError
 
-__all__ = ["preprocess", "to_gray", "pixel_window", "load_roi", "scaled_size", "resolve_scale", "AUTO_PIXELS", "AUTO_MIN_SCALE"]
+__all__ = ["preprocess", "to_gray", "pixel_window", "load_roi", "scaled_size", "resolve_scale",
+           "AUTO_PIXELS", "AUTO_MIN_SCALE"]
 
 #: automatic processing scale: about this many pixels are processed (384 x 288) ...
 AUTO_PIXELS = 384 * 288
@@ -34,7 +36,7 @@ def scaled_size(width: int, height: int, scale: float) -> tuple[int, int]:
     return max(1, int(round(width * scale))), max(1, int(round(height * scale)))
 
 
-def pixel_window(box, scale: float, shape: tuple[int, ...], margin: int = 0
+def pixel_window(box: Sequence[float] | np.ndarray, scale: float, shape: tuple[int, ...], margin: int = 0
                  ) -> tuple[int, int, int, int]:
     """The pixels ``(x1, y1, x2, y2)`` (end exclusive) that a box ``x, y, w, h`` in original-frame
     pixels covers in an image of ``shape`` (h, w, ...) at processing scale ``scale``: the scaled
