@@ -122,10 +122,7 @@ def detect_heads(mask: np.ndarray, box: Box | None = None, scale: float = 1.0,
     if box is None:
         x1, y1, x2, y2 = 0, 0, W, H
     else:
-        x1 = max(int(np.floor(box.x * scale)), 0)
-        y1 = max(int(np.floor(box.y * scale)), 0)
-        x2 = min(int(np.ceil(box.x2 * scale)), W)
-        y2 = min(int(np.ceil(box.y2 * scale)), H)
+        x1, y1, x2, y2 = _crop_bounds(box, scale, W, H)
     if x2 <= x1 or y2 <= y1:
         return []
     crop = m[y1:y2, x1:x2]
@@ -292,10 +289,7 @@ def split_region_by_heads(region: Region, mask: np.ndarray, heads: list[Head] | 
         return [region]
     m = np.asarray(mask)
     Hm, Wm = m.shape[:2]
-    x1 = max(int(np.floor(region.box.x * scale)), 0)
-    y1 = max(int(np.floor(region.box.y * scale)), 0)
-    x2 = min(int(np.ceil(region.box.x2 * scale)), Wm)
-    y2 = min(int(np.ceil(region.box.y2 * scale)), Hm)
+    x1, y1, x2, y2 = _crop_bounds(region.box, scale, Wm, Hm)
     fg = m[y1:y2, x1:x2] > 0
     total = int(fg.sum())
     if total == 0:
