@@ -142,3 +142,48 @@ def test_ghost_filter_keeps_regions_until_it_has_a_background():
     reg = [Region(box=Box(5, 5, 10, 10), centroid=(10, 10), area=100)]
     out_mask, out = f.regions(np.zeros((20, 20), np.uint8), mask, lambda m: reg, 1.0)
     assert out == reg and out_mask is mask and f.dropped == 0
+
+
+def _ghost_and_person(person: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """First frame, later frame and detector mask, worked by hand: plain ground (gray 100); an
+    object (gray 30) stands at columns 10-19 in the first frame; later that place shows the
+    ground again (a ghost: the detector still reports it) and a person of gray ``person`` stands
+    at columns 20-29, where the first frame showed ground. Rows 10-29; the mask covers both."""
+    first = np.full((40, 40), 100, np.uint8)
+    first[10:30, 10:20] = 30
+    later = np.full((40, 40), 100, np.uint8)
+    later[10:30, 20:30] = person
+    mask = np.zeros((40, 40), np.uint8)
+    mask[10:30, 10:30] = 255
+    return first, later, mask
+
+
+@pytest.mark.parametrize("person", [30, 108])   # dark, and only 8 gray levels off the ground
+def test_a_ghost_attached_to_a_person_dissolves_pixel_by_pixel_and_the_person_stays(person):
+    first, later, mask = _ghost_and_person(person)
+    f = GhostFilter(0.0)          # ratio 0: the region-level test never fires, only the pixel one
+    f.regions(first, np.zeros_like(mask), lambda m: [], 1.0)   # the background: the first frame
+    out = []
+    for _ in range(18):
+        m, _ = f.regions(later, mask, lambda m: [], 1.0)
+        out.append(m)
+    # a run every 3rd frame (frames 3, 6, ...): the first only keeps the frame for the
+    # stillness test; from frame 6 each run takes two rings of the ghost's border pixels that
+    # look like the ground around them (gray 100) and not like the background held there (30)
+    assert (out[3] == mask).all()                                 # frame 5: nothing taken yet
+    taken = mask.astype(bool) & (out[5] == 0)                     # frame 6: the first run
+    two_rings = np.zeros_like(taken)                              # the ghost's free sides: left,
+    two_rings[10:30, 10:12] = two_rings[10:12, 10:20] = two_rings[28:30, 10:20] = True  # top, bottom
+    assert (taken == two_rings).all()
+    assert not out[-1][:, :20].any()                              # frame 18: the ghost is gone
+    assert (out[-1] == np.where(np.arange(40)[None, :] >= 20, mask, 0)).all()   # the person stays
+
+
+def test_pixels_that_keep_changing_are_never_taken_as_ghost():
+    # the same ghost, but the frame flickers by 10 gray levels: nothing is still, nothing is taken
+    first, later, mask = _ghost_and_person(30)
+    f = GhostFilter(0.0)
+    f.regions(first, np.zeros_like(mask), lambda m: [], 1.0)
+    for k in range(18):
+        m, _ = f.regions(later + (10 if k % 2 else 0), mask, lambda m: [], 1.0)
+        assert (m == mask).all()
