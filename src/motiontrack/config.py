@@ -220,6 +220,9 @@ class MotionConfig(_Section):
                                doc="drop ghost regions (where a still object left): image gradient "
                                    "along a region's outline in the frame over that in the "
                                    "background below this (0 = off)")
+    ghost_pixels: bool = param(True, doc="with the ghost filter on, also take a ghost apart pixel by "
+                                         "pixel from its border (a ghost still joined to the person "
+                                         "who left it)")
     frame_diff: FrameDiffParams = field(default_factory=FrameDiffParams)
     mog2: MOG2Params = field(default_factory=MOG2Params)
     knn: KNNParams = field(default_factory=KNNParams)

@@ -115,7 +115,7 @@ class Pipeline:
         if cfg.motion.ghost_ratio > 0 and self.detector is not None:
             from .motion.ghosts import GhostFilter
 
-            self.ghosts = GhostFilter(cfg.motion.ghost_ratio)
+            self.ghosts = GhostFilter(cfg.motion.ghost_ratio, pixels=cfg.motion.ghost_pixels)
         self._prev_tracks: tuple = ()
         self.bridge = None
         if cfg.tracker.bridge != "none":

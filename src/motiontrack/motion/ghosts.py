@@ -81,6 +81,7 @@ class GhostFilter:
     Parameters
     ----------
     ratio : a region whose outline ratio (current / background gradient) is below this is a ghost.
+    pixels : also take ghosts apart pixel by pixel from their border (:meth:`_absorb`).
     """
 
     #: gray levels within which a remembered ghost pixel still shows the same ground
@@ -93,8 +94,9 @@ class GhostFilter:
     #: place must differ more, and the rings of pixels taken per run
     ABSORB_EVERY, STILL, STILL_T, MATCH, MARGIN, STEPS = 3, 2, 8, 10.0, 10.0, 2
 
-    def __init__(self, ratio: float) -> None:
+    def __init__(self, ratio: float, pixels: bool = True) -> None:
         self.ratio = float(ratio)
+        self.pixels = bool(pixels)
         self._bg: np.ndarray | None = None     # running background (float32 gray)
         self._bg8: np.ndarray | None = None    # the same in uint8
         self._ghost: np.ndarray | None = None  # ground seen at remembered ghost pixels, or -1
@@ -131,7 +133,7 @@ class GhostFilter:
             if same.any():
                 mask = mask.copy()
                 mask[same] = 0
-        if self._frames % self.ABSORB_EVERY == 0:
+        if self.pixels and self._frames % self.ABSORB_EVERY == 0:
             if gray is None:
                 gray = to_gray(image)
             mask = self._absorb(gray, mask)
