@@ -187,19 +187,14 @@ class GhostFilter:
         if not prev:
             return mask
         # only a still pixel next to the ground can be taken: the still part of the mask's border
-        change = cv2.absdiff(gray, prev[0])
-        for p in prev[1:]:
-            change = cv2.max(change, cv2.absdiff(gray, p))
-        cand = cv2.bitwise_and(cv2.bitwise_and(mask, cv2.bitwise_not(cv2.erode(mask, _K3))),
-                               cv2.compare(change, self.STILL_T, cv2.CMP_LT))
-        pts = cv2.findNonZero(cand)
+        pts = cv2.findNonZero(cv2.bitwise_and(mask, cv2.bitwise_not(cv2.erode(mask, _K3))))
         if pts is None:
             return mask
         h, w = mask.shape
         pts = pts.reshape(-1, 2)
         xs, ys = pts[:, 0], pts[:, 1]
         inside = (xs > 0) & (ys > 0) & (xs < w - 1) & (ys < h - 1)   # whole 3x3 neighbourhoods
-        xs, ys = xs[inside], ys[inside]
+        ys, xs = _still(ys[inside], xs[inside], gray, prev, self.STILL_T)
         out = mask.copy()
         taken = False
         for _ in range(self.STEPS):
