@@ -44,6 +44,13 @@ _K3 = np.ones((3, 3), np.uint8)
 _DY, _DX = (a.ravel() for a in np.mgrid[-1:2, -1:2])
 
 
+def _interior(ys: np.ndarray, xs: np.ndarray, shape: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
+    """The pixels among ``(ys, xs)`` whose whole 3x3 neighbourhood lies in an image of ``shape``."""
+    h, w = shape[:2]
+    keep = (xs > 0) & (ys > 0) & (xs < w - 1) & (ys < h - 1)
+    return ys[keep], xs[keep]
+
+
 def _still(ys: np.ndarray, xs: np.ndarray, gray: np.ndarray, previous: list[np.ndarray],
            tolerance: int) -> tuple[np.ndarray, np.ndarray]:
     """The pixels among ``(ys, xs)`` whose gray value differs by less than ``tolerance`` from
@@ -190,11 +197,10 @@ class GhostFilter:
         pts = cv2.findNonZero(cv2.bitwise_and(mask, cv2.bitwise_not(cv2.erode(mask, _K3))))
         if pts is None:
             return mask
-        h, w = mask.shape
+        w = mask.shape[1]
         pts = pts.reshape(-1, 2)
-        xs, ys = pts[:, 0], pts[:, 1]
-        inside = (xs > 0) & (ys > 0) & (xs < w - 1) & (ys < h - 1)   # whole 3x3 neighbourhoods
-        ys, xs = _still(ys[inside], xs[inside], gray, prev, self.STILL_T)
+        ys, xs = _interior(pts[:, 1], pts[:, 0], mask.shape)
+        ys, xs = _still(ys, xs, gray, prev, self.STILL_T)
         out = mask.copy()
         taken = False
         for _ in range(self.STEPS):
@@ -214,9 +220,7 @@ class GhostFilter:
             self._ghost[ys, xs] = gray[ys, xs]
             taken = True
             # the next ring: still foreground pixels next to the ones just taken
-            ny, nx = (ys[:, None] + _DY).ravel(), (xs[:, None] + _DX).ravel()
-            sel = (nx > 0) & (ny > 0) & (nx < w - 1) & (ny < h - 1)
-            ny, nx = ny[sel], nx[sel]
+            ny, nx = _interior(ny[ok].ravel(), nx[ok].ravel(), mask.shape)
             flat = np.unique(ny * w + nx)
             ys, xs = flat // w, flat % w
             fg = out[ys, xs] > 0
