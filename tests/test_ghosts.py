@@ -125,7 +125,16 @@ def test_an_object_walking_over_a_remembered_ghost_is_still_found():
     b_at = [None if k < 70 else (-BW + (k - 70) * 4, START[1]) for k in range(130)]
     cfg = load_config(None, ["preprocess.scale=1", "regions.min_area=200"])
     pipe = Pipeline(cfg, (W, H), None, 25.0)
-    on = list(pipe.results(Frame(index=k, timestamp=k / 25, image=f) for k, f in enumerate(frames)))
+    on = []
+    for r in pipe.results(Frame(index=k, timestamp=k / 25, image=f) for k, f in enumerate(frames)):
+        on.append(r)
+        # the filter looks at its remembered pixels only inside a window: none lies outside it
+        g = pipe.ghosts
+        outside = g._ghost >= 0
+        if g._win is not None:
+            y1, y2, x1, x2 = g._win
+            outside[y1:y2, x1:x2] = False
+        assert not outside.any(), r.index
     assert pipe.ghosts.dropped > 0
     for r in on:
         at = b_at[r.index]

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import Sequence
 
@@ -45,7 +46,7 @@ def pixel_window(box: Sequence[float] | np.ndarray, scale: float, shape: tuple[i
     x, y, bw, bh = (float(v) * scale for v in box)
     h, w = shape[:2]
     return (max(0, int(x) - margin), max(0, int(y) - margin),
-            min(w, int(np.ceil(x + bw)) + margin), min(h, int(np.ceil(y + bh)) + margin))
+            min(w, math.ceil(x + bw) + margin), min(h, math.ceil(y + bh) + margin))
 
 
 def to_gray(image: np.ndarray) -> np.ndarray:

@@ -107,7 +107,8 @@ class GhostFilter:
         self._bg: np.ndarray | None = None     # running background (float32 gray)
         self._bg8: np.ndarray | None = None    # the same in uint8
         self._ghost: np.ndarray | None = None  # ground seen at remembered ghost pixels, or -1
-        self._remembered = False
+        #: (y1, y2, x1, x2): every remembered ghost pixel lies in this window (None: none is)
+        self._win: tuple[int, int, int, int] | None = None
         self._frames = 0
         self.dropped = 0
         self._prev: list[np.ndarray] = []   # gray frames of the last runs of _absorb
@@ -126,20 +127,24 @@ class GhostFilter:
             self._bg = gray.astype(np.float32)
             self._bg8 = gray.copy()
             self._ghost = np.full(gray.shape, -1, np.int16)
-            self._remembered = False
+            self._win = None
             self._prev = []
             return mask, find(mask)
         detected = mask
-        if self._remembered:
+        if self._win is not None:
             gray = to_gray(image)
             # forget what the detector no longer reports; hide what still shows the same ground
-            self._ghost[mask == 0] = -1
-            remembered = self._ghost >= 0
-            self._remembered = bool(remembered.any())
-            same = remembered & (np.abs(gray.astype(np.int16) - self._ghost) < self.SAME)
+            # (only inside the window of the remembered pixels: outside it all are forgotten)
+            y1, y2, x1, x2 = self._win
+            ghost = self._ghost[y1:y2, x1:x2]
+            ghost[mask[y1:y2, x1:x2] == 0] = -1
+            remembered = ghost >= 0
+            x, y, w, h = cv2.boundingRect(remembered.view(np.uint8))
+            self._win = (y1 + y, y1 + y + h, x1 + x, x1 + x + w) if w else None
+            same = remembered & (np.abs(gray[y1:y2, x1:x2].astype(np.int16) - ghost) < self.SAME)
             if same.any():
                 mask = mask.copy()
-                mask[same] = 0
+                mask[y1:y2, x1:x2][same] = 0
         if self.pixels and self._frames % self.ABSORB_EVERY == 0:
             if gray is None:
                 gray = to_gray(image)
@@ -158,7 +163,7 @@ class GhostFilter:
             self.dropped += 1
             on = crop > 0
             self._ghost[y1:y2, x1:x2][on] = cur[on]
-            self._remembered = True
+            self._remember(y1, y2, x1, x2)
         if self._frames % self.EVERY == 0:
             # learn where the detector reports background: elsewhere the model still holds
             # whatever was there (a standing person, the object that left a ghost)
@@ -203,6 +208,7 @@ class GhostFilter:
         ys, xs = _still(ys, xs, gray, prev, self.STILL_T)
         out = mask.copy()
         taken = False
+        top, bottom, left, right = mask.shape[0], -1, mask.shape[1], -1   # the taken pixels' box
         for _ in range(self.STEPS):
             if not len(ys):
                 break
@@ -219,6 +225,8 @@ class GhostFilter:
             out[ys, xs] = 0
             self._ghost[ys, xs] = gray[ys, xs]
             taken = True
+            top, bottom = min(top, ys.min()), max(bottom, ys.max())
+            left, right = min(left, xs.min()), max(right, xs.max())
             # the next ring: still foreground pixels next to the ones just taken
             ny, nx = _interior(ny[ok].ravel(), nx[ok].ravel(), mask.shape)
             flat = np.unique(ny * w + nx)
@@ -227,5 +235,12 @@ class GhostFilter:
             ys, xs = _still(ys[fg], xs[fg], gray, prev, self.STILL_T)
         if not taken:
             return mask
-        self._remembered = True
+        self._remember(int(top), int(bottom) + 1, int(left), int(right) + 1)
         return out
+
+    def _remember(self, y1: int, y2: int, x1: int, x2: int) -> None:
+        """Ghost pixels were remembered in the window ``[y1:y2, x1:x2]``."""
+        if self._win is not None:
+            y1, y2 = min(y1, self._win[0]), max(y2, self._win[1])
+            x1, x2 = min(x1, self._win[2]), max(x2, self._win[3])
+        self._win = (y1, y2, x1, x2)
