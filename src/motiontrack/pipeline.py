@@ -502,7 +502,6 @@ def score_run(gt: Annotations, pred: Annotations, frames: int, src: Source) -> d
     res = evaluate_tracking(gt, pred, ignore_zero_marked=True)
     keys = ("HOTA", "MOTA", "IDF1", "MOTP", "DetA", "AssA", "IDSW", "TP", "FP", "FN")
     out = {k: float(res[k]) for k in keys if k in res}
-    tp, fp, fn = out.get("TP", 0.0), out.get("FP", 0.0), out.get("FN", 0.0)
-    out["recall"] = tp / (tp + fn) if tp + fn else 0.0
-    out["precision"] = tp / (tp + fp) if tp + fp else 0.0
+    out["recall"] = float(res.get("recall", 0.0))   # CLEAR's CLR_Re and CLR_Pr
+    out["precision"] = float(res.get("precision", 0.0))
     return out
