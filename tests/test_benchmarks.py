@@ -22,3 +22,15 @@ def test_stages_benchmark_reports_every_stage(data):
     assert all(float(times[s]) > 0 for s in ("decode", "preprocess", "motion detector")), out
     # the total is the sum of the stages after decoding
     assert abs(float(times["all stages"]) - sum(float(times[s]) for s in stages[1:])) < 0.02, out
+
+
+def test_detections_benchmark_reports_every_row(data):
+    data("pets09-s2l1", "video.avi")
+    out = subprocess.run([sys.executable, str(REPO / "benchmarks" / "detections.py"), "--data",
+                          str(data_root()), "--frames", "40", "--seeds", "1"],
+                         capture_output=True, text=True, timeout=120, check=True).stdout
+    rows = re.findall(r"^\s*(\d\.\d\d)\s+(\d\.\d\d)\s+(\d\.\d)((?:\s+-?\d+\.\d+){6})$", out, re.M)
+    assert len(rows) == 6, out
+    perfect = [float(v) for v in rows[0][3].split()]
+    # perfect detections: every reported box is a person
+    assert rows[0][:3] == ("0.00", "0.00", "0.0") and perfect[4] == 1.0, out

@@ -290,8 +290,9 @@ class TrackerConfig(_Section):
                                      "partial view: keep the predicted size, anchor the visible edges (0 = off)")
     search_growth: float = param(0.05, lo=0.0, hi=10.0,
                                  doc="re-detection window growth per unseen frame (fraction of max_distance)")
-    split_merged: bool = param(True, doc="split a blob holding several tracks' predictions into "
-                                      "one synthetic measurement per track (people crossing)")
+    split_merged: bool = param(True, doc="split a motion blob holding several tracks' predictions "
+                                      "into one synthetic measurement per track (people crossing); "
+                                      "never applied to --detections boxes (one object each)")
     appearance_weight: float = param(0.5, lo=0.0, hi=10.0,
                                      doc="weight of the colour-histogram (Bhattacharyya) distance in the "
                                          "association cost (0 = no appearance model)")

@@ -97,7 +97,12 @@ class Pipeline:
         self.pre_cfg = replace(pre, scale=self.scale)  # the resolved (automatic) scale
         pw, ph = scaled_size(image_size[0], image_size[1], self.scale)
         self.roi = load_roi(pre.roi, pw, ph) if pre.roi else None
-        self.tracker = TRACKERS.get(cfg.tracker.method)(cfg.tracker, image_size, fps)
+        tracker_cfg = cfg.tracker
+        if detections is not None and tracker_cfg.split_merged:
+            # a detector's box is one object: there is no merged blob to split (split shares of a
+            # box that overlaps a neighbour's prediction swap identities; benchmarks/detections.py)
+            tracker_cfg = replace(tracker_cfg, split_merged=False)
+        self.tracker = TRACKERS.get(cfg.tracker.method)(tracker_cfg, image_size, fps)
         self.people = None
         if cfg.people.enabled:
             from .people import PeopleStage

@@ -1,0 +1,110 @@
+"""The tracker alone: PETS 2009 S2L1 tracked from detections made out of its ground truth.
+
+``--detections det.txt`` replaces the motion stage with any detector's boxes. To see what the
+tracker itself does with them, apart from any detector, the detections here are the ground-truth
+boxes of the people (rows with consider = 1), first perfect and then with the errors a real
+detector makes, drawn with a seed:
+
+* ``drop``: each box is missed with this probability (occlusion, a weak detection);
+* ``jitter``: each side of a box moves by a normal error of this fraction of the box's height;
+* ``fp``: false boxes per frame (Poisson), of a person's typical size, anywhere in the image.
+
+Every row runs the default pipeline with these detections (the same call as ``motiontrack track
+VIDEO --detections det.txt``) and scores it like the other PETS benchmarks: CLEAR-MOT, Identity
+and HOTA at IoU 0.5 against gt_mot15.txt, rows with consider = 0 as ignore regions; noisy rows
+average ``--seeds`` draws. With perfect detections the misses are the first ``confirm_hits`` - 1
+frames of each track (tentative, not reported) and the boxes are the Kalman filter's estimate
+(HOTA below 1 measures that smoothing).
+
+Run: .venv/bin/python benchmarks/detections.py [--data ../shared/data] [--seeds 3] [--frames 300]
+     [--set stage.param=value ...]
+"""
+
+from __future__ import annotations
+
+import argparse
+
+import numpy as np
+
+from motiontrack.config import load_config
+from motiontrack.evaluate.mot import evaluate_tracking
+from motiontrack.io.mot import read_mot
+from motiontrack.io.sources import open_source
+from motiontrack.pipeline import run
+from motiontrack.types import Annotations
+
+from _pets import add_data_argument, pets_video  # benchmarks/ is on sys.path when a script here runs
+
+KEYS = ("HOTA", "MOTA", "IDF1", "recall", "precision", "IDSW")
+#: (drop, jitter, fp) of each row
+ROWS = ((0.0, 0.0, 0.0), (0.1, 0.0, 0.0), (0.0, 0.05, 0.0), (0.0, 0.0, 1.0),
+        (0.1, 0.05, 0.5), (0.2, 0.1, 1.0))
+
+
+def noisy_detections(gt: Annotations, drop: float, jitter: float, fp: float, seed: int,
+                     image_size: tuple[int, int]) -> Annotations:
+    """Detections from the people in ``gt`` (consider != 0) with the errors above."""
+    rng = np.random.default_rng(seed)
+    people = gt.select(gt.consider != 0)
+    keep = rng.random(len(people)) >= drop
+    frames, boxes = people.frames[keep], people.boxes[keep].astype(np.float64)
+    if jitter > 0 and len(boxes):
+        h = boxes[:, 3:4]
+        x1, y1 = boxes[:, 0:1], boxes[:, 1:2]
+        x2, y2 = x1 + boxes[:, 2:3], y1 + h
+        x1, x2, y1, y2 = (v + rng.normal(0.0, jitter, v.shape) * h for v in (x1, x2, y1, y2))
+        boxes = np.hstack([np.minimum(x1, x2), np.minimum(y1, y2),
+                           np.maximum(np.abs(x2 - x1), 2.0), np.maximum(np.abs(y2 - y1), 2.0)])
+    if fp > 0:
+        all_frames = np.unique(gt.frames)
+        n = rng.poisson(fp, len(all_frames))
+        f_fp = np.repeat(all_frames, n)
+        size = np.median(people.boxes[:, 2:4], axis=0)
+        w, h = image_size
+        pos = rng.uniform([0, 0], [w - size[0], h - size[1]], (len(f_fp), 2))
+        frames = np.concatenate([frames, f_fp])
+        boxes = np.vstack([boxes, np.hstack([pos, np.tile(size, (len(f_fp), 1))])])
+    order = np.argsort(frames, kind="stable")
+    return Annotations.from_columns(frames[order], np.full(len(order), -1), boxes[order],
+                                    scores=np.ones(len(order)))
+
+
+def score(video: str, gt: Annotations, det: Annotations, overrides: list[str], frames: int
+          ) -> dict[str, float]:
+    """Scores of the default pipeline (plus ``overrides``) tracking ``det`` on ``video``."""
+    cfg = load_config(None, [*overrides, f"source.max_frames={frames}"])
+    rows = [(r.index + 1, t.id, *t.box.as_array()) for r in run(video, cfg, detections=det)
+            for t in r.tracks]
+    a = np.array(rows, float).reshape(-1, 6)
+    res = evaluate_tracking(gt.select(gt.frames <= frames),
+                            Annotations.from_columns(a[:, 0], a[:, 1], a[:, 2:6]),
+                            ignore_zero_marked=True)
+    return {k: res[k] for k in KEYS}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    add_data_argument(ap)
+    ap.add_argument("--seeds", type=int, default=3, help="draws of each noisy row")
+    ap.add_argument("--frames", type=int, default=300)
+    ap.add_argument("--set", dest="overrides", action="append", default=[], metavar="STAGE.PARAM=VALUE")
+    args = ap.parse_args()
+    video = pets_video(args.data)
+    gt = read_mot(video.parent / "gt_mot15.txt", kind="gt")
+    src = open_source(str(video))
+    size = (src.info.width, src.info.height)
+    src.close()
+    print(f"PETS09-S2L1 frames 1-{args.frames}, the default tracker on detections made from the "
+          f"ground truth{' with ' + ' '.join(args.overrides) if args.overrides else ''}")
+    print(f"{'drop':>5}{'jitter':>7}{'fp':>5}" + "".join(f"{k:>10}" for k in KEYS))
+    for drop, jitter, fp in ROWS:
+        seeds = range(args.seeds) if (drop or jitter or fp) else range(1)
+        rs = [score(str(video), gt, noisy_detections(gt, drop, jitter, fp, s, size),
+                    args.overrides, args.frames) for s in seeds]
+        print(f"{drop:>5.2f}{jitter:>7.2f}{fp:>5.1f}" + "".join(
+            f"{np.mean([r[k] for r in rs]):>10.3f}" if k != "IDSW"
+            else f"{np.mean([r[k] for r in rs]):>10.1f}" for k in KEYS))
+
+
+if __name__ == "__main__":
+    main()
