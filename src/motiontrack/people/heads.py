@@ -33,6 +33,7 @@ from typing import Sequence
 import numpy as np
 from scipy.ndimage import minimum_filter1d
 
+from ..preprocess import pixel_window
 from ..types import Box, Region
 
 __all__ = ["Head", "height_profile", "detect_heads", "detect_heads_many", "detect_heads_in_regions",
@@ -122,7 +123,7 @@ def detect_heads(mask: np.ndarray, box: Box | None = None, scale: float = 1.0,
     if box is None:
         x1, y1, x2, y2 = 0, 0, W, H
     else:
-        x1, y1, x2, y2 = _crop_bounds(box, scale, W, H)
+        x1, y1, x2, y2 = pixel_window(box.as_array(), scale, (H, W))
     if x2 <= x1 or y2 <= y1:
         return []
     crop = m[y1:y2, x1:x2]
@@ -173,12 +174,6 @@ def _drop_px(min_drop: float, scale: float) -> float:
     return float(max(1, int(np.floor(min_drop * scale + 0.5))))
 
 
-def _crop_bounds(box: Box, scale: float, W: int, H: int) -> tuple[int, int, int, int]:
-    """``box`` (original pixels) as mask rows/columns ``x1, y1, x2, y2``, clipped to the mask."""
-    return (max(int(np.floor(box.x * scale)), 0), max(int(np.floor(box.y * scale)), 0),
-            min(int(np.ceil(box.x2 * scale)), W), min(int(np.ceil(box.y2 * scale)), H))
-
-
 def detect_heads_many(mask: np.ndarray, boxes, scale: float = 1.0, min_width: float = 6.0,
                       max_width: float = 40.0, tolerance: float = 3.0,
                       min_drop: float = 4.0) -> list[list[Head]]:
@@ -206,7 +201,7 @@ def detect_heads_many(mask: np.ndarray, boxes, scale: float = 1.0, min_width: fl
     segs: list[tuple[int, int, int, int, int]] = []   # (box index, start, stop, x1, y1)
     pos = 0
     for k, box in enumerate(boxes):
-        x1, y1, x2, y2 = _crop_bounds(box, scale, W, H)
+        x1, y1, x2, y2 = pixel_window(box.as_array(), scale, (H, W))
         if x2 <= x1 or y2 <= y1:
             continue
         fg = m[y1:y2, x1:x2] > 0
@@ -289,7 +284,7 @@ def split_region_by_heads(region: Region, mask: np.ndarray, heads: list[Head] | 
         return [region]
     m = np.asarray(mask)
     Hm, Wm = m.shape[:2]
-    x1, y1, x2, y2 = _crop_bounds(region.box, scale, Wm, Hm)
+    x1, y1, x2, y2 = pixel_window(region.box.as_array(), scale, (Hm, Wm))
     fg = m[y1:y2, x1:x2] > 0
     total = int(fg.sum())
     if total == 0:
