@@ -24,26 +24,18 @@ from concurrent.futures import ProcessPoolExecutor
 import numpy as np
 
 from motiontrack.config import load_config
-from motiontrack.evaluate.mot import evaluate_tracking
 from motiontrack.io.mot import read_mot
-from motiontrack.pipeline import run
-from motiontrack.types import Annotations
 
-from _pets import add_data_argument, pets_video  # benchmarks/ is on sys.path when a script here runs
+from _pets import KEYS, add_data_argument, pets_video, score_tracks  # benchmarks/ is on sys.path when a script here runs
 
-KEYS = ("HOTA", "MOTA", "IDF1", "recall", "precision", "IDSW")
 
 
 def one(video: str, gt_path: str, start: int, seed: int, overrides: list[str]) -> dict[str, float]:
     """Scores of the default pipeline (plus ``overrides``) started at frame ``start`` (0-based)."""
     cfg = load_config(None, [*overrides, f"source.start={start}", f"motion.knn.seed={seed}"])
-    rows = [(r.index + 1, t.id, *t.box.as_array()) for r in run(video, cfg) for t in r.tracks]
-    a = np.array(rows, float).reshape(-1, 6)
     gt = read_mot(gt_path, kind="gt")
-    gt = gt.select(gt.frames > start)   # the run goes to the end of the clip (and of its gt)
-    res = evaluate_tracking(gt, Annotations.from_columns(a[:, 0], a[:, 1], a[:, 2:6]),
-                            ignore_zero_marked=True)
-    return {k: res[k] for k in KEYS}
+    # the run goes to the end of the clip (and of its gt)
+    return score_tracks(video, cfg, gt.select(gt.frames > start))
 
 
 def main() -> None:

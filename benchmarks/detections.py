@@ -27,15 +27,12 @@ import argparse
 import numpy as np
 
 from motiontrack.config import load_config
-from motiontrack.evaluate.mot import evaluate_tracking
 from motiontrack.io.mot import read_mot
 from motiontrack.io.sources import open_source
-from motiontrack.pipeline import run
 from motiontrack.types import Annotations
 
-from _pets import add_data_argument, pets_video  # benchmarks/ is on sys.path when a script here runs
+from _pets import KEYS, add_data_argument, pets_video, score_tracks  # benchmarks/ is on sys.path when a script here runs
 
-KEYS = ("HOTA", "MOTA", "IDF1", "recall", "precision", "IDSW")
 #: (drop, jitter, fp) of each row
 ROWS = ((0.0, 0.0, 0.0), (0.1, 0.0, 0.0), (0.0, 0.05, 0.0), (0.0, 0.0, 1.0),
         (0.1, 0.05, 0.5), (0.2, 0.1, 1.0))
@@ -69,19 +66,6 @@ def noisy_detections(gt: Annotations, drop: float, jitter: float, fp: float, see
                                     scores=np.ones(len(order)))
 
 
-def score(video: str, gt: Annotations, det: Annotations, overrides: list[str], frames: int
-          ) -> dict[str, float]:
-    """Scores of the default pipeline (plus ``overrides``) tracking ``det`` on ``video``."""
-    cfg = load_config(None, [*overrides, f"source.max_frames={frames}"])
-    rows = [(r.index + 1, t.id, *t.box.as_array()) for r in run(video, cfg, detections=det)
-            for t in r.tracks]
-    a = np.array(rows, float).reshape(-1, 6)
-    res = evaluate_tracking(gt.select(gt.frames <= frames),
-                            Annotations.from_columns(a[:, 0], a[:, 1], a[:, 2:6]),
-                            ignore_zero_marked=True)
-    return {k: res[k] for k in KEYS}
-
-
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     add_data_argument(ap)
@@ -91,6 +75,7 @@ def main() -> None:
     args = ap.parse_args()
     video = pets_video(args.data)
     gt = read_mot(video.parent / "gt_mot15.txt", kind="gt")
+    cfg = load_config(None, [*args.overrides, f"source.max_frames={args.frames}"])
     src = open_source(str(video))
     size = (src.info.width, src.info.height)
     src.close()
@@ -99,8 +84,8 @@ def main() -> None:
     print(f"{'drop':>5}{'jitter':>7}{'fp':>5}" + "".join(f"{k:>10}" for k in KEYS))
     for drop, jitter, fp in ROWS:
         seeds = range(args.seeds) if (drop or jitter or fp) else range(1)
-        rs = [score(str(video), gt, noisy_detections(gt, drop, jitter, fp, s, size),
-                    args.overrides, args.frames) for s in seeds]
+        rs = [score_tracks(str(video), cfg, gt.select(gt.frames <= args.frames),
+                           noisy_detections(gt, drop, jitter, fp, s, size)) for s in seeds]
         print(f"{drop:>5.2f}{jitter:>7.2f}{fp:>5.1f}" + "".join(
             f"{np.mean([r[k] for r in rs]):>10.3f}" if k != "IDSW"
             else f"{np.mean([r[k] for r in rs]):>10.1f}" for k in KEYS))
