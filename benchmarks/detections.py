@@ -5,7 +5,10 @@ tracker itself does with them, apart from any detector, the detections here are 
 boxes of the people (rows with consider = 1), first perfect and then with the errors a real
 detector makes, drawn with a seed:
 
-* ``drop``: each box is missed with this probability (occlusion, a weak detection);
+* ``drop``: each box is missed with this probability (a weak detection);
+* ``burst``: occlusion-like misses: at each frame a person's detections go missing with this
+  probability for a run of 1 to 10 frames (uniform), so the gaps are as long as a person passing
+  behind another;
 * ``jitter``: each side of a box moves by a normal error of this fraction of the box's height;
 * ``fp``: false boxes per frame (Poisson), of a person's typical size, anywhere in the image.
 
@@ -14,7 +17,8 @@ VIDEO --detections det.txt``) and scores it like the other PETS benchmarks: CLEA
 and HOTA at IoU 0.5 against gt_mot15.txt, rows with consider = 0 as ignore regions; noisy rows
 average ``--seeds`` draws. With perfect detections the misses are the first ``confirm_hits`` - 1
 frames of each track (tentative, not reported) and the boxes are the Kalman filter's estimate
-(HOTA below 1 measures that smoothing).
+(HOTA below 1 measures that smoothing). The tracks are scored after ``motiontrack track``'s
+gap filling (``tracker.fill_gaps_s``): a track's gaps of up to a second are interpolated.
 
 Run: .venv/bin/python benchmarks/detections.py [--data ../shared/data] [--seeds 3] [--frames 300]
      [--set stage.param=value ...]
@@ -33,17 +37,38 @@ from motiontrack.types import Annotations
 
 from _pets import KEYS, add_data_argument, pets_video, score_tracks  # benchmarks/ is on sys.path when a script here runs
 
-#: (drop, jitter, fp) of each row
-ROWS = ((0.0, 0.0, 0.0), (0.1, 0.0, 0.0), (0.0, 0.05, 0.0), (0.0, 0.0, 1.0),
-        (0.1, 0.05, 0.5), (0.2, 0.1, 1.0))
+#: (drop, burst, jitter, fp) of each row
+ROWS = ((0.0, 0.0, 0.0, 0.0), (0.1, 0.0, 0.0, 0.0), (0.0, 0.05, 0.0, 0.0), (0.0, 0.0, 0.05, 0.0),
+        (0.0, 0.0, 0.0, 1.0), (0.1, 0.0, 0.05, 0.5), (0.0, 0.05, 0.05, 0.5), (0.2, 0.0, 0.1, 1.0))
+#: longest run of frames an occlusion-like miss (``burst``) lasts
+BURST_FRAMES = 10
+
+
+def burst_misses(frames: np.ndarray, ids: np.ndarray, rate: float,
+                 rng: np.random.Generator) -> np.ndarray:
+    """Rows to drop: per id, in frame order, a miss starts at each frame with probability
+    ``rate`` and lasts 1 to :data:`BURST_FRAMES` frames."""
+    miss = np.zeros(len(frames), bool)
+    order = np.lexsort((frames, ids))
+    for rows in np.split(order, np.flatnonzero(np.diff(ids[order])) + 1):
+        j = 0
+        while j < len(rows):
+            if rng.random() < rate:
+                run = int(rng.integers(1, BURST_FRAMES + 1))
+                miss[rows[j:j + run]] = True
+                j += run
+            j += 1
+    return miss
 
 
 def noisy_detections(gt: Annotations, drop: float, jitter: float, fp: float, seed: int,
-                     image_size: tuple[int, int]) -> Annotations:
+                     image_size: tuple[int, int], burst: float = 0.0) -> Annotations:
     """Detections from the people in ``gt`` (consider != 0) with the errors above."""
     rng = np.random.default_rng(seed)
     people = gt.select(gt.consider != 0)
     keep = rng.random(len(people)) >= drop
+    if burst > 0:
+        keep &= ~burst_misses(people.frames, people.ids, burst, rng)
     frames, boxes = people.frames[keep], people.boxes[keep].astype(np.float64)
     if jitter > 0 and len(boxes):
         h = boxes[:, 3:4]
@@ -81,12 +106,12 @@ def main() -> None:
     src.close()
     print(f"PETS09-S2L1 frames 1-{args.frames}, the default tracker on detections made from the "
           f"ground truth{' with ' + ' '.join(args.overrides) if args.overrides else ''}")
-    print(f"{'drop':>5}{'jitter':>7}{'fp':>5}" + "".join(f"{k:>10}" for k in KEYS))
-    for drop, jitter, fp in ROWS:
-        seeds = range(args.seeds) if (drop or jitter or fp) else range(1)
+    print(f"{'drop':>5}{'burst':>6}{'jitter':>7}{'fp':>5}" + "".join(f"{k:>10}" for k in KEYS))
+    for drop, burst, jitter, fp in ROWS:
+        seeds = range(args.seeds) if (drop or burst or jitter or fp) else range(1)
         rs = [score_tracks(str(video), cfg, gt.select(gt.frames <= args.frames),
-                           noisy_detections(gt, drop, jitter, fp, s, size)) for s in seeds]
-        print(f"{drop:>5.2f}{jitter:>7.2f}{fp:>5.1f}" + "".join(
+                           noisy_detections(gt, drop, jitter, fp, s, size, burst)) for s in seeds]
+        print(f"{drop:>5.2f}{burst:>6.2f}{jitter:>7.2f}{fp:>5.1f}" + "".join(
             f"{np.mean([r[k] for r in rs]):>10.3f}" if k != "IDSW"
             else f"{np.mean([r[k] for r in rs]):>10.1f}" for k in KEYS))
 

@@ -29,8 +29,9 @@ def test_detections_benchmark_reports_every_row(data):
     out = subprocess.run([sys.executable, str(REPO / "benchmarks" / "detections.py"), "--data",
                           str(data_root()), "--frames", "40", "--seeds", "1"],
                          capture_output=True, text=True, timeout=120, check=True).stdout
-    rows = re.findall(r"^\s*(\d\.\d\d)\s+(\d\.\d\d)\s+(\d\.\d)((?:\s+-?\d+\.\d+){6})$", out, re.M)
-    assert len(rows) == 6, out
-    perfect = [float(v) for v in rows[0][3].split()]
+    rows = re.findall(r"^\s*(\d\.\d\d)\s+(\d\.\d\d)\s+(\d\.\d\d)\s+(\d\.\d)((?:\s+-?\d+\.\d+){6})$",
+                      out, re.M)
+    assert len(rows) == 8, out
+    perfect = [float(v) for v in rows[0][4].split()]
     # perfect detections: every reported box is a person
-    assert rows[0][:3] == ("0.00", "0.00", "0.0") and perfect[4] == 1.0, out
+    assert rows[0][:4] == ("0.00", "0.00", "0.00", "0.0") and perfect[4] == 1.0, out

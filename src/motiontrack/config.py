@@ -303,6 +303,13 @@ class TrackerConfig(_Section):
     bridge_frames: int = param(50, lo=1, hi=100000, doc="longest bridge, frames")
     history: int = param(64, lo=0, hi=100000, doc="trajectory points kept per track (bounded)")
     output_lost: bool = param(False, doc="report coasting (lost) tracks in tracks.txt")
+    fill_gaps_s: float = param(1.0, lo=0.0, hi=3600.0,
+                               doc="when the run ends, fill each track's gaps of up to this many seconds "
+                                   "in tracks.txt by linear interpolation (0 = off); applied to tracks "
+                                   "from --detections boxes, and to motion runs with fill_motion_gaps")
+    fill_motion_gaps: bool = param(False, doc="also fill the gaps of tracks from motion regions (off: "
+                                              "the boxes at a motion gap's ends are often a fragment or "
+                                              "a merged blob)")
 
 
 @dataclass(frozen=True)

@@ -37,7 +37,7 @@ from .types import Annotations, Box, Frame, FrameResult, Region
 
 log = logging.getLogger(__name__)
 
-__all__ = ["Pipeline", "run", "TrackJob", "JobSummary", "resolve_config"]
+__all__ = ["Pipeline", "run", "TrackJob", "JobSummary", "resolve_config", "fill_gap_frames"]
 
 
 #: ``people.auto_split``: weight of each frame's median region height/width in the scene's
@@ -66,6 +66,17 @@ def _regions_from_detections(det: Annotations, rows: np.ndarray | None) -> list[
                           centroid=(float(x + w / 2), float(y + h / 2)), area=float(w * h),
                           score=float(det.scores[i])))
     return out
+
+
+def fill_gap_frames(cfg: PipelineConfig, fps: float | None, external: bool) -> int:
+    """Longest gap (frames) of a track that :class:`TrackJob` fills by interpolation in
+    ``tracks.txt`` (0 = none): ``tracker.fill_gaps_s`` at the source's frame rate (25 fps when
+    unknown), for tracks from external detections, or from motion regions with
+    ``tracker.fill_motion_gaps``. See :func:`motiontrack.tracking.gaps.fill_gaps`."""
+    t = cfg.tracker
+    if not (external or t.fill_motion_gaps):
+        return 0
+    return int(round(t.fill_gaps_s * (fps or 25.0)))
 
 
 class Pipeline:
@@ -444,9 +455,12 @@ class TrackJob:
         summary.tracks = len(ids)
         summary.outputs = {k: str(v) for k, v in self.paths.items()
                            if v.exists() or k == "summary"}
-        if self.camera is not None or self.gt is not None:
+        max_gap = fill_gap_frames(cfg, info.fps, self.detections is not None)
+        if max_gap or self.camera is not None or self.gt is not None:
             # read the run back from its tracks file: nothing accumulates in memory per frame
             pred = read_mot(self.paths["tracks"], kind="results")
+            if max_gap:
+                pred = self._fill_gaps(pred, max_gap, summary)
             if self.camera is not None:
                 from .calibrate import track_measurements
 
@@ -460,6 +474,25 @@ class TrackJob:
         atomic_write_text(self.paths["summary"], json.dumps(summary.as_dict(), indent=2) + "\n")
         outcome.reraise()  # everything is written; an interrupt or a failed source still surfaces
         return summary
+
+    def _fill_gaps(self, pred: Annotations, max_gap: int, summary: JobSummary) -> Annotations:
+        """Rewrite ``tracks.txt`` (atomically) with each track's gaps of up to ``max_gap`` frames
+        filled by interpolation; the filled rows get their world position from the camera."""
+        from .tracking.gaps import fill_gaps
+
+        filled = fill_gaps(pred, max_gap)
+        summary.extra["filled_rows"] = len(filled) - len(pred)
+        if len(filled) == len(pred):
+            return pred
+        if self.camera is not None:
+            from .calibrate import world_positions
+
+            new = (filled.world == -1.0).all(axis=1)
+            filled.world[new, :2] = world_positions(filled.boxes[new], self.camera)
+            filled.world[new, 2] = 0.0
+        write_mot(filled, self.paths["tracks"], kind="results")
+        log.info("filled %d rows in gaps of up to %d frames", len(filled) - len(pred), max_gap)
+        return filled
 
     def _write_frame(self, res: FrameResult, tracks_fh, video: VideoSink | None,
                      mask_video: VideoSink | None, inter: IntermediateWriter | None,
