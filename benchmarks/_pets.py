@@ -53,8 +53,10 @@ def score_tracks(video: str, cfg: PipelineConfig, gt: Annotations,
     """:data:`KEYS` of the pipeline's tracks of ``video`` (``cfg``; ``detections`` replace the
     motion stage) against ``gt``, which the caller cuts to the frames the run covers: CLEAR-MOT,
     Identity and HOTA at IoU 0.5, rows with consider = 0 as ignore regions."""
-    rows = [(r.index + 1, t.id, *t.box.as_array()) for r in run(video, cfg, detections=detections)
-            for t in r.tracks]
+    # each frame's tracks and, as `motiontrack track` writes them, the tracks confirmed in the
+    # frame at their tentative frames (tracker.backfill)
+    rows = [(f + 1, t.id, *t.box.as_array()) for r in run(video, cfg, detections=detections)
+            for f, t in [*((r.index, t) for t in r.tracks), *r.earlier]]
     a = np.array(rows, float).reshape(-1, 6)
     # the gaps `motiontrack track` fills in tracks.txt when the run ends (PETS is 10 fps)
     pred = fill_gaps(Annotations.from_columns(a[:, 0], a[:, 1], a[:, 2:6]),

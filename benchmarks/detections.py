@@ -15,10 +15,12 @@ detector makes, drawn with a seed:
 Every row runs the default pipeline with these detections (the same call as ``motiontrack track
 VIDEO --detections det.txt``) and scores it like the other PETS benchmarks: CLEAR-MOT, Identity
 and HOTA at IoU 0.5 against gt_mot15.txt, rows with consider = 0 as ignore regions; noisy rows
-average ``--seeds`` draws. With perfect detections the misses are the first ``confirm_hits`` - 1
-frames of each track (tentative, not reported) and the boxes are the Kalman filter's estimate
-(HOTA below 1 measures that smoothing). The tracks are scored after ``motiontrack track``'s
-gap filling (``tracker.fill_gaps_s``): a track's gaps of up to a second are interpolated.
+average ``--seeds`` draws. The tracks scored are what ``motiontrack track`` writes for tracks
+from detections: each track also at the first ``confirm_hits`` - 1 frames, where it was still
+tentative (``tracker.backfill``), and its gaps of up to a second interpolated
+(``tracker.fill_gaps_s``); ``--set tracker.backfill=false --set tracker.fill_gaps_s=0`` scores
+the online output alone. The boxes are the Kalman filter's estimate (HOTA below 1 with perfect
+detections measures that smoothing).
 
 Run: .venv/bin/python benchmarks/detections.py [--data ../shared/data] [--seeds 3] [--frames 300]
      [--set stage.param=value ...]

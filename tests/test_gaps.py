@@ -1,5 +1,7 @@
-"""Offline gap filling (``tracker.fill_gaps_s``): hand-computed interpolation, and the tracks file
-of a ``--detections`` run in which a person's detections go missing for three frames."""
+"""What ``motiontrack track`` adds to a detections run's tracks file when the run ends: gaps
+filled by interpolation (``tracker.fill_gaps_s``, hand-computed cases) and a track's tentative
+frames (``tracker.backfill``), on a ``--detections`` run in which a person's detections go
+missing for three frames."""
 
 from __future__ import annotations
 
@@ -11,7 +13,7 @@ import pytest
 from motiontrack.cli import main
 from motiontrack.config import load_config
 from motiontrack.io.mot import read_mot, write_mot
-from motiontrack.pipeline import fill_gap_frames
+from motiontrack.pipeline import Pipeline, fill_gap_frames
 from motiontrack.tracking.association import iou_matrix
 from motiontrack.tracking.gaps import fill_gaps
 from motiontrack.types import Annotations
@@ -75,10 +77,17 @@ def test_filling_applies_to_external_detections_by_default():
     assert fill_gap_frames(cfg, 30.0, external=True) == 30
     assert fill_gap_frames(cfg, None, external=True) == 25       # 25 fps when unknown
     assert fill_gap_frames(cfg, 10.0, external=False) == 0
-    on = load_config(None, ["tracker.fill_motion_gaps=true", "tracker.fill_gaps_s=0.5"])
+    on = load_config(None, ["tracker.fill_motion=true", "tracker.fill_gaps_s=0.5"])
     assert fill_gap_frames(on, 10.0, external=False) == 5
     off = load_config(None, ["tracker.fill_gaps_s=0"])
     assert fill_gap_frames(off, 10.0, external=True) == 0
+    # the tracker keeps tentative boxes for the same runs
+    det = Annotations.from_columns([1], [-1], [[10, 10, 20, 40]])
+    assert Pipeline(cfg, (320, 240), detections=det).tracker.keep_tentative
+    assert not Pipeline(cfg, (320, 240)).tracker.keep_tentative
+    assert Pipeline(on, (320, 240)).tracker.keep_tentative
+    no = load_config(None, ["tracker.backfill=false"])
+    assert not Pipeline(no, (320, 240), detections=det).tracker.keep_tentative
 
 
 @pytest.fixture(scope="module")
@@ -106,6 +115,7 @@ def pets_run(tmp_path_factory, request):
                      "--camera", str(video.parent / "View_001.xml"),
                      "--gt", str(video.parent / "gt_mot15.txt"), *extra]) == 0
         runs[name] = (read_mot(out / "tracks.txt"), json.loads((out / "summary.json").read_text()))
+    runs["gt"] = gt
     return people.select(hole), runs
 
 
@@ -132,3 +142,18 @@ def test_detection_run_fills_the_missing_frames(pets_run):
     assert not (tracks.world == -1).all(axis=1).any()
     # the score reads the filled file
     assert summary["accuracy"]["recall"] > off_summary["accuracy"]["recall"]
+
+
+def test_detection_run_reports_tracks_from_their_first_frame(pets_run):
+    """Perfect detections: each track is confirmed at its fifth frame (confirm_hits = 5) and
+    then written at its four tentative frames too, so the people of frame 1 are in frame 1, and
+    the file is sorted by frame although those rows were written late."""
+    _, runs = pets_run
+    tracks, summary = runs["filled"]
+    assert summary["backfilled_rows"] >= 4 * summary["tracks"]
+    assert (np.diff(tracks.frames) >= 0).all()
+    first = tracks.select(tracks.frames == 1)
+    gt1 = runs["gt"].select((runs["gt"].frames == 1) & runs["gt"].consider)
+    assert len(gt1) == 3 and len(first) == 3
+    iou = iou_matrix(gt1.boxes, first.boxes)
+    assert (iou.max(axis=1) > 0.9).all(), iou.max(axis=1)

@@ -132,6 +132,31 @@ def test_tentative_deleted_on_miss_and_ids_not_wasted():
     assert [t.id for t in out] == [1]            # the noise never consumed an id
 
 
+def test_confirmed_track_reports_its_tentative_frames_when_asked():
+    trk = MultiObjectTracker(TrackerConfig(confirm_hits=3), image_size=(640, 480))
+    trk.keep_tentative = True
+    trk.update(np.array([[300, 300, 10, 10]]), frame=10)   # noise: one frame, then gone
+    for t in range(2):
+        assert trk.update(np.array([walk(t)]), frame=11 + t) == []
+        assert trk.confirmed_earlier == []
+    (tr,) = trk.update(np.array([walk(2)]), frame=13)
+    # confirmed at frame 13: its two tentative frames come under the id it now has; the noise,
+    # deleted while tentative, never appears
+    assert [(f, t.id, t.state) for f, t in trk.confirmed_earlier] == [
+        (11, 1, TrackState.TENTATIVE), (12, 1, TrackState.TENTATIVE)]
+    first = trk.confirmed_earlier[0][1].box.as_array()
+    np.testing.assert_allclose(first, walk(0), atol=1e-6)   # a new track starts on its box
+    assert trk.confirmed_earlier[1][1].hits == 2 and tr.hits == 3
+    # reported once: the next update has none
+    trk.update(np.array([walk(3)]), frame=14)
+    assert trk.confirmed_earlier == []
+    # off by default: nothing is kept
+    plain = MultiObjectTracker(TrackerConfig(confirm_hits=3), image_size=(640, 480))
+    for t in range(3):
+        plain.update(np.array([walk(t)]))
+    assert plain.confirmed_earlier == [] and plain.meta[0].tentative == []
+
+
 def test_two_crossing_tracks_keep_ids_with_velocity():
     trk = MultiObjectTracker(TrackerConfig(confirm_hits=2), image_size=(640, 480))
     for t in range(40):

@@ -305,11 +305,14 @@ class TrackerConfig(_Section):
     output_lost: bool = param(False, doc="report coasting (lost) tracks in tracks.txt")
     fill_gaps_s: float = param(1.0, lo=0.0, hi=3600.0,
                                doc="when the run ends, fill each track's gaps of up to this many seconds "
-                                   "in tracks.txt by linear interpolation (0 = off); applied to tracks "
-                                   "from --detections boxes, and to motion runs with fill_motion_gaps")
-    fill_motion_gaps: bool = param(False, doc="also fill the gaps of tracks from motion regions (off: "
-                                              "the boxes at a motion gap's ends are often a fragment or "
-                                              "a merged blob)")
+                                   "in tracks.txt by linear interpolation (0 = off); tracks from "
+                                   "--detections boxes, and from motion with fill_motion")
+    backfill: bool = param(True, doc="once a track is confirmed, also report it in the frames where it "
+                                     "was tentative (the first confirm_hits - 1); tracks from "
+                                     "--detections boxes, and from motion with fill_motion")
+    fill_motion: bool = param(False, doc="apply fill_gaps_s and backfill to tracks from motion regions "
+                                         "too (off: a motion track's first boxes and the boxes at a "
+                                         "gap's ends are often a fragment or a merged blob)")
 
 
 @dataclass(frozen=True)

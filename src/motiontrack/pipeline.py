@@ -72,9 +72,9 @@ def fill_gap_frames(cfg: PipelineConfig, fps: float | None, external: bool) -> i
     """Longest gap (frames) of a track that :class:`TrackJob` fills by interpolation in
     ``tracks.txt`` (0 = none): ``tracker.fill_gaps_s`` at the source's frame rate (25 fps when
     unknown), for tracks from external detections, or from motion regions with
-    ``tracker.fill_motion_gaps``. See :func:`motiontrack.tracking.gaps.fill_gaps`."""
+    ``tracker.fill_motion``. See :func:`motiontrack.tracking.gaps.fill_gaps`."""
     t = cfg.tracker
-    if not (external or t.fill_motion_gaps):
+    if not (external or t.fill_motion):
         return 0
     return int(round(t.fill_gaps_s * (fps or 25.0)))
 
@@ -114,6 +114,9 @@ class Pipeline:
             # box that overlaps a neighbour's prediction swap identities; benchmarks/detections.py)
             tracker_cfg = replace(tracker_cfg, split_merged=False)
         self.tracker = TRACKERS.get(cfg.tracker.method)(tracker_cfg, image_size, fps)
+        # a confirmed track's tentative frames (FrameResult.earlier): detections, or fill_motion
+        self.tracker.keep_tentative = (cfg.tracker.backfill
+                                       and (detections is not None or cfg.tracker.fill_motion))
         self.people = None
         if cfg.people.enabled:
             from .people import PeopleStage
@@ -262,13 +265,14 @@ class Pipeline:
             located = {index[tid]: box for tid, box in outlines.items() if tid in index}
         tracks = self.tracker.update(regions, dt=self._frame_gap(frame), owned=owned,
                                      image=extras.get("small"), mask=mask, scale=self.scale,
-                                     located=located)
+                                     located=located, frame=frame.index)
         if self.bridge is not None:
             self.bridge.remember(frame.image, tracks)
         self._prev_tracks = tuple(tracks)
         self.frames_seen += 1
         return FrameResult(index=frame.index, timestamp=frame.timestamp, frame=frame.image,
-                           mask=mask, regions=tuple(regions), tracks=tuple(tracks), extras=extras)
+                           mask=mask, regions=tuple(regions), tracks=tuple(tracks), extras=extras,
+                           earlier=tuple(self.tracker.confirmed_earlier))
 
     def process(self, frame: Frame) -> FrameResult:
         """Both stages of one frame."""
@@ -383,6 +387,7 @@ class TrackJob:
         if self.gt is not None:
             self.paths["gt"] = self.out / "gt.txt"
         self.save = parse_streams(save)
+        self.backfilled = 0   # rows written at a track's tentative frames (FrameResult.earlier)
         for stream in self.save:
             self.paths[stream] = self.out / f"{stream}{extension_for(cfg.output.codec)}"
         check_writable(list(self.paths.values()), force)
@@ -426,6 +431,7 @@ class TrackJob:
                       if "mask_video" in self.paths else None)
         inter = IntermediateWriter(self.out, self.save, fps, cfg.output.codec) if self.save else None
         ids: set[int] = set()
+        self.backfilled = 0
         t0 = time.perf_counter()
         pipe = self.pipe
 
@@ -456,11 +462,13 @@ class TrackJob:
         summary.outputs = {k: str(v) for k, v in self.paths.items()
                            if v.exists() or k == "summary"}
         max_gap = fill_gap_frames(cfg, info.fps, self.detections is not None)
-        if max_gap or self.camera is not None or self.gt is not None:
+        if self.pipe.tracker.keep_tentative:
+            summary.extra["backfilled_rows"] = self.backfilled
+        if max_gap or self.backfilled or self.camera is not None or self.gt is not None:
             # read the run back from its tracks file: nothing accumulates in memory per frame
             pred = read_mot(self.paths["tracks"], kind="results")
-            if max_gap:
-                pred = self._fill_gaps(pred, max_gap, summary)
+            if max_gap or self.backfilled:
+                pred = self._rewrite_tracks(pred, max_gap, summary)
             if self.camera is not None:
                 from .calibrate import track_measurements
 
@@ -475,14 +483,16 @@ class TrackJob:
         outcome.reraise()  # everything is written; an interrupt or a failed source still surfaces
         return summary
 
-    def _fill_gaps(self, pred: Annotations, max_gap: int, summary: JobSummary) -> Annotations:
-        """Rewrite ``tracks.txt`` (atomically) with each track's gaps of up to ``max_gap`` frames
-        filled by interpolation; the filled rows get their world position from the camera."""
+    def _rewrite_tracks(self, pred: Annotations, max_gap: int, summary: JobSummary) -> Annotations:
+        """Rewrite ``tracks.txt`` (atomically) sorted by frame, with each track's gaps of up to
+        ``max_gap`` frames filled by interpolation; the filled rows get their world position from
+        the camera."""
         from .tracking.gaps import fill_gaps
 
         filled = fill_gaps(pred, max_gap)
-        summary.extra["filled_rows"] = len(filled) - len(pred)
-        if len(filled) == len(pred):
+        if max_gap:
+            summary.extra["filled_rows"] = len(filled) - len(pred)
+        if len(filled) == len(pred) and not self.backfilled:
             return pred
         if self.camera is not None:
             from .calibrate import world_positions
@@ -490,8 +500,9 @@ class TrackJob:
             new = (filled.world == -1.0).all(axis=1)
             filled.world[new, :2] = world_positions(filled.boxes[new], self.camera)
             filled.world[new, 2] = 0.0
-        write_mot(filled, self.paths["tracks"], kind="results")
-        log.info("filled %d rows in gaps of up to %d frames", len(filled) - len(pred), max_gap)
+        write_mot(filled, self.paths["tracks"], kind="results")   # sorted by frame, then id
+        log.info("tracks.txt: %d rows at tentative frames, %d filled in gaps of up to %d frames",
+                 self.backfilled, len(filled) - len(pred), max_gap)
         return filled
 
     def _write_frame(self, res: FrameResult, tracks_fh, video: VideoSink | None,
@@ -499,16 +510,22 @@ class TrackJob:
                      ids: set[int]) -> bool:
         """Append one frame to every output; False when the live viewer asked to stop."""
         cfg = self.cfg
-        if res.tracks:
-            boxes = np.array([t.box.as_array() for t in res.tracks])
-            tid = [t.id for t in res.tracks]
+        rows = [(res.index, t) for t in res.tracks]
+        if res.earlier:
+            # tracks confirmed now, at their tentative frames: out of frame order until the
+            # file is rewritten sorted when the run ends
+            rows += res.earlier
+            self.backfilled += len(res.earlier)
+        if rows:
+            boxes = np.array([t.box.as_array() for _, t in rows])
+            tid = [t.id for _, t in rows]
             world = None
             if self.camera is not None:
                 from .calibrate import world_positions
 
                 world = np.column_stack([world_positions(boxes, self.camera), np.zeros(len(boxes))])
-            tracks_fh.write(format_mot_rows([res.index + 1] * len(tid), tid, boxes,
-                                            [t.score for t in res.tracks], world))
+            tracks_fh.write(format_mot_rows([f + 1 for f, _ in rows], tid, boxes,
+                                            [t.score for _, t in rows], world))
             ids.update(tid)
         if video is not None or self.show is not None:
             img = annotate_frame(res.frame, res.tracks, res.regions, res.mask, cfg.output.trail,

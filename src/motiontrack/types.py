@@ -188,7 +188,9 @@ class FrameResult:
     """What the pipeline yields for each frame.
 
     ``mask`` is the cleaned motion mask (``uint8``, 0/255) at processing resolution, or ``None``
-    when detections came from elsewhere.
+    when detections came from elsewhere. ``earlier`` holds the tracks confirmed in this frame at
+    the earlier frames where they were still tentative, as ``(frame index, Track)`` pairs (empty
+    unless ``tracker.backfill`` applies to the run).
     """
 
     index: int
@@ -198,6 +200,7 @@ class FrameResult:
     regions: tuple[Region, ...]
     tracks: tuple[Track, ...]
     extras: Mapping[str, object] = field(default_factory=dict, repr=False)
+    earlier: tuple[tuple[int, Track], ...] = field(default=(), repr=False)
 
 
 #: frame numbers, ids and classes are int64 columns: readers refuse values at or beyond this

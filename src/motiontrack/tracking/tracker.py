@@ -50,7 +50,7 @@ APPEARANCE_RATE = 0.1
 
 class _TrackState:
     __slots__ = ("tid", "state", "hits", "age", "tsu", "history", "score", "partials", "ref",
-                 "origin", "moved", "bridged", "hist")
+                 "origin", "moved", "bridged", "hist", "tentative")
 
     def __init__(self, history: int, size: np.ndarray) -> None:
         self.ref = np.asarray(size, np.float64).copy()  # reference (unoccluded) w, h
@@ -66,6 +66,7 @@ class _TrackState:
         self.moved = False                        # has travelled at least one body height
         self.bridged = False                      # last matched to a bridge measurement
         self.hist: np.ndarray | None = None       # appearance (colour histogram), running average
+        self.tentative: list[tuple] = []  # (frame, Track fields) of each frame while tentative
 
 
 @TRACKERS.register("kalman")
@@ -83,6 +84,12 @@ class MultiObjectTracker:
         self.meta: list[_TrackState] = []
         self.next_id = 1
         self.frame_count = 0
+        #: keep the snapshots of tentative tracks, to report them in :attr:`confirmed_earlier`
+        #: once the track is confirmed (off: nothing is kept)
+        self.keep_tentative = False
+        #: ``(frame, snapshot)`` of the tracks confirmed in the last update, at each earlier frame
+        #: where they were tentative (empty unless :attr:`keep_tentative`)
+        self.confirmed_earlier: list[tuple[int, Track]] = []
 
     # ------------------------------------------------------------------------------- helpers
     def _boxes(self) -> np.ndarray:
@@ -107,7 +114,8 @@ class MultiObjectTracker:
                scores: np.ndarray | None = None, dt: int = 1,
                owned: dict[int, np.ndarray] | None = None, image: np.ndarray | None = None,
                mask: np.ndarray | None = None, scale: float = 1.0,
-               located: dict[int, np.ndarray] | None = None) -> list[Track]:
+               located: dict[int, np.ndarray] | None = None,
+               frame: int | None = None) -> list[Track]:
         """One tracking step with this frame's detections (regions or an (M, 4) box array).
 
         ``dt`` is the number of frame periods since the previous update: more than 1 after a gap
@@ -120,7 +128,8 @@ class MultiObjectTracker:
         ``located`` maps a track index to its box found in this frame by other means (the active
         shape tracker's fitted outline): when a merged blob is split, such a track's share is
         that box cut to the blob rather than its moved prediction (see
-        :func:`~motiontrack.tracking.merge.split_merged`).
+        :func:`~motiontrack.tracking.merge.split_merged`). ``frame`` labels this update in
+        :attr:`confirmed_earlier` (default: the count of updates).
 
         Returns the snapshots of the tracks to report this frame: confirmed tracks matched in this
         frame (plus coasting lost tracks when ``output_lost``).
@@ -133,6 +142,7 @@ class MultiObjectTracker:
             det = np.array([r.box.as_array() for r in detections]).reshape(-1, 4)
             det_scores = np.array([r.score for r in detections], np.float64)
         self.frame_count += 1
+        self.confirmed_earlier = []
 
         held = self.x[:, 2:4].copy()   # sizes before this step's size velocity (merged blobs)
         pred = self.predict(dt)
@@ -147,7 +157,7 @@ class MultiObjectTracker:
             m.age += dt
         # synthetic (split) and owned (bridge, hypothesis) measurements never start tracks
         self._spawn(un_dets[owner[un_dets] < 0], det, det_scores, det_hist)
-        return self._snapshots()
+        return self._snapshots(self.frame_count if frame is None else frame)
 
     # ------------------------------------------------------------------------ update steps
     def _measurements(self, pred: np.ndarray, det: np.ndarray, det_scores: np.ndarray,
@@ -318,16 +328,29 @@ class MultiObjectTracker:
         x, y, bw, bh = box
         return x + bw <= 0 or y + bh <= 0 or x >= w or y >= h
 
-    def _snapshots(self) -> list[Track]:
+    def _snapshots(self, frame: int) -> list[Track]:
         out: list[Track] = []
         boxes = self._boxes().tolist()
         vel = self.x[:, 4:6].tolist()
         output_lost = self.cfg.output_lost
         for m, (x, y, w, h), (vx, vy) in zip(self.meta, boxes, vel):
             m.history.append((x + w / 2, y + h / 2))
+            if m.state == TrackState.TENTATIVE:
+                if self.keep_tentative:
+                    # a tentative track is matched in every frame it lives (a miss deletes it)
+                    m.tentative.append((frame, Box(x, y, w, h), (vx, vy), m.hits, m.age,
+                                        tuple(m.history), m.score))
+                continue
             if not ((m.state == TrackState.CONFIRMED and m.tsu == 0)
                     or (m.state == TrackState.LOST and output_lost)):
                 continue
+            if m.tentative:
+                # confirmed in this frame: its tentative frames, under the id it now has
+                self.confirmed_earlier.extend(
+                    (f, Track(id=m.tid, box=b, state=TrackState.TENTATIVE, velocity=v, hits=n,
+                              age=a, history=hist, score=sc))
+                    for f, b, v, n, a, hist, sc in m.tentative)
+                m.tentative = []
             out.append(Track(
                 id=m.tid, box=Box(x, y, w, h), state=m.state, velocity=(vx, vy), hits=m.hits,
                 age=m.age, time_since_update=m.tsu, history=tuple(m.history), score=m.score,
