@@ -12,12 +12,11 @@ import numpy as np
 from motiontrack.config import PipelineConfig
 from motiontrack.evaluate.mot import evaluate_tracking
 from motiontrack.io.mot import read_mot
-from motiontrack.pipeline import fill_gap_frames, run
+from motiontrack.io.sources import open_source
+from motiontrack.pipeline import fill_gap_frames, reported, run
 from motiontrack.tracking.gaps import fill_gaps
 from motiontrack.types import Annotations
 
-#: frame rate of the PETS clip (its header's)
-PETS_FPS = 10.0
 #: the scores the PETS accuracy benchmarks print
 KEYS = ("HOTA", "MOTA", "IDF1", "recall", "precision", "IDSW")
 
@@ -53,13 +52,15 @@ def score_tracks(video: str, cfg: PipelineConfig, gt: Annotations,
     """:data:`KEYS` of the pipeline's tracks of ``video`` (``cfg``; ``detections`` replace the
     motion stage) against ``gt``, which the caller cuts to the frames the run covers: CLEAR-MOT,
     Identity and HOTA at IoU 0.5, rows with consider = 0 as ignore regions."""
-    # each frame's tracks and, as `motiontrack track` writes them, the tracks confirmed in the
-    # frame at their tentative frames (tracker.backfill)
+    # the rows `motiontrack track` writes: each frame's tracks and those confirmed in it at their
+    # tentative frames (tracker.backfill), then the short gaps filled when the run ends
     rows = [(f + 1, t.id, *t.box.as_array()) for r in run(video, cfg, detections=detections)
-            for f, t in [*((r.index, t) for t in r.tracks), *r.earlier]]
+            for f, t in reported(r)]
     a = np.array(rows, float).reshape(-1, 6)
-    # the gaps `motiontrack track` fills in tracks.txt when the run ends (PETS is 10 fps)
+    src = open_source(video)
+    fps = src.info.fps
+    src.close()
     pred = fill_gaps(Annotations.from_columns(a[:, 0], a[:, 1], a[:, 2:6]),
-                     fill_gap_frames(cfg, PETS_FPS, detections is not None))
+                     fill_gap_frames(cfg, fps, detections is not None))
     res = evaluate_tracking(gt, pred, ignore_zero_marked=True)
     return {k: res[k] for k in KEYS}

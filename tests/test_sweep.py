@@ -321,3 +321,28 @@ def test_interrupted_sweep_keeps_finished_runs(tmp_path, monkeypatch, capsys):
     assert [r["motion.median.threshold"] for r in rows] == [0.1, 0.2]
     assert (out / "runs" / "r001" / "walker" / "tracks.txt").is_file()
     assert "interrupted" in capsys.readouterr().err
+
+
+def test_sweep_scores_what_track_writes_with_fill_motion(tmp_path):
+    """With ``tracker.fill_motion`` a run's tracks gain their tentative frames and filled gaps
+    when it ends; a sweep run must score (and save) the same tracks as ``motiontrack track``."""
+    from motiontrack.cli import main
+    from motiontrack.io.mot import read_mot
+
+    scene = "synth:crossing?n_frames=120"
+    base = ["tracker.fill_motion=true"]
+    st = study_from_args([scene], None, ["tracker.backfill=true,false"], load_config(None, base))
+    res = run_sweep(st, tmp_path / "sweep", jobs=1, figures=False)
+    assert main(["track", scene, "--no-video", "-o", str(tmp_path / "track"),
+                 *[a for b in base for a in ("--set", b)]]) == 0
+    summary = json.loads((tmp_path / "track" / "summary.json").read_text())
+    assert summary["backfilled_rows"] > 0
+    track_rows = (tmp_path / "track" / "tracks.txt").read_text()
+    sweep_rows = (tmp_path / "sweep" / "runs" / "r001" / "crossing" / "tracks.txt").read_text()
+    key = lambda text: [r.split(",")[:6] for r in text.splitlines()]   # frame, id, box
+    assert key(sweep_rows) == key(track_rows)
+    for k in ("MOTA", "IDF1", "HOTA"):
+        assert res.rows[0][k] == pytest.approx(summary["accuracy"][k], abs=1e-9), k
+    # backfill off: fewer rows, so the sweep really scores the completed file
+    assert len(read_mot(tmp_path / "sweep" / "runs" / "r002" / "crossing" / "tracks.txt")) \
+        == len(read_mot(tmp_path / "track" / "tracks.txt")) - summary["backfilled_rows"]

@@ -152,9 +152,17 @@ def test_confirmed_track_reports_its_tentative_frames_when_asked():
     assert trk.confirmed_earlier == []
     # off by default: nothing is kept
     plain = MultiObjectTracker(TrackerConfig(confirm_hits=3), image_size=(640, 480))
-    for t in range(3):
+    for t in range(2):
         plain.update(np.array([walk(t)]))
-    assert plain.confirmed_earlier == [] and plain.meta[0].tentative == []
+    assert plain.meta[0].state == TrackState.TENTATIVE and plain.meta[0].tentative == []
+    plain.update(np.array([walk(2)]))
+    assert plain.confirmed_earlier == []
+    # without a frame label, an update is labelled by the number of updates before it (0-based)
+    unlabelled = MultiObjectTracker(TrackerConfig(confirm_hits=2), image_size=(640, 480))
+    unlabelled.keep_tentative = True
+    for t in range(2):
+        unlabelled.update(np.array([walk(t)]))
+    assert [f for f, _ in unlabelled.confirmed_earlier] == [0]
 
 
 def test_two_crossing_tracks_keep_ids_with_velocity():

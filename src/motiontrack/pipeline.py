@@ -33,11 +33,12 @@ from .motion.cleanup import clean_mask
 from .preprocess import load_roi, pixel_window, preprocess, resolve_scale, scaled_size
 from .regions import find_regions
 from .tracking.tracker import TRACKERS
-from .types import Annotations, Box, Frame, FrameResult, Region
+from .types import Annotations, Box, Frame, FrameResult, Region, Track
 
 log = logging.getLogger(__name__)
 
-__all__ = ["Pipeline", "run", "TrackJob", "JobSummary", "resolve_config", "fill_gap_frames"]
+__all__ = ["Pipeline", "run", "TrackJob", "JobSummary", "resolve_config", "completes_tracks",
+           "fill_gap_frames", "reported"]
 
 
 #: ``people.auto_split``: weight of each frame's median region height/width in the scene's
@@ -68,15 +69,26 @@ def _regions_from_detections(det: Annotations, rows: np.ndarray | None) -> list[
     return out
 
 
+def completes_tracks(cfg: PipelineConfig, external: bool) -> bool:
+    """Whether a run's tracks get their tentative frames (``tracker.backfill``) and their gaps
+    filled (``tracker.fill_gaps_s``): tracks from external detections, or from motion regions with
+    ``tracker.fill_motion``."""
+    return external or cfg.tracker.fill_motion
+
+
 def fill_gap_frames(cfg: PipelineConfig, fps: float | None, external: bool) -> int:
     """Longest gap (frames) of a track that :class:`TrackJob` fills by interpolation in
     ``tracks.txt`` (0 = none): ``tracker.fill_gaps_s`` at the source's frame rate (25 fps when
-    unknown), for tracks from external detections, or from motion regions with
-    ``tracker.fill_motion``. See :func:`motiontrack.tracking.gaps.fill_gaps`."""
-    t = cfg.tracker
-    if not (external or t.fill_motion):
+    unknown), when :func:`completes_tracks`. See :func:`motiontrack.tracking.gaps.fill_gaps`."""
+    if not completes_tracks(cfg, external):
         return 0
-    return int(round(t.fill_gaps_s * (fps or 25.0)))
+    return int(round(cfg.tracker.fill_gaps_s * (fps or 25.0)))
+
+
+def reported(res: FrameResult) -> list[tuple[int, Track]]:
+    """``(frame index, track)`` rows one frame adds to the tracks file: its tracks, then the
+    tracks confirmed in it at their earlier, tentative frames (:attr:`FrameResult.earlier`)."""
+    return [*((res.index, t) for t in res.tracks), *res.earlier]
 
 
 class Pipeline:
@@ -114,9 +126,9 @@ class Pipeline:
             # box that overlaps a neighbour's prediction swap identities; benchmarks/detections.py)
             tracker_cfg = replace(tracker_cfg, split_merged=False)
         self.tracker = TRACKERS.get(cfg.tracker.method)(tracker_cfg, image_size, fps)
-        # a confirmed track's tentative frames (FrameResult.earlier): detections, or fill_motion
+        # a confirmed track's tentative frames (FrameResult.earlier)
         self.tracker.keep_tentative = (cfg.tracker.backfill
-                                       and (detections is not None or cfg.tracker.fill_motion))
+                                       and completes_tracks(cfg, detections is not None))
         self.people = None
         if cfg.people.enabled:
             from .people import PeopleStage
@@ -461,14 +473,12 @@ class TrackJob:
         summary.tracks = len(ids)
         summary.outputs = {k: str(v) for k, v in self.paths.items()
                            if v.exists() or k == "summary"}
-        max_gap = fill_gap_frames(cfg, info.fps, self.detections is not None)
-        if self.pipe.tracker.keep_tentative:
-            summary.extra["backfilled_rows"] = self.backfilled
-        if max_gap or self.backfilled or self.camera is not None or self.gt is not None:
+        complete = completes_tracks(cfg, self.detections is not None)
+        if complete or self.camera is not None or self.gt is not None:
             # read the run back from its tracks file: nothing accumulates in memory per frame
             pred = read_mot(self.paths["tracks"], kind="results")
-            if max_gap or self.backfilled:
-                pred = self._rewrite_tracks(pred, max_gap, summary)
+            if complete:
+                pred = self._complete_tracks(pred, summary)
             if self.camera is not None:
                 from .calibrate import track_measurements
 
@@ -483,47 +493,43 @@ class TrackJob:
         outcome.reraise()  # everything is written; an interrupt or a failed source still surfaces
         return summary
 
-    def _rewrite_tracks(self, pred: Annotations, max_gap: int, summary: JobSummary) -> Annotations:
-        """Rewrite ``tracks.txt`` (atomically) sorted by frame, with each track's gaps of up to
-        ``max_gap`` frames filled by interpolation; the filled rows get their world position from
-        the camera."""
+    def _complete_tracks(self, pred: Annotations, summary: JobSummary) -> Annotations:
+        """Rewrite ``tracks.txt`` (atomically) sorted by frame, then id, with each track's short
+        gaps filled by interpolation (:func:`fill_gap_frames`); the filled rows get their world
+        position from the camera. The tentative frames (:attr:`backfilled`) are in it already."""
         from .tracking.gaps import fill_gaps
 
+        max_gap = fill_gap_frames(self.cfg, self.src.info.fps, self.detections is not None)
         filled = fill_gaps(pred, max_gap)
-        if max_gap:
-            summary.extra["filled_rows"] = len(filled) - len(pred)
-        if len(filled) == len(pred) and not self.backfilled:
-            return pred
+        summary.extra["backfilled_rows"] = self.backfilled
+        summary.extra["filled_rows"] = len(filled) - len(pred)
         if self.camera is not None:
-            from .calibrate import world_positions
-
             new = (filled.world == -1.0).all(axis=1)
-            filled.world[new, :2] = world_positions(filled.boxes[new], self.camera)
-            filled.world[new, 2] = 0.0
+            filled.world[new] = self._world(filled.boxes[new])
         write_mot(filled, self.paths["tracks"], kind="results")   # sorted by frame, then id
         log.info("tracks.txt: %d rows at tentative frames, %d filled in gaps of up to %d frames",
                  self.backfilled, len(filled) - len(pred), max_gap)
         return filled
+
+    def _world(self, boxes: np.ndarray) -> np.ndarray:
+        """Ground-plane positions ``(x, y, 0)`` in metres of the boxes' foot points."""
+        from .calibrate import world_positions
+
+        return np.column_stack([world_positions(boxes, self.camera), np.zeros(len(boxes))])
 
     def _write_frame(self, res: FrameResult, tracks_fh, video: VideoSink | None,
                      mask_video: VideoSink | None, inter: IntermediateWriter | None,
                      ids: set[int]) -> bool:
         """Append one frame to every output; False when the live viewer asked to stop."""
         cfg = self.cfg
-        rows = [(res.index, t) for t in res.tracks]
-        if res.earlier:
-            # tracks confirmed now, at their tentative frames: out of frame order until the
-            # file is rewritten sorted when the run ends
-            rows += res.earlier
-            self.backfilled += len(res.earlier)
+        # tracks confirmed now are also written at their tentative frames: out of frame order
+        # until the file is rewritten sorted when the run ends
+        rows = reported(res)
+        self.backfilled += len(res.earlier)
         if rows:
             boxes = np.array([t.box.as_array() for _, t in rows])
             tid = [t.id for _, t in rows]
-            world = None
-            if self.camera is not None:
-                from .calibrate import world_positions
-
-                world = np.column_stack([world_positions(boxes, self.camera), np.zeros(len(boxes))])
+            world = self._world(boxes) if self.camera is not None else None
             tracks_fh.write(format_mot_rows([f + 1 for f, _ in rows], tid, boxes,
                                             [t.score for _, t in rows], world))
             ids.update(tid)

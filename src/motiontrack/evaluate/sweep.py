@@ -403,7 +403,9 @@ def execute_run(spec: RunSpec) -> dict[str, Any]:
     """
     from ..config import PipelineConfig, apply_overrides, from_dict
     from ..io.mot import format_mot_rows
-    from ..pipeline import Pipeline, open_configured_source
+    from ..pipeline import (Pipeline, completes_tracks, fill_gap_frames, open_configured_source,
+                            reported)
+    from ..tracking.gaps import fill_gaps
     from .framewise import evaluate_framewise
     from .mot import evaluate_tracking
 
@@ -436,8 +438,8 @@ def execute_run(spec: RunSpec) -> dict[str, Any]:
             first = f if first is None else first
             for j, r in enumerate(res.regions, 1):
                 rf.append(f), rb.append(r.box.as_array()), ri.append(j), rs.append(r.score)
-            for t in res.tracks:
-                tf.append(f), tb.append(t.box.as_array()), ti.append(t.id), ts.append(t.score)
+            for k, t in reported(res):
+                tf.append(k + 1), tb.append(t.box.as_array()), ti.append(t.id), ts.append(t.score)
             if writer is not None:
                 writer.write(res, pipe.detector)
             n += 1
@@ -447,6 +449,10 @@ def execute_run(spec: RunSpec) -> dict[str, Any]:
             writer.close()
     regions = _annotations(rf, rb, ri, rs)
     tracks = _annotations(tf, tb, ti, ts)
+    if completes_tracks(cfg, external=False):
+        # as `motiontrack track` writes them (tracker.fill_motion): short gaps filled, sorted
+        tracks = fill_gaps(tracks, fill_gap_frames(cfg, info.fps, external=False))
+        tracks = tracks.select(np.lexsort((tracks.ids, tracks.frames)))
     lo = first if first is not None else 1
     hi = lo + n - 1
     gt = gt.select((gt.frames >= lo) & (gt.frames <= hi))
@@ -465,7 +471,8 @@ def execute_run(spec: RunSpec) -> dict[str, Any]:
     mot = evaluate_tracking(gt, tracks, ignore_zero_marked=True)
     row.update({k: float(mot[k]) for k in TRACKING_KEYS if k in mot})
     files = {
-        f"{spec.run_dir()}/tracks.txt": format_mot_rows(tf, ti, np.asarray(tb).reshape(-1, 4), ts),
+        f"{spec.run_dir()}/tracks.txt": format_mot_rows(tracks.frames, tracks.ids, tracks.boxes,
+                                                        tracks.scores),
         f"{spec.run_dir()}/regions.txt": format_mot_rows(rf, ri, np.asarray(rb).reshape(-1, 4), rs),
     }
     return {"row": row, "files": files}

@@ -27,8 +27,9 @@ def fill_gaps(tracks: Annotations, max_gap: int) -> Annotations:
     """``tracks`` with every gap of at most ``max_gap`` missing frames filled by interpolation.
 
     A gap is a run of frames between two consecutive rows of the same id (rows with id < 0,
-    anonymous detections, are left alone). Gaps longer than ``max_gap`` stay gaps. The result is
-    sorted by frame, then id; ``max_gap`` <= 0 returns ``tracks`` unchanged.
+    anonymous detections, are left alone). Gaps longer than ``max_gap`` stay gaps. When rows are
+    added the result is a new table sorted by frame, then id; with nothing to fill (``max_gap``
+    <= 0, or no gap that short) it is ``tracks`` itself, in its own order.
     """
     if max_gap <= 0 or len(tracks) < 2:
         return tracks

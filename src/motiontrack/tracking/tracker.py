@@ -129,7 +129,8 @@ class MultiObjectTracker:
         shape tracker's fitted outline): when a merged blob is split, such a track's share is
         that box cut to the blob rather than its moved prediction (see
         :func:`~motiontrack.tracking.merge.split_merged`). ``frame`` labels this update in
-        :attr:`confirmed_earlier` (default: the count of updates).
+        :attr:`confirmed_earlier` (default: the number of earlier updates, so 0-based like the
+        pipeline's frame index).
 
         Returns the snapshots of the tracks to report this frame: confirmed tracks matched in this
         frame (plus coasting lost tracks when ``output_lost``).
@@ -157,7 +158,7 @@ class MultiObjectTracker:
             m.age += dt
         # synthetic (split) and owned (bridge, hypothesis) measurements never start tracks
         self._spawn(un_dets[owner[un_dets] < 0], det, det_scores, det_hist)
-        return self._snapshots(self.frame_count if frame is None else frame)
+        return self._snapshots(self.frame_count - 1 if frame is None else frame)
 
     # ------------------------------------------------------------------------ update steps
     def _measurements(self, pred: np.ndarray, det: np.ndarray, det_scores: np.ndarray,
