@@ -118,17 +118,26 @@ class FrameDiffParams(_Section):
     gap: int = param(2, lo=1, hi=100, doc="difference with the frame this many frames back")
 
 
+def _protect(default: bool):
+    """The ``protect`` field of the subtractors that support a selective update."""
+    return param(default, doc="selective update: pixels of tracked objects that have moved are not "
+                              "learnt, so people who stop stay foreground")
+
+
+def _protect_threshold():
+    """The ``protect_threshold`` field that goes with :func:`_protect` (MOG2, KNN)."""
+    return param(30, lo=1, hi=255, doc="inside tracked objects (not learnt): difference from the "
+                                       "background that counts as foreground")
+
+
 @dataclass(frozen=True)
 class MOG2Params(_Section):
     history: int = param(500, lo=1)
     var_threshold: float = param(16.0, lo=0.0)
     detect_shadows: bool = param(True)
     learning_rate: float = param(-1.0, lo=-1.0, hi=1.0, doc="-1 = automatic (1/history)")
-    protect: bool = param(False, doc="selective update: pixels of tracked objects that have moved are not "
-                                     "learnt, so people who stop stay foreground")
-    protect_threshold: int = param(30, lo=1, hi=255,
-                                   doc="inside tracked objects (not learnt): difference from the "
-                                       "background that counts as foreground")
+    protect: bool = _protect(False)
+    protect_threshold: int = _protect_threshold()
 
 
 @dataclass(frozen=True)
@@ -143,11 +152,8 @@ class KNNParams(_Section):
     knn_samples: int = param(2, lo=1, hi=50,
                              doc="matching samples within dist2_threshold that make a pixel "
                                  "background, at most n_samples")
-    protect: bool = param(False, doc="selective update: pixels of tracked objects that have moved are not "
-                                     "learnt, so people who stop stay foreground")
-    protect_threshold: int = param(30, lo=1, hi=255,
-                                   doc="inside tracked objects (not learnt): difference from the "
-                                       "background that counts as foreground")
+    protect: bool = _protect(False)
+    protect_threshold: int = _protect_threshold()
     seed: int = param(0, lo=0, hi=1_000_000,
                       doc="seed of the model's random sample updates: a run repeats exactly for a "
                           "given seed; other seeds show the spread of the scores")
@@ -173,8 +179,7 @@ class MedianParams(_Section):
                              doc="DETECT_DIFF_THRESH: |frame - background| / 255 above this is motion")
     history: int = param(25, lo=3, hi=255, doc="frames kept for the median")
     update_every: int = param(5, lo=1, doc="sample a frame into the history every N frames")
-    protect: bool = param(True, doc="selective update: pixels of tracked objects that have moved are not "
-                                     "learnt, so people who stop stay foreground")
+    protect: bool = _protect(True)
 
 
 @dataclass(frozen=True)
