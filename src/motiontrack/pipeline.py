@@ -443,7 +443,6 @@ class TrackJob:
                       if "mask_video" in self.paths else None)
         inter = IntermediateWriter(self.out, self.save, fps, cfg.output.codec) if self.save else None
         ids: set[int] = set()
-        self.backfilled = 0
         t0 = time.perf_counter()
         pipe = self.pipe
 

@@ -310,6 +310,10 @@ class Annotations:
         """Rows where the boolean ``mask`` is true (a new object; inputs are never mutated)."""
         return Annotations(**{c: getattr(self, c)[mask] for c in _ANN_COLUMNS}, meta=self.meta)
 
+    def sorted(self) -> "Annotations":
+        """The rows sorted by frame, then id (stable: equal pairs keep their order)."""
+        return self.select(np.lexsort((self.ids, self.frames)))
+
     def frame_numbers(self) -> np.ndarray:
         """Sorted unique frame numbers present."""
         return np.unique(self.frames)

@@ -451,8 +451,7 @@ def execute_run(spec: RunSpec) -> dict[str, Any]:
     tracks = _annotations(tf, tb, ti, ts)
     if completes_tracks(cfg, external=False):
         # as `motiontrack track` writes them (tracker.fill_motion): short gaps filled, sorted
-        tracks = fill_gaps(tracks, fill_gap_frames(cfg, info.fps, external=False))
-        tracks = tracks.select(np.lexsort((tracks.ids, tracks.frames)))
+        tracks = fill_gaps(tracks, fill_gap_frames(cfg, info.fps, external=False)).sorted()
     lo = first if first is not None else 1
     hi = lo + n - 1
     gt = gt.select((gt.frames >= lo) & (gt.frames <= hi))

@@ -162,8 +162,7 @@ def format_mot_rows(frames: Iterable[int], ids: Iterable[int], boxes: np.ndarray
 def write_mot(ann: Annotations, path: str | Path, kind: str = "results") -> None:
     """Write annotations as MOTChallenge CSV (atomically). ``kind="gt"`` writes the consider flag
     in column 7 and, when classes are known, the 9-column MOT17 layout."""
-    order = np.lexsort((ann.ids, ann.frames))
-    a = ann.select(order) if len(ann) else ann
+    a = ann.sorted()
     with atomic_open(path) as fh:
         if kind == "gt" and len(a) and (a.classes >= 0).any():
             for f, i, b, c, k, v in zip(a.frames, a.ids, a.boxes, a.consider, a.classes, a.visibility):

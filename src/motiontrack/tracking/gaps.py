@@ -53,5 +53,4 @@ def fill_gaps(tracks: Annotations, max_gap: int) -> Annotations:
     filled = Annotations.from_columns(
         f[a] + k, i[a], lerp(tracks.boxes), scores=lerp(tracks.scores),
         consider=tracks.consider[order][a], classes=tracks.classes[order][a])
-    out = tracks.concat(filled)
-    return out.select(np.lexsort((out.ids, out.frames)))
+    return tracks.concat(filled).sorted()
