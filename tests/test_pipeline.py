@@ -412,3 +412,31 @@ def test_knn_model_size_reaches_opencv_and_the_fast_preset_keeps_identities():
         load_config(None, ["motion.knn.n_samples=3", "motion.knn.knn_samples=4"])
     with pytest.raises(ConfigError, match="knn_samples"):
         DETECTORS.create("knn", n_samples=3, knn_samples=5)
+
+
+def test_a_stage_that_raises_stops_the_reading_threads(tmp_path, monkeypatch):
+    # an exception inside the pipeline reaches the caller, and the source's decoding thread and
+    # the detection worker are stopped before it does (a reading thread left running at
+    # interpreter exit aborts the process)
+    import threading
+
+    import cv2
+
+    from motiontrack.pipeline import Pipeline, run
+
+    p = tmp_path / "v.avi"
+    w = cv2.VideoWriter(str(p), cv2.VideoWriter_fourcc(*"MJPG"), 10, (64, 48))
+    for i in range(40):
+        w.write(np.full((48, 64, 3), (i * 7) % 255, np.uint8))
+    w.release()
+
+    def boom(self, *args, **kwargs):
+        raise RuntimeError("stage failed")
+
+    for stage in ("motion", "track"):
+        with monkeypatch.context() as m:
+            m.setattr(Pipeline, stage, boom)
+            with pytest.raises(RuntimeError, match="stage failed"):
+                for _ in run(str(p), PipelineConfig()):
+                    pass
+        assert not [t for t in threading.enumerate() if t.name == "motiontrack-decode"], stage

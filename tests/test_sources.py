@@ -158,6 +158,31 @@ def test_prefetch_passes_exceptions_and_stops_early():
     assert closed == [True]
 
 
+def test_prepared_runs_in_the_reading_thread_of_sources_that_decode_ahead(tmp_path):
+    # the pipeline preprocesses in the thread that decodes (Source.prepared): same frames, same
+    # order, start and length as plain iteration; sources without a reading thread run it inline
+    import threading
+
+    p = tmp_path / "v.avi"
+    _write_video(p)
+    for i in (1, 2, 10):
+        cv2.imwrite(str(tmp_path / f"in{i}.png"), np.full((8, 9, 3), i, np.uint8))
+
+    def where(frame):
+        return threading.current_thread().name, int(frame.image[0, 0, 0])
+
+    cases = [(open_source(str(p), start=3, max_frames=4), "motiontrack-decode"),
+             (open_source(str(tmp_path / "in*.png")), "motiontrack-decode"),
+             (ArraySource([np.full((4, 4, 3), i, np.uint8) for i in range(5)], max_frames=3),
+              threading.current_thread().name)]
+    for src, thread in cases:
+        plain = [(f.index, int(f.image[0, 0, 0])) for f in src]
+        pairs = list(src.prepared(where))
+        assert [(f.index, int(f.image[0, 0, 0])) for f, _ in pairs] == plain
+        assert [value for f, (_, value) in pairs] == [v for _, v in plain]
+        assert {name for _, (name, _) in pairs} == {thread}
+
+
 def test_array_source_and_bad_arguments():
     src = ArraySource([np.zeros((4, 4, 3), np.uint8)] * 5, max_frames=2)
     assert len(list(src)) == 2

@@ -188,18 +188,28 @@ class Pipeline:
                 mask[y1:y2, x1:x2] = True
         return mask
 
-    def detect(self, frame: Frame, index: int) -> tuple[np.ndarray | None, list[Region], dict[str, Any]]:
+    def detect(self, frame: Frame, index: int, small: np.ndarray | None = None
+               ) -> tuple[np.ndarray | None, list[Region], dict[str, Any]]:
         """Motion stage of one frame: ``(mask, regions, extras)``. ``index`` counts frames from
-        the start of this run (for the warm-up)."""
-        return self.regions_of(index, *self.motion(frame))
+        the start of this run (for the warm-up); ``small`` is :meth:`prepare`'s image of the
+        frame when already made."""
+        return self.regions_of(index, *self.motion(frame, small))
 
-    def motion(self, frame: Frame) -> tuple[np.ndarray | None, dict[str, Any]]:
+    def prepare(self, frame: Frame) -> np.ndarray | None:
+        """The frame at processing scale, preprocessed (None with external detections): the
+        part of the image work that needs nothing but the frame, so a source that decodes
+        ahead can do it in its thread (:meth:`~motiontrack.io.sources.Source.prepared`)."""
+        return preprocess(frame.image, self.pre_cfg) if self.detector is not None else None
+
+    def motion(self, frame: Frame, small: np.ndarray | None = None
+               ) -> tuple[np.ndarray | None, dict[str, Any]]:
         """First half of :meth:`detect`, the image work (OpenCV, which releases the GIL):
         ``(mask, extras)``; with external detections ``(None, {"detections": regions})``."""
         if self._det_index is not None:
             return None, {"detections": _regions_from_detections(
                 self.detections, self._det_index.get(frame.index + 1))}
-        small = preprocess(frame.image, self.pre_cfg)
+        if small is None:
+            small = self.prepare(frame)
         raw = self.detector.apply(small, self._protect_mask(small.shape[:2]))
         if self.roi is not None:
             raw = np.bitwise_and(raw, self.roi)
@@ -291,23 +301,34 @@ class Pipeline:
         return self.track(frame, *self.detect(frame, self.frames_seen))
 
     def results(self, frames: Iterable[Frame]) -> Iterator[FrameResult]:
-        """:meth:`process` over ``frames``. When detection does not depend on the tracks (no
-        selective update), the image work of the next frame (:meth:`motion`) runs in a worker
-        thread while this thread finds the current frame's regions and tracks them: OpenCV
-        releases the GIL, so the two overlap on two cores."""
-        if self.sequential or (self.detector is not None and self.detector.protect):
-            for frame in frames:
-                yield self.process(frame)
-            return
-        # the worker does the image work; regions and head splitting (Python, holding the GIL)
-        # run here, so the worker's OpenCV calls do not wait for the GIL behind them (measured
-        # about 5% faster than detecting regions in the worker)
-        detected = prefetch((f, self.motion(f)) for f in frames)
+        """:meth:`process` over ``frames``. A :class:`Source` that decodes ahead in a thread
+        also preprocesses there (:meth:`prepare`). When detection does not depend on the tracks
+        (no selective update), the rest of the image work of the next frame (:meth:`motion`:
+        the motion detector) runs in a worker thread while this thread finds the current
+        frame's regions and tracks them: OpenCV releases the GIL, so the three overlap on two
+        cores (benchmarks/throughput.py; docs/benchmarks.md)."""
+        prepared = (frames.prepared(self.prepare) if isinstance(frames, Source)
+                    else ((f, self.prepare(f)) for f in frames))
         try:
-            for k, (frame, (mask, extras)) in enumerate(detected):
-                yield self.track(frame, *self.regions_of(k, mask, extras))
+            if self.sequential or (self.detector is not None and self.detector.protect):
+                for frame, small in prepared:
+                    yield self.track(frame, *self.detect(frame, self.frames_seen, small))
+                return
+            # the worker does the image work; regions and head splitting (Python, holding the
+            # GIL) run here, so the worker's OpenCV calls do not wait for the GIL behind them
+            # (measured about 5% faster than detecting regions in the worker)
+            detected = prefetch((f, self.motion(f, small)) for f, small in prepared)
+            try:
+                for k, (frame, (mask, extras)) in enumerate(detected):
+                    yield self.track(frame, *self.regions_of(k, mask, extras))
+            finally:
+                detected.close()
         finally:
-            detected.close()
+            # stops the source's reading thread now, also when a stage raised: left to the
+            # garbage collector it can still be running when the interpreter exits (abort)
+            close = getattr(prepared, "close", None)
+            if close is not None:
+                close()
 
 
 def run(source: Any, config: PipelineConfig | str | Path | None = None,

@@ -70,6 +70,13 @@ class Source:
     def __iter__(self) -> Iterator[Frame]:  # pragma: no cover - abstract
         raise NotImplementedError
 
+    def prepared(self, prepare: Callable[[Frame], Any]) -> Iterator[tuple[Frame, Any]]:
+        """``(frame, prepare(frame))`` for every frame. Sources that decode ahead in a thread
+        (video files, image folders) call ``prepare`` in that thread, so per-frame image work
+        that needs nothing but the frame (the pipeline's resizing and blurring) runs beside the
+        consumer's instead of before it."""
+        return ((frame, prepare(frame)) for frame in self)
+
     def expected_frames(self) -> int | None:
         """Frames this iteration should yield, when known (for progress bars)."""
         n = self.info.frame_count
@@ -141,7 +148,20 @@ def _open_capture(target: Any, what: str) -> cv2.VideoCapture:
     return cap
 
 
-class VideoFileSource(Source):
+class _DecodedAhead(Source):
+    """A source that reads in a background thread (:func:`prefetch`) what ``_frames`` yields."""
+
+    def __iter__(self) -> Iterator[Frame]:
+        return prefetch(self._frames())
+
+    def prepared(self, prepare: Callable[[Frame], Any]) -> Iterator[tuple[Frame, Any]]:
+        return prefetch((frame, prepare(frame)) for frame in self._frames())
+
+    def _frames(self) -> Iterator[Frame]:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+
+class VideoFileSource(_DecodedAhead):
     """A video file decoded with OpenCV (FFmpeg backend)."""
 
     def __init__(self, path: str | Path, start: int = 0, max_frames: int = 0) -> None:
@@ -166,9 +186,6 @@ class VideoFileSource(Source):
             name=str(self.path), width=first.shape[1], height=first.shape[0],
             fps=fps if 0 < fps < 1000 else None, frame_count=count if count > 0 else None,
         )
-
-    def __iter__(self) -> Iterator[Frame]:
-        return prefetch(self._frames())
 
     def _frames(self) -> Iterator[Frame]:
         cap = _open_capture(str(self.path), f"{self.path} as a video")
@@ -294,7 +311,7 @@ def _natural_key(s: str) -> list[Any]:
     return [int(t) if t.isdigit() else t.lower() for t in re.split(r"(\d+)", s)]
 
 
-class ImageSequenceSource(Source):
+class ImageSequenceSource(_DecodedAhead):
     """Frames from an image folder or a glob pattern (e.g. ``input/*.jpg``), in natural order."""
 
     def __init__(self, pattern: str | Path, start: int = 0, max_frames: int = 0,
@@ -315,9 +332,6 @@ class ImageSequenceSource(Source):
             raise SourceError(f"cannot read image {self.files[0]}")
         self.info = SourceInfo(name=name, width=first.shape[1], height=first.shape[0],
                                fps=fps, frame_count=len(self.files))
-
-    def __iter__(self) -> Iterator[Frame]:
-        return prefetch(self._frames())
 
     def _frames(self) -> Iterator[Frame]:
         fps = self.info.fps or 25.0
