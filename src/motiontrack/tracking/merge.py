@@ -23,10 +23,13 @@ import numpy as np
 
 __all__ = ["split_merged", "anchor_partial"]
 
+#: reference height / width from which a track is taken for a person (upright) in the claim test
+UPRIGHT = 1.5
+
 
 def split_merged(pred: np.ndarray, established: np.ndarray, det: np.ndarray,
                  max_share: float = 0.85, own: np.ndarray | None = None,
-                 size: np.ndarray | None = None
+                 size: np.ndarray | None = None, ref: np.ndarray | None = None
                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Split detections that contain several established tracks' predictions.
 
@@ -51,6 +54,14 @@ def split_merged(pred: np.ndarray, established: np.ndarray, det: np.ndarray,
         (default: the predicted size). A share of a blob says nothing about the size of the
         object in it, and a measurement that repeats the prediction never corrects the
         prediction's size velocity: the tracker passes sizes that do not follow it.
+    ref : (N, 2) float64, optional
+        Each track's reference (unmerged) size. An upright track (reference height at least
+        :data:`UPRIGHT` times its width: a person) claims a blob when the smaller of its
+        predicted and reference areas is at most ``max_share`` of the blob's: a person's track
+        that matched a blob holding a neighbour's body for a few frames before the blobs fused
+        has grown to it, and would otherwise no longer claim its share. Other tracks are judged
+        by their predicted area (a car approaching the camera grows faster than its reference
+        follows, and its own blob would be split).
 
     Returns
     -------
@@ -75,7 +86,11 @@ def split_merged(pred: np.ndarray, established: np.ndarray, det: np.ndarray,
     inside &= established[:, None]
     if not (inside.sum(axis=0) >= 2).any():  # the common case: nothing to split
         return det.copy(), np.arange(m), np.full(m, -1, np.int64)
-    small = (pred[:, 2] * pred[:, 3])[:, None] <= max_share * (det[:, 2] * det[:, 3])[None, :]
+    area = pred[:, 2] * pred[:, 3]
+    if ref is not None:
+        upright = ref[:, 1] >= UPRIGHT * ref[:, 0]
+        area = np.where(upright, np.minimum(area, ref[:, 0] * ref[:, 1]), area)
+    small = area[:, None] <= max_share * (det[:, 2] * det[:, 3])[None, :]
     claim = inside & small
     # a track claims at most one blob: the one whose centre is nearest its prediction
     if claim.any():

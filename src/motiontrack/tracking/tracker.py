@@ -179,10 +179,9 @@ class MultiObjectTracker:
                 own = np.full((len(pred), 4), np.nan)
                 for t, box in located.items():
                     own[t] = box
-            size = np.array([m.ref for m in self.meta], np.float64).reshape(-1, 2)
-            if held is not None:
-                size = np.maximum(size, held)
-            det, origin, owner = split_merged(pred, established, det, own=own, size=size)
+            ref = np.array([m.ref for m in self.meta], np.float64).reshape(-1, 2)
+            size = ref if held is None else np.maximum(ref, held)
+            det, origin, owner = split_merged(pred, established, det, own=own, size=size, ref=ref)
             det_scores = det_scores[origin]
         else:
             owner = np.full(len(det), -1, np.int64)
