@@ -73,3 +73,5 @@ def test_split_applies_to_motion_regions_only():
     det = Annotations.from_columns([1], [-1], [[10, 10, 20, 40]], scores=[1.0])
     assert Pipeline(cfg, (320, 240)).tracker.cfg.split_merged
     assert not Pipeline(cfg, (320, 240), detections=det).tracker.cfg.split_merged
+    assert Pipeline(cfg, (320, 240)).tracker.cfg.coast_frames == 10
+    assert Pipeline(cfg, (320, 240), detections=det).tracker.cfg.coast_frames == 0

@@ -298,6 +298,10 @@ class TrackerConfig(_Section):
     split_merged: bool = param(True, doc="split a motion blob holding several tracks' predictions "
                                       "into one synthetic measurement per track (people crossing); "
                                       "never applied to --detections boxes (one object each)")
+    coast_frames: int = param(10, lo=0, hi=1000,
+                              doc="a lost track coasts at the median pace of its last N steps, not its "
+                                  "last Kalman velocity (a fragment at an occluder's edge tilts that); "
+                                  "0 = Kalman velocity; never applied to --detections boxes")
     appearance_weight: float = param(0.5, lo=0.0, hi=10.0,
                                      doc="weight of the colour-histogram (Bhattacharyya) distance in the "
                                          "association cost (0 = no appearance model)")

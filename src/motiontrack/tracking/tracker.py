@@ -4,9 +4,12 @@ Lifecycle (parameters of :class:`~motiontrack.config.TrackerConfig`):
 
 1. An unmatched detection starts a **tentative** track (no public id yet).
 2. A tentative track with ``confirm_hits`` matched frames becomes **confirmed** and receives the
-   next integer id (ids are therefore never wasted on noise and never reused).
-   A tentative track that misses a frame is deleted.
-3. A confirmed track that misses a frame becomes **lost** and coasts on its prediction; a match
+   next integer id (ids are therefore never wasted on noise and never reused) — or, when a lost
+   track fits it (appearance, search window, height), that track's id: the same person
+   reappearing, taken over first by a tentative track (re-identification at confirmation; the
+   lost track is dropped). A tentative track that misses a frame is deleted.
+3. A confirmed track that misses a frame becomes **lost** and coasts on its prediction, at the
+   median pace of its last ``coast_frames`` steps rather than its last Kalman velocity; a match
    makes it confirmed again with the same id.
 4. A lost track unseen for more than ``max_lost_s`` seconds (at the source's frame rate), or
    whose prediction has left the image, is **deleted**.
@@ -33,7 +36,8 @@ from ..registry import Registry
 from ..types import Box, Region, Track, TrackState
 from . import kalman
 from .appearance import bhattacharyya, histograms
-from .association import INF_COST, assign_in_stages, association_cost, iou_matrix
+from .association import (INF_COST, assign_in_stages, association_cost, center_distance_matrix,
+                          iou_matrix)
 from .merge import anchor_partial, split_merged
 
 __all__ = ["TRACKERS", "MultiObjectTracker"]
@@ -46,6 +50,16 @@ MAX_PARTIAL_FRAMES = 8
 REF_RATE = 0.2
 #: running-average rate of a track's appearance histogram
 APPEARANCE_RATE = 0.1
+
+
+def _recent_velocity(history: deque, k: int) -> np.ndarray | None:
+    """Median per-frame displacement of the centre over the last ``k`` steps of ``history``
+    (None with fewer than two steps)."""
+    n = min(len(history), k + 1)
+    if n < 3:
+        return None
+    pts = np.array([history[i] for i in range(len(history) - n, len(history))], np.float64)
+    return np.median(np.diff(pts, axis=0), axis=0)
 
 
 class _TrackState:
@@ -154,6 +168,7 @@ class MultiObjectTracker:
         matches, un_tracks, un_dets = assign_in_stages(*self._cost(pred, det, owner, n_real, det_hist))
         self._correct(matches, pred, det, det_scores, owner, n_real, det_hist)
         self._miss(un_tracks, dt)
+        self._name_confirmed()
         for m in self.meta:
             m.age += dt
         # synthetic (split) and owned (bridge, hypothesis) measurements never start tracks
@@ -272,8 +287,7 @@ class MultiObjectTracker:
                     m.moved = True
             m.score = scores[k]
             if m.state == TrackState.TENTATIVE and m.hits >= c.confirm_hits:
-                m.state = TrackState.CONFIRMED
-                m.tid = self._new_id()
+                m.state = TrackState.CONFIRMED   # named by _name_confirmed, after _miss
             elif m.state == TrackState.LOST:
                 m.state = TrackState.CONFIRMED
 
@@ -290,6 +304,13 @@ class MultiObjectTracker:
             if m.state == TrackState.TENTATIVE:
                 keep[t] = False
                 continue
+            if m.state == TrackState.CONFIRMED and c.coast_frames:
+                # just lost: coast at the pace of its recent matches, not at the last
+                # Kalman velocity (a fragment matched in the last frames before an occluder
+                # tilts it, and a long coast amplifies the tilt)
+                v = _recent_velocity(m.history, c.coast_frames)
+                if v is not None:
+                    self.x[t, 4:6] = v
             m.state = TrackState.LOST
             # coast on position only: the size keeps its reference value
             self.x[t, 2:4] = m.ref
@@ -297,6 +318,54 @@ class MultiObjectTracker:
             if m.tsu > self.max_lost or self._outside(boxes[t]):
                 keep[t] = False
         if not keep.all():
+            self._keep(keep)
+
+    def _name_confirmed(self) -> None:
+        """Ids for the tracks confirmed in this update: a lost track's id when one fits (the
+        same person reappearing, whom a tentative track took over first), else a new one.
+
+        A lost track fits a newly confirmed one when its appearance is within
+        ``appearance_gate`` of the new track's, the new track's centre lies within the lost
+        track's search window (``max_distance`` of its diagonal, grown by ``search_growth``
+        per unseen frame) around its prediction, and the new track's height agrees with the
+        lost one's reference height within a third (the new track's own reference still
+        remembers the sliver it was born from). The closest in appearance wins; the lost track is then dropped and the new one
+        continues under its id, with its trajectory and appearance."""
+        new = [i for i, m in enumerate(self.meta) if m.state == TrackState.CONFIRMED and m.tid == 0]
+        if not new:
+            return
+        c = self.cfg
+        lost = [j for j, m in enumerate(self.meta) if m.state == TrackState.LOST]
+        drop: list[int] = []
+        if lost and c.appearance_weight > 0:
+            boxes = self._boxes()
+            for i in new:
+                m = self.meta[i]
+                best, best_d = -1, c.appearance_gate
+                for j in lost:
+                    o = self.meta[j]
+                    if j in drop or m.hist is None or o.hist is None:
+                        continue
+                    if not 0.75 <= boxes[i, 3] / max(o.ref[1], 1e-9) <= 1.33:
+                        continue
+                    window = c.max_distance * (1.0 + c.search_growth * o.tsu)
+                    if center_distance_matrix(boxes[j:j + 1], boxes[i:i + 1])[0, 0] >= window:
+                        continue
+                    d = float(bhattacharyya(o.hist[None], m.hist[None])[0, 0])
+                    if d < best_d:
+                        best, best_d = j, d
+                if best >= 0:
+                    o = self.meta[best]
+                    m.tid = o.tid
+                    m.history.extendleft(reversed(o.history))
+                    m.hist, m.moved, m.origin = o.hist, o.moved or m.moved, o.origin
+                    drop.append(best)
+        for i in new:
+            if self.meta[i].tid == 0:
+                self.meta[i].tid = self._new_id()
+        if drop:
+            keep = np.ones(len(self.meta), bool)
+            keep[drop] = False
             self._keep(keep)
 
     def _spawn(self, rows: np.ndarray, det: np.ndarray, det_scores: np.ndarray,
