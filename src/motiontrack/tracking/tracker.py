@@ -329,8 +329,9 @@ class MultiObjectTracker:
         track's search window (``max_distance`` of its diagonal, grown by ``search_growth``
         per unseen frame) around its prediction, and the new track's height agrees with the
         lost one's reference height within a third (the new track's own reference still
-        remembers the sliver it was born from). The closest in appearance wins; the lost track is then dropped and the new one
-        continues under its id, with its trajectory and appearance."""
+        remembers the sliver it was born from). The closest in appearance wins; the lost track
+        is then dropped and the new one continues under its id, with its trajectory and
+        appearance."""
         new = [i for i, m in enumerate(self.meta) if m.state == TrackState.CONFIRMED and m.tid == 0]
         if not new:
             return
@@ -357,7 +358,8 @@ class MultiObjectTracker:
                 if best >= 0:
                     o = self.meta[best]
                     m.tid = o.tid
-                    m.history.extendleft(reversed(o.history))
+                    # the lost track's trajectory, then the new one's (the newest kept)
+                    m.history = deque([*o.history, *m.history], maxlen=m.history.maxlen)
                     m.hist, m.moved, m.origin = o.hist, o.moved or m.moved, o.origin
                     drop.append(best)
         for i in new:
