@@ -106,6 +106,11 @@ class MultiObjectTracker:
         self.confirmed_earlier: list[tuple[int, Track]] = []
 
     # ------------------------------------------------------------------------------- helpers
+    def _search_window(self, tsu: np.ndarray) -> np.ndarray:
+        """Largest centre distance (in diagonals of the prediction) at which a track unseen for
+        ``tsu`` frames may match: ``max_distance``, grown by ``search_growth`` per unseen frame."""
+        return self.cfg.max_distance * (1.0 + self.cfg.search_growth * tsu)
+
     def _boxes(self) -> np.ndarray:
         return kalman.z_to_box(self.x[:, :4]) if len(self.x) else np.zeros((0, 4))
 
@@ -214,10 +219,8 @@ class MultiObjectTracker:
         that overlap (IoU cost) and split measurements, before the distance rescues and the
         owned (bridge) measurements."""
         c = self.cfg
-        # the search window around an unseen track's prediction grows with the time it is unseen
         tsu = np.array([m.tsu for m in self.meta], np.float64)
-        cost = association_cost(pred, det, c.min_iou, c.max_distance * (1.0 + c.search_growth * tsu),
-                                c.cost)
+        cost = association_cost(pred, det, c.min_iou, self._search_window(tsu), c.cost)
         # IoU costs are below 1, the centre-distance rescue of non-overlapping boxes 1 + distance
         first = cost < 1.0 if c.cost == "iou" else np.ones(cost.shape, bool)
         if det_hist is not None and len(self.meta):
@@ -340,17 +343,18 @@ class MultiObjectTracker:
         drop: list[int] = []
         if lost and c.appearance_weight > 0:
             boxes = self._boxes()
-            for i in new:
+            # (lost, new) centre distances in diagonals of the lost tracks' predictions
+            near = (center_distance_matrix(boxes[lost], boxes[new])
+                    < self._search_window(np.array([self.meta[j].tsu for j in lost],
+                                                   np.float64))[:, None])
+            for b, i in enumerate(new):
                 m = self.meta[i]
                 best, best_d = -1, c.appearance_gate
-                for j in lost:
+                for a, j in enumerate(lost):
                     o = self.meta[j]
-                    if j in drop or m.hist is None or o.hist is None:
+                    if j in drop or m.hist is None or o.hist is None or not near[a, b]:
                         continue
                     if not 0.75 <= boxes[i, 3] / max(o.ref[1], 1e-9) <= 1.33:
-                        continue
-                    window = c.max_distance * (1.0 + c.search_growth * o.tsu)
-                    if center_distance_matrix(boxes[j:j + 1], boxes[i:i + 1])[0, 0] >= window:
                         continue
                     d = float(bhattacharyya(o.hist[None], m.hist[None])[0, 0])
                     if d < best_d:
