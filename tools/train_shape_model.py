@@ -17,7 +17,8 @@ import logging
 import sys
 from pathlib import Path
 
-from motiontrack.people.shape_model import DEFAULT_TRAINING, default_model_path, train_from_synth
+from motiontrack.people.shape_model import default_model_path
+from motiontrack.people.training import DEFAULT_TRAINING, save_model, train_from_synth
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -30,7 +31,7 @@ def main(argv: list[str] | None = None) -> int:
     logging.basicConfig(level=logging.INFO, format="%(message)s")
     model = train_from_synth(DEFAULT_TRAINING, n_control=args.control_points, xi=args.xi,
                              every=args.every)
-    model.save(args.out)
+    save_model(model, args.out)
     print(f"{args.out}: {model.n_control} control points, {model.n_modes} modes "
           f"({model.meta['explained']:.3f} of the variance), {model.meta['samples']} outlines, "
           f"{args.out.stat().st_size} bytes")

@@ -69,7 +69,8 @@ def _seeds(text: str) -> list[int]:
 def cmd_train(args) -> int:
     from pathlib import Path
 
-    from ..people.shape_model import outlines_from_synth, outlines_from_video, train_shape_model
+    from ..people.training import (outlines_from_synth, outlines_from_video, save_model,
+                                   train_shape_model)
 
     if args.control_points < 4:
         raise ConfigError(f"--control-points must be >= 4, got {args.control_points}")
@@ -109,7 +110,7 @@ def cmd_train(args) -> int:
         raise ConfigError(f"found {len(shapes)} usable outline(s) of isolated people; need at least 2 "
                           "(try --every 1, a lower --min-height or more frames)")
     model = train_shape_model(shapes, xi=args.xi, dmax=args.dmax, meta=meta)
-    model.save(out)
+    save_model(model, out)
     print(f"{out}: {model.n_control} control points, {model.n_modes} modes explaining "
           f"{model.meta['explained']:.3f} of the variance, from {len(shapes)} outlines")
     return 0
