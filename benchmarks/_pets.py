@@ -13,7 +13,7 @@ from motiontrack.config import PipelineConfig
 from motiontrack.evaluate.mot import evaluate_tracking
 from motiontrack.io.mot import read_mot
 from motiontrack.io.sources import open_source
-from motiontrack.pipeline import fill_gap_frames, reported, run
+from motiontrack.pipeline import fill_gap_frames, run
 from motiontrack.tracking.gaps import fill_gaps
 from motiontrack.types import Annotations
 
@@ -55,7 +55,7 @@ def score_tracks(video: str, cfg: PipelineConfig, gt: Annotations,
     # the rows `motiontrack track` writes: each frame's tracks and those confirmed in it at their
     # tentative frames (tracker.backfill), then the short gaps filled when the run ends
     rows = [(f + 1, t.id, *t.box.as_array()) for r in run(video, cfg, detections=detections)
-            for f, t in reported(r)]
+            for f, t in r.reported()]
     a = np.array(rows, float).reshape(-1, 6)
     src = open_source(video)
     fps = src.info.fps

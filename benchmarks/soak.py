@@ -1,7 +1,7 @@
 """Soak test: 20,000 synthetic frames through the whole `track` job; memory must stay flat.
 
 A crowd scene is replayed in a loop (people keep entering, crossing and leaving, so tracks are
-born and deleted all the time) through `TrackJob` with the tracks file and summary written as in
+born and deleted all the time) through the `track` job (`motiontrack.run.track_job`) with the tracks file and summary written as in
 `motiontrack track --no-video`. Peak RSS is reported at 1k, 10k and 20k frames; the target is a
 growth under 10% from 1k to 20k frames.
 
@@ -18,7 +18,7 @@ from typing import Iterator
 
 from motiontrack.config import load_config
 from motiontrack.io.sources import Source, SourceInfo
-from motiontrack.pipeline import TrackJob
+from motiontrack.run import track_job
 from motiontrack.synth import make_scene
 from motiontrack.types import Frame
 
@@ -62,7 +62,7 @@ def main() -> None:
 
     cfg = load_config(None, ["output.video=false"])
     with tempfile.TemporaryDirectory() as out:
-        job = TrackJob(LoopedScene(args.frames), cfg, out, force=True)
+        job = track_job(LoopedScene(args.frames), cfg, out, force=True)
         t0 = time.perf_counter()
         summary = job.run(progress=progress)
     first, last = marks[checkpoints[0]], marks[checkpoints[-1]]

@@ -16,7 +16,7 @@ import time
 from pathlib import Path
 
 from motiontrack.config import load_config
-from motiontrack.evaluate.sweep import run_sweep, study_from_args
+from motiontrack.studies.sweep import run_sweep, study_from_args
 
 
 def main() -> None:

@@ -35,7 +35,8 @@ from motiontrack.config import PipelineConfig, load_config
 from motiontrack.evaluate.mot import evaluate_tracking
 from motiontrack.motion import create_detector
 from motiontrack.motion.cleanup import clean_mask
-from motiontrack.pipeline import Pipeline, TrackJob, run
+from motiontrack.pipeline import Pipeline, run
+from motiontrack.run import track_job
 from motiontrack.preprocess import preprocess
 from motiontrack.types import Annotations, Frame
 
@@ -132,7 +133,7 @@ def pipeline_video(video: Path, n: int, cfg: PipelineConfig) -> tuple[float, Non
 
     cfg = replace(cfg, source=replace(cfg.source, max_frames=n))
     with tempfile.TemporaryDirectory() as d:
-        job = TrackJob(str(video), cfg, d, force=True)
+        job = track_job(str(video), cfg, d, force=True)
         t = time.perf_counter()
         s = job.run()
         return s.frames / (time.perf_counter() - t), None

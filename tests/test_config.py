@@ -83,7 +83,8 @@ def test_sections_validate_directly():
     ((160, 120), 1.0),      # never enlarged
 ])
 def test_automatic_processing_scale(size, scale):
-    from motiontrack.preprocess import preprocess, resolve_scale
+    from motiontrack.imaging import resolve_scale
+    from motiontrack.preprocess import preprocess
 
     assert resolve_scale(0.0, *size) == pytest.approx(scale)
     assert resolve_scale(0.3, *size) == 0.3  # an explicit scale is kept
@@ -93,7 +94,7 @@ def test_automatic_processing_scale(size, scale):
 
 
 def test_pixel_window_scales_widens_and_cuts_a_box():
-    from motiontrack.preprocess import pixel_window
+    from motiontrack.imaging import pixel_window
 
     # (10.5, 20, 7, 9) at scale 0.5 is x 5.25..8.75, y 10..14.5: whole pixels 5..9, 10..15
     assert pixel_window((10.5, 20, 7, 9), 0.5, (100, 200)) == (5, 10, 9, 15)
@@ -105,7 +106,7 @@ def test_pixel_window_scales_widens_and_cuts_a_box():
 
 
 def test_to_gray_converts_colour_and_passes_gray_through():
-    from motiontrack.preprocess import to_gray
+    from motiontrack.imaging import to_gray
 
     bgr = np.zeros((4, 5, 3), np.uint8)
     bgr[..., 2] = 200                      # pure red

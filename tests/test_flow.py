@@ -1,5 +1,5 @@
-"""Sparse optical-flow tracking (track/flow.py), dense flow pictures (motion/dense_flow.py) and
-``motiontrack flow``."""
+"""Sparse optical-flow tracking (tracking/flow.py), dense flow (motion/dense_flow.py) and its
+pictures (render/flow.py), the flow jobs and ``motiontrack flow``."""
 
 from __future__ import annotations
 
@@ -11,15 +11,12 @@ import pytest
 from scipy.optimize import linear_sum_assignment
 
 from motiontrack.cli import main
-from motiontrack.config import FarnebackParams
+from motiontrack.config import FarnebackParams, load_config
 from motiontrack.errors import ConfigError
-from motiontrack.motion.dense_flow import (
-    DenseFlow,
-    flow_to_bgr,
-    flow_to_hsv,
-    hue_to_angle,
-    write_flow_videos,
-)
+from motiontrack.io.sources import ArraySource
+from motiontrack.motion.dense_flow import DenseFlow
+from motiontrack.render.flow import flow_to_bgr, flow_to_hsv, hue_to_angle
+from motiontrack.run import dense_flow_job
 from motiontrack.synth import make_scene
 from motiontrack.tracking.association import iou_matrix
 from motiontrack.tracking.flow import SparseFlowParams, SparseFlowTracker, forward_backward_lk
@@ -128,23 +125,32 @@ def test_dense_flow_of_shifted_pair(dx, dy):
     assert mask[30:-30, 30:-30].mean() > 0.9 * 255
 
 
-def test_write_flow_videos(tmp_path):
+def _dense(frames, out, stop=False, **kw):
+    """The dense flow job's summary; ``stop``: a stop request after the first frame."""
+    cfg = load_config(None, ['output.codec="mjpg"', "output.mask_video=true"])
+    job = dense_flow_job(ArraySource(frames, fps=10.0), cfg, out, **kw)
+    try:
+        job.run(should_stop=(lambda: True) if stop else None)
+    except KeyboardInterrupt:
+        assert stop
+    return json.loads((out / "summary.json").read_text())
+
+
+def test_dense_flow_job_writes_flow_and_mask_videos(tmp_path):
     a = _texture(seed=4)
     frames = [cv2.cvtColor(_shift(a, 2 * i, 0), cv2.COLOR_GRAY2BGR) for i in range(6)]
-    stats = write_flow_videos(frames, tmp_path / "flow.avi", 10.0, mask_path=tmp_path / "mask.avi",
-                              codec="mjpg", params=FarnebackParams(), max_magnitude=4.0)
-    assert stats.frames == 6
-    assert stats.mean_magnitude == pytest.approx(2.0, abs=0.3)  # every pixel moves 2 px/frame
-    assert stats.moving_fraction > 0.5
+    stats = _dense(frames, tmp_path / "a", max_magnitude=4.0)
+    assert stats["frames"] == 6 and stats["max_magnitude"] == 4.0
+    assert stats["mean_magnitude"] == pytest.approx(2.0, abs=0.3)  # every pixel moves 2 px/frame
+    assert stats["moving_fraction"] > 0.5
     for name in ("flow.avi", "mask.avi"):
-        cap = cv2.VideoCapture(str(tmp_path / name))
+        cap = cv2.VideoCapture(str(tmp_path / "a" / name))
         assert int(cap.get(cv2.CAP_PROP_FRAME_COUNT)) == 6
         cap.release()
-    stopped = write_flow_videos(frames, tmp_path / "stop.avi", 10.0, codec="mjpg",
-                                should_stop=lambda: True)  # e.g. Ctrl-C after the first frame
-    assert stopped.stopped and stopped.frames == 1 and (tmp_path / "stop.avi").exists()
-    empty = write_flow_videos([], tmp_path / "none.avi", 10.0, codec="mjpg")
-    assert empty.frames == 0 and not (tmp_path / "none.avi").exists()
+    # a stop request after the first frame (Ctrl-C) keeps that frame
+    stopped = _dense(frames, tmp_path / "b", stop=True)
+    assert stopped["interrupted"] and stopped["frames"] == 1
+    assert (tmp_path / "b" / "flow.avi").exists()
 
 
 # --------------------------------------------------------------- sparse-flow object tracking
@@ -224,7 +230,7 @@ def test_flow_cli_dense(tmp_path):
     assert main(["flow", "synth:runner", "--mode", "dense", "--start", "20", "--max-frames", "8",
                  "--codec", "mjpg", "--mask-video", "--max-magnitude", "8", "-o", str(out)]) == 0
     summary = json.loads((out / "summary.json").read_text())
-    assert summary["frames"] == 8 and summary["max_magnitude"] > 0
+    assert summary["frames"] == 8 and summary["peak_magnitude"] > 0
     assert 0 < summary["moving_fraction"] < 0.2  # one runner moves, the floor does not
     assert (out / "flow.avi").stat().st_size > 0 and (out / "mask.avi").stat().st_size > 0
 

@@ -161,7 +161,7 @@ def _auto_split(mask: np.ndarray, settings: list[str] = ()) -> list[list[Region]
     the same mask (the scene gate is a running mean over frames)."""
     from motiontrack.config import load_config
     from motiontrack.pipeline import Pipeline
-    from motiontrack.regions import find_regions
+    from motiontrack.motion.regions import find_regions
 
     cfg = load_config(None, list(settings))
     pipe = Pipeline(cfg, (mask.shape[1], mask.shape[0]))

@@ -9,9 +9,9 @@ import pytest
 
 from motiontrack.config import load_config
 from motiontrack.errors import ConfigError
-from motiontrack.evaluate.sweep import run_sweep, study_from_args
+from motiontrack.studies.sweep import run_sweep, study_from_args
 from motiontrack.io.sources import ArraySource
-from motiontrack.overlay import GT_COLOR, PALETTE, draw_overlay, render_overlay
+from motiontrack.render.overlay import GT_COLOR, PALETTE, draw_overlay, render_overlay
 from motiontrack.types import Annotations
 
 

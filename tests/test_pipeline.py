@@ -301,16 +301,16 @@ def test_head_splitting_without_shapes_keeps_detection_in_its_worker_thread():
 
 def test_track_job_keeps_the_shapes_in_order_with_detection(tmp_path):
     # The shape tracker reads the detector's background image after each frame: the CLI's job
-    # must not run detection of the next frame meanwhile. Until session 9 TrackJob reset the
-    # pipeline to threaded mode unless the background stream was saved, so `--preset people`
-    # read a model being updated in another thread (its scores on PETS varied from run to run,
-    # HOTA 0.569-0.597, and differed from `run`). It writes what `run` yields.
-    from motiontrack.pipeline import TrackJob, run
+    # must not run detection of the next frame meanwhile (in threaded mode `--preset people`
+    # reads a model being updated in another thread, and its scores vary from run to run). It
+    # writes what `run` yields.
+    from motiontrack.pipeline import run
+    from motiontrack.run import track_job
 
     cfg = load_config(None, ["people.enabled=true", "output.video=false"])
     spec = "synth:crossing?n_frames=60"
-    job = TrackJob(spec, cfg, tmp_path / "out")
-    assert job.pipe.sequential is True
+    job = track_job(spec, cfg, tmp_path / "out")
+    assert job.processor.pipe.sequential is True
     job.run()
     written = np.loadtxt(tmp_path / "out" / "tracks.txt", delimiter=",", ndmin=2)[:, :6]
     expected = np.array([(r.index + 1, t.id, *t.box.as_array()) for r in run(spec, cfg)
@@ -318,9 +318,9 @@ def test_track_job_keeps_the_shapes_in_order_with_detection(tmp_path):
     np.testing.assert_allclose(written, expected, atol=0.006)   # tracks.txt keeps 2 decimals
     no_shapes = load_config(None, ["people.enabled=true", "people.shapes=false",
                                    "output.video=false"])
-    assert TrackJob(spec, no_shapes, tmp_path / "out2").pipe.sequential is False
-    saving = TrackJob(spec, no_shapes, tmp_path / "out3", save=["background"])
-    assert saving.pipe.sequential is True
+    assert track_job(spec, no_shapes, tmp_path / "out2").processor.pipe.sequential is False
+    saving = track_job(spec, no_shapes, tmp_path / "out3", save=["background"])
+    assert saving.processor.pipe.sequential is True
 
 
 @pytest.mark.parametrize("border_rule", [True, False])

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from motiontrack.config import RegionsConfig
-from motiontrack.regions import components, filter_regions, find_regions, merge_distance, merge_regions
+from motiontrack.motion.regions import components, filter_regions, find_regions, merge_distance, merge_regions
 from motiontrack.types import Box, Region
 
 
@@ -120,7 +120,7 @@ def test_find_regions_drops_specks_then_merges():
 def test_contour_and_labelled_components_agree():
     # two L-shapes whose boxes overlap (the contour path must not count the other's pixels),
     # a ring (hole) and scattered blobs; compared with full labelling
-    from motiontrack.regions import _components_labelled
+    from motiontrack.motion.regions import _components_labelled
 
     m = np.zeros((60, 80), np.uint8)
     m[5:30, 5:10] = 255

@@ -134,7 +134,7 @@ def test_stream_failing_midway_keeps_outputs_and_fails(tmp_path, capsys):
     from motiontrack.config import load_config
     from motiontrack.errors import SourceError
     from motiontrack.io.sources import LiveSource
-    from motiontrack.pipeline import TrackJob
+    from motiontrack.run import track_job
 
     class Cam:
         def __init__(self, ok):
@@ -157,7 +157,7 @@ def test_stream_failing_midway_keeps_outputs_and_fails(tmp_path, capsys):
     src = LiveSource(0, reconnect_attempts=2, backoff=0.0, opener=lambda t: Cam(next(opens)),
                      sleep=lambda s: None, clock=itertools.count().__next__)
     out = tmp_path / "o"
-    job = TrackJob(src, load_config(None, ['output.codec="mjpg"']), out)
+    job = track_job(src, load_config(None, ['output.codec="mjpg"']), out)
     with pytest.raises(SourceError, match="failed after 12 frames"):
         job.run()
     summary = json.loads((out / "summary.json").read_text())
@@ -199,7 +199,8 @@ def test_more_commands_bad_input(files, capsys, line, words):
 
 
 def test_run_outcome_records_then_reraises():
-    from motiontrack.errors import RunOutcome, SourceError
+    from motiontrack.errors import SourceError
+    from motiontrack.run import RunOutcome
 
     with RunOutcome() as ok:
         pass

@@ -109,7 +109,7 @@ def test_people_stage_end_to_end_on_the_walker(walker):
     bg = scene.background
     stage = PeopleStage(PeopleConfig(enabled=True))
     mask = scene.foreground_mask(first)
-    from motiontrack.regions import components
+    from motiontrack.motion.regions import components
 
     regions = components(mask)
     tracks = [_track(1, gt.at(first + 1).boxes[0])]
@@ -157,13 +157,13 @@ def test_people_config_validates():
 
 
 def test_draw_people_marks_outlines_heads_normals_and_hypotheses(walker):
-    from motiontrack.people.draw import draw_people
+    from motiontrack.render.people import draw_people
 
     scene, gt, first = walker
     bg = scene.background
     stage = PeopleStage(PeopleConfig(enabled=True))
     mask = scene.foreground_mask(first)
-    from motiontrack.regions import components
+    from motiontrack.motion.regions import components
 
     img = scene.frame(first)
     _, extras = stage.process(img, bg, mask, components(mask), [_track(1, gt.at(first + 1).boxes[0])])

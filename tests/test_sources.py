@@ -9,8 +9,9 @@ import numpy as np
 import pytest
 
 from motiontrack.errors import SourceError
-from motiontrack.io.sources import (ArraySource, ImageSequenceSource, LiveSource, SyntheticSource,
-                                    VideoFileSource, open_source, prefetch)
+from motiontrack.io.sources import (ArraySource, ImageSequenceSource, LiveSource, VideoFileSource,
+                                    open_source, prefetch)
+from motiontrack.synth import SyntheticSource
 
 
 @pytest.mark.parametrize("content, message", [

@@ -9,7 +9,7 @@ import pytest
 
 from motiontrack.config import PipelineConfig, load_config
 from motiontrack.errors import ConfigError, InputError
-from motiontrack.evaluate.sweep import (
+from motiontrack.studies.sweep import (
     SequenceSpec, Study, load_study, parse_param, read_manifest, read_table, run_sweep,
     study_from_args, summarise_runs, write_table,
 )
@@ -237,7 +237,7 @@ def test_cli_errors_are_one_line(argv, message, capsys, tmp_path, monkeypatch):
     ("", ()),
 ])
 def test_parse_streams(text, expected):
-    from motiontrack.intermediate import parse_streams
+    from motiontrack.render.streams import parse_streams
 
     assert parse_streams(text) == expected
 
@@ -245,7 +245,7 @@ def test_parse_streams(text, expected):
 def test_stream_images():
     import numpy as np
 
-    from motiontrack.intermediate import parse_streams, stream_image
+    from motiontrack.render.streams import parse_streams, stream_image
     from motiontrack.types import FrameResult
 
     raw = np.zeros((4, 6), np.uint8)
@@ -254,35 +254,27 @@ def test_stream_images():
     res = FrameResult(index=0, timestamp=0.0, frame=np.zeros((8, 12, 3), np.uint8), mask=mask,
                       regions=(), tracks=(), extras={"raw_mask": raw})
 
-    class NoBackground:
-        def background(self):
-            return None
-
-    class Background:
-        def background(self):
-            return np.full((4, 6), 7, np.uint8)
-
     assert (stream_image("difference", res) == raw).all()
     assert (stream_image("motion", res) == mask).all()
-    assert stream_image("background", res, NoBackground()).shape == (4, 6)       # black frame
-    assert stream_image("background", res, NoBackground()).max() == 0
-    assert stream_image("background", res, Background()).max() == 7
+    assert stream_image("background", res, None).shape == (4, 6)       # no model: black frame
+    assert stream_image("background", res, None).max() == 0
+    assert stream_image("background", res, np.full((4, 6), 7, np.uint8)).max() == 7
     assert stream_image("annotated", res).shape == (8, 12, 3)
     with pytest.raises(ConfigError, match="valid"):
         parse_streams("colour")
 
 
 def test_intermediate_writer_with_the_pipeline(tmp_path):
-    from motiontrack.intermediate import IntermediateWriter
-    from motiontrack.io.sources import open_source
-    from motiontrack.pipeline import Pipeline
+    from motiontrack.pipeline import open_configured_source
+    from motiontrack.run import Job
+    from motiontrack.run.processors import TrackProcessor
+    from motiontrack.run.writers import IntermediateWriter
 
     cfg = load_config(None, ["motion.method=median"])
-    src = open_source("synth:walker?n_frames=12")
-    pipe = Pipeline(cfg, (src.info.width, src.info.height))
-    with IntermediateWriter(tmp_path, ("background", "difference", "motion"), 10, "mjpg") as w:
-        for frame in src:
-            w.write(pipe.process(frame), pipe.detector)
+    src = open_configured_source("synth:walker?n_frames=12", cfg.source)
+    streams = ("background", "difference", "motion")
+    proc = TrackProcessor(cfg, src.info, needs_background=True)
+    Job(src, proc, [IntermediateWriter(tmp_path, streams, "mjpg")], tmp_path).run()
     for s in ("background", "difference", "motion"):
         assert (tmp_path / f"{s}.avi").stat().st_size > 0
     import cv2
@@ -298,7 +290,7 @@ def test_intermediate_writer_with_the_pipeline(tmp_path):
 def test_interrupted_sweep_keeps_finished_runs(tmp_path, monkeypatch, capsys):
     import json as _json
 
-    import motiontrack.evaluate.sweep as sw
+    import motiontrack.studies.sweep as sw
     from motiontrack.cli import main
 
     real = sw.execute_run

@@ -6,8 +6,8 @@ import pytest
 
 from motiontrack.config import load_config
 from motiontrack.errors import ConfigError
-from motiontrack.evaluate.sweep import SequenceSpec
-from motiontrack.evaluate.tune import SearchParam, parse_space
+from motiontrack.studies.sweep import SequenceSpec
+from motiontrack.studies.tune import SearchParam, parse_space
 
 optuna = pytest.importorskip("optuna", reason="optuna not installed (pip install optuna)")
 
@@ -36,7 +36,7 @@ SPACE = (parse_space("motion.median.threshold=0.02:0.45"),)
 
 @pytest.fixture(scope="module")
 def tuned():
-    from motiontrack.evaluate.tune import tune
+    from motiontrack.studies.tune import tune
 
     base = load_config(None, ["motion.method=median"])
     return [tune(TRAIN, VAL, SPACE, base, metric="det_object_f1", n_trials=4, seed=3)
@@ -54,7 +54,7 @@ def test_tune_is_deterministic_and_scores_validation(tuned):
 
 
 def test_best_config_loads_with_track_config(tuned, tmp_path):
-    from motiontrack.evaluate.tune import write_tune_outputs
+    from motiontrack.studies.tune import write_tune_outputs
 
     paths = write_tune_outputs(tuned[0], tmp_path)
     cfg = load_config(paths["config"])
@@ -63,7 +63,7 @@ def test_best_config_loads_with_track_config(tuned, tmp_path):
 
 
 def test_unknown_metric_is_a_config_error():
-    from motiontrack.evaluate.tune import tune
+    from motiontrack.studies.tune import tune
 
     with pytest.raises(ConfigError, match="unknown metric"):
         tune(TRAIN, (), SPACE, load_config(None, ["motion.method=median"]), metric="nope", n_trials=1)

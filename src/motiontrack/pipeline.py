@@ -1,44 +1,40 @@
 """The pipeline: the only module that knows the stage order.
 
-    source → preprocess → motion (mask) → clean-up → regions → tracker → FrameResult
+    source → preprocess → motion (mask) → clean-up → regions → [people] → tracker → FrameResult
 
-:func:`run` yields one :class:`~motiontrack.types.FrameResult` per frame (the Python API).
-:class:`TrackJob` drives :func:`run` and writes the outputs of ``motiontrack track`` (annotated
-video, mask video, ``tracks.txt``, ``summary.json``, resolved ``config.toml``); it finalises every
-output with what was processed so far when the run is interrupted.
+:class:`Pipeline` holds every stage's state and processes frames; :func:`run` is the Python API
+(:func:`motiontrack.track`): a :class:`TrackRun` that yields one
+:class:`~motiontrack.types.FrameResult` per frame. Writing outputs is the run layer's work
+(:mod:`motiontrack.run`).
 """
 
 from __future__ import annotations
 
-import json
+import atexit
 import logging
 import statistics
-import time
-from dataclasses import dataclass, field, replace
+import weakref
+from dataclasses import replace
 from pathlib import Path
-from typing import Any, Callable, Iterable, Iterator
+from typing import Any, Iterable, Iterator
 
 import numpy as np
 
-from .annotate import annotate_frame
-from .config import PipelineConfig, load_config, save_config
-from .errors import RunOutcome
-from .intermediate import IntermediateWriter, parse_streams
-from .io.atomic import atomic_open, atomic_write_text, check_writable
-from .io.mot import format_mot_rows, read_mot, write_mot
+from . import synth as _synth  # noqa: F401  (registers the synth: sources)
+from .config import PipelineConfig, SourceConfig, load_config
 from .io.sources import Source, open_source, prefetch
-from .io.video import VideoSink, extension_for
 from .motion import create_detector
 from .motion.cleanup import clean_mask
-from .preprocess import load_roi, pixel_window, preprocess, resolve_scale, scaled_size
-from .regions import find_regions
+from .imaging import pixel_window, resolve_scale, scaled_size
+from .preprocess import load_roi, preprocess
+from .motion.regions import find_regions
 from .tracking.tracker import TRACKERS
-from .types import Annotations, Box, Frame, FrameResult, Region, Track
+from .types import Annotations, Box, Frame, FrameResult, Region
 
 log = logging.getLogger(__name__)
 
-__all__ = ["Pipeline", "run", "TrackJob", "JobSummary", "resolve_config", "completes_tracks",
-           "fill_gap_frames", "reported"]
+__all__ = ["Pipeline", "run", "TrackRun", "resolve_config", "completes_tracks",
+           "fill_gap_frames", "open_configured_source"]
 
 
 #: ``people.auto_split``: weight of each frame's median region height/width in the scene's
@@ -77,18 +73,12 @@ def completes_tracks(cfg: PipelineConfig, external: bool) -> bool:
 
 
 def fill_gap_frames(cfg: PipelineConfig, fps: float | None, external: bool) -> int:
-    """Longest gap (frames) of a track that :class:`TrackJob` fills by interpolation in
+    """Longest gap (frames) of a track that the tracks writer fills by interpolation in
     ``tracks.txt`` (0 = none): ``tracker.fill_gaps_s`` at the source's frame rate (25 fps when
     unknown), when :func:`completes_tracks`. See :func:`motiontrack.tracking.gaps.fill_gaps`."""
     if not completes_tracks(cfg, external):
         return 0
     return int(round(cfg.tracker.fill_gaps_s * (fps or 25.0)))
-
-
-def reported(res: FrameResult) -> list[tuple[int, Track]]:
-    """``(frame index, track)`` rows one frame adds to the tracks file: its tracks, then the
-    tracks confirmed in it at their earlier, tentative frames (:attr:`FrameResult.earlier`)."""
-    return [*((res.index, t) for t in res.tracks), *res.earlier]
 
 
 class Pipeline:
@@ -334,258 +324,69 @@ class Pipeline:
                 close()
 
 
-def run(source: Any, config: PipelineConfig | str | Path | None = None,
-        detections: Annotations | None = None) -> Iterator[FrameResult]:
-    """Yield a :class:`FrameResult` for every frame of ``source`` (see :func:`open_source`)."""
-    cfg = resolve_config(config)
-    src = open_configured_source(source, cfg)
-    pipe = Pipeline(cfg, (src.info.width, src.info.height), detections, src.info.fps)
-    try:
-        yield from pipe.results(src)
-    finally:
-        src.close()
+class TrackRun:
+    """The frames of one source through a :class:`Pipeline`: an iterator of
+    :class:`FrameResult` that owns the source and the pipeline's threads.
 
-
-def open_configured_source(source: Any, cfg: PipelineConfig) -> Source:
-    """Open ``source`` with the start/length and live-reconnection settings of ``cfg``."""
-    if isinstance(source, Source):
-        return source
-    sc = cfg.source
-    return open_source(source, sc.start, sc.max_frames, reconnect_attempts=sc.reconnect_attempts,
-                       backoff=sc.reconnect_backoff, backoff_max=sc.reconnect_backoff_max)
-
-
-# ------------------------------------------------------------------------------------ the job
-@dataclass
-class JobSummary:
-    """What ``summary.json`` holds."""
-
-    source: str
-    width: int
-    height: int
-    source_fps: float | None
-    frames: int = 0
-    seconds: float = 0.0
-    tracks: int = 0
-    status: str = "complete"
-    interrupted: bool = False
-    truncated: bool = False
-    outputs: dict[str, str] = field(default_factory=dict)
-    accuracy: dict[str, float] | None = None
-    extra: dict[str, Any] = field(default_factory=dict)
-
-    @property
-    def fps(self) -> float:
-        return self.frames / self.seconds if self.seconds > 0 else 0.0
-
-    def as_dict(self) -> dict[str, Any]:
-        d = {
-            "source": self.source, "width": self.width, "height": self.height,
-            "source_fps": self.source_fps, "frames": self.frames,
-            "seconds": round(self.seconds, 3), "fps": round(self.fps, 2), "tracks": self.tracks,
-            "status": self.status, "interrupted": self.interrupted, "truncated": self.truncated,
-            "outputs": self.outputs,
-        }
-        if self.accuracy is not None:
-            d["accuracy"] = self.accuracy
-        d.update(self.extra)
-        return d
-
-
-class TrackJob:
-    """``motiontrack track``: run the pipeline on a source and write every output to ``out_dir``.
-
-    Outputs are streamed to temporary files and renamed into place when the job ends, whether it
-    finishes, the source fails mid-way, or the user interrupts (then ``summary.json`` says
-    ``"interrupted": true``).
+    Use it as a context manager or call :meth:`close` when done early; a run left open is closed
+    when it is garbage-collected or, at the latest, when the interpreter exits, so the decoding
+    and detection threads never outlive it.
     """
 
-    def __init__(self, source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: bool = False,
-                 gt: Annotations | None = None, detections: Annotations | None = None,
-                 show: Callable[[np.ndarray], bool] | None = None, save: Iterable[str] = ()) -> None:
-        self.cfg = cfg
-        self.out = Path(out_dir)
-        self.src = open_configured_source(source, cfg)
-        self.gt = gt
-        if self.gt is None and hasattr(self.src, "ground_truth"):
-            self.gt = self.src.ground_truth()
-        self.detections = detections
-        self.show = show
-        self.paths = {
-            "tracks": self.out / "tracks.txt",
-            "summary": self.out / "summary.json",
-            "config": self.out / "config.toml",
-        }
-        if cfg.output.video:
-            self.paths["video"] = self.out / f"annotated{extension_for(cfg.output.codec)}"
-        if cfg.output.mask_video:
-            self.paths["mask_video"] = self.out / f"mask{extension_for(cfg.output.codec)}"
-        if self.gt is not None:
-            self.paths["gt"] = self.out / "gt.txt"
-        self.save = parse_streams(save)
-        self.backfilled = 0   # rows written at a track's tentative frames (FrameResult.earlier)
-        for stream in self.save:
-            self.paths[stream] = self.out / f"{stream}{extension_for(cfg.output.codec)}"
-        check_writable(list(self.paths.values()), force)
-        self.camera = None
-        if cfg.measure.camera:
-            from .calibrate import load_camera
+    def __init__(self, source: Any, config: PipelineConfig | str | Path | None = None,
+                 detections: Annotations | None = None) -> None:
+        cfg = resolve_config(config)
+        self.source = open_configured_source(source, cfg.source)
+        try:
+            self.pipeline = Pipeline(cfg, (self.source.info.width, self.source.info.height),
+                                     detections, self.source.info.fps)
+        except BaseException:
+            self.source.close()
+            raise
+        self._results = self.pipeline.results(self.source)
+        _OPEN_RUNS.add(self)
 
-            self.camera = load_camera(cfg.measure.camera)
-        # build every stage now: a bad plug-in name or ROI fails before anything is written
-        self.pipe = Pipeline(cfg, (self.src.info.width, self.src.info.height), detections,
-                             self.src.info.fps)
-        # saving the background reads the detector's model after each frame, as the people
-        # stage's shapes and HOG do: detection of the next frame must not run meanwhile
-        self.pipe.sequential = self.pipe.sequential or "background" in self.save
+    def __iter__(self) -> "TrackRun":
+        return self
 
-    def expected_frames(self) -> int | None:
-        return self.src.expected_frames()
+    def __next__(self) -> FrameResult:
+        return next(self._results)
 
-    def run(self, progress: Callable[[int], None] | None = None,
-            should_stop: Callable[[], bool] | None = None) -> JobSummary:
-        """Process the source and write the outputs.
+    def close(self) -> None:
+        """Stop the threads and close the source (safe to call more than once)."""
+        _OPEN_RUNS.discard(self)
+        try:
+            self._results.close()
+        finally:
+            self.source.close()
 
-        ``should_stop`` is polled after each complete frame (the CLI's signal handlers set it), so
-        an interruption never splits a frame between the outputs. A ``KeyboardInterrupt`` raised
-        mid-frame is handled too. Either way the outputs are finalised, ``summary.json`` records
-        ``"interrupted": true``, and ``KeyboardInterrupt`` is re-raised. A live source that fails
-        for good (:class:`SourceError`) is handled the same way and its error re-raised.
-        """
-        cfg, info = self.cfg, self.src.info
-        self.out.mkdir(parents=True, exist_ok=True)
-        save_config(cfg, self.paths["config"])
-        fps = info.fps or 25.0
-        summary = JobSummary(source=info.name, width=info.width, height=info.height, source_fps=info.fps)
-        if self.detections is None:
-            # the scale detection ran at (``preprocess.scale = 0`` is resolved per frame size)
-            summary.extra["processing_scale"] = round(self.pipe.scale, 4)
-            log.info("processing at scale %.3g (%dx%d)", self.pipe.scale,
-                     *scaled_size(info.width, info.height, self.pipe.scale))
-        video = VideoSink(self.paths["video"], fps, cfg.output.codec) if "video" in self.paths else None
-        mask_video = (VideoSink(self.paths["mask_video"], fps, cfg.output.codec)
-                      if "mask_video" in self.paths else None)
-        inter = IntermediateWriter(self.out, self.save, fps, cfg.output.codec) if self.save else None
-        ids: set[int] = set()
-        t0 = time.perf_counter()
-        pipe = self.pipe
+    def __enter__(self) -> "TrackRun":
+        return self
 
-        with atomic_open(self.paths["tracks"]) as tracks_fh:
-            try:
-                with RunOutcome() as outcome:
-                    for res in pipe.results(self.src):
-                        if not self._write_frame(res, tracks_fh, video, mask_video, inter, ids):
-                            summary.status = "stopped by user"
-                            break
-                        summary.frames += 1
-                        if progress is not None:
-                            progress(1)
-                        if should_stop is not None and should_stop():
-                            raise KeyboardInterrupt
-            finally:
-                summary.seconds = time.perf_counter() - t0
-                for sink in (video, mask_video, inter):
-                    if sink is not None:
-                        sink.close()
-        if outcome.status != "complete":
-            log.warning("%s after %d frames; writing what was processed", outcome.status,
-                        summary.frames)
-            summary.status = outcome.status
-        summary.interrupted = outcome.interrupted
-        summary.truncated = summary.truncated or self.src.truncated or outcome.failed
-        summary.tracks = len(ids)
-        summary.outputs = {k: str(v) for k, v in self.paths.items()
-                           if v.exists() or k == "summary"}
-        complete = completes_tracks(cfg, self.detections is not None)
-        if complete or self.camera is not None or self.gt is not None:
-            # read the run back from its tracks file: nothing accumulates in memory per frame
-            pred = read_mot(self.paths["tracks"], kind="results")
-            if complete:
-                pred = self._complete_tracks(pred, summary)
-            if self.camera is not None:
-                from .calibrate import track_measurements
-
-                summary.extra["measurements"] = {
-                    str(k): v for k, v in track_measurements(pred.frames, pred.ids, pred.boxes,
-                                                             self.camera, fps).items()}
-            if self.gt is not None:
-                summary.accuracy = score_run(self.gt, pred, summary.frames, self.src)
-                write_mot(self.gt, self.paths["gt"], kind="gt")
-                summary.outputs["gt"] = str(self.paths["gt"])
-        atomic_write_text(self.paths["summary"], json.dumps(summary.as_dict(), indent=2) + "\n")
-        outcome.reraise()  # everything is written; an interrupt or a failed source still surfaces
-        return summary
-
-    def _complete_tracks(self, pred: Annotations, summary: JobSummary) -> Annotations:
-        """Rewrite ``tracks.txt`` (atomically) sorted by frame, then id, with each track's short
-        gaps filled by interpolation (:func:`fill_gap_frames`); the filled rows get their world
-        position from the camera. The tentative frames (:attr:`backfilled`) are in it already."""
-        from .tracking.gaps import fill_gaps
-
-        max_gap = fill_gap_frames(self.cfg, self.src.info.fps, self.detections is not None)
-        filled = fill_gaps(pred, max_gap)
-        summary.extra["backfilled_rows"] = self.backfilled
-        summary.extra["filled_rows"] = len(filled) - len(pred)
-        if self.camera is not None:
-            new = (filled.world == -1.0).all(axis=1)
-            filled.world[new] = self._world(filled.boxes[new])
-        write_mot(filled, self.paths["tracks"], kind="results")   # sorted by frame, then id
-        log.info("tracks.txt: %d rows at tentative frames, %d filled in gaps of up to %d frames",
-                 self.backfilled, len(filled) - len(pred), max_gap)
-        return filled
-
-    def _world(self, boxes: np.ndarray) -> np.ndarray:
-        """Ground-plane positions ``(x, y, 0)`` in metres of the boxes' foot points."""
-        from .calibrate import world_positions
-
-        return np.column_stack([world_positions(boxes, self.camera), np.zeros(len(boxes))])
-
-    def _write_frame(self, res: FrameResult, tracks_fh, video: VideoSink | None,
-                     mask_video: VideoSink | None, inter: IntermediateWriter | None,
-                     ids: set[int]) -> bool:
-        """Append one frame to every output; False when the live viewer asked to stop."""
-        cfg = self.cfg
-        # tracks confirmed now are also written at their tentative frames: out of frame order
-        # until the file is rewritten sorted when the run ends
-        rows = reported(res)
-        self.backfilled += len(res.earlier)
-        if rows:
-            boxes = np.array([t.box.as_array() for _, t in rows])
-            tid = [t.id for _, t in rows]
-            world = self._world(boxes) if self.camera is not None else None
-            tracks_fh.write(format_mot_rows([f + 1 for f, _ in rows], tid, boxes,
-                                            [t.score for _, t in rows], world))
-            ids.update(tid)
-        if video is not None or self.show is not None:
-            img = annotate_frame(res.frame, res.tracks, res.regions, res.mask, cfg.output.trail,
-                                 cfg.output.mask_inset, text=f"frame {res.index}")
-            if self.pipe.people is not None:
-                from .people.draw import draw_people
-
-                draw_people(img, res.extras, inplace=True)
-            if video is not None:
-                video.write(img)
-            if self.show is not None and not self.show(img):
-                return False
-        if mask_video is not None and res.mask is not None:
-            mask_video.write(res.mask)
-        if inter is not None:
-            inter.write(res, self.pipe.detector)
-        return True
+    def __exit__(self, *exc: Any) -> None:
+        self.close()
 
 
-def score_run(gt: Annotations, pred: Annotations, frames: int, src: Source) -> dict[str, float]:
-    """Accuracy of a run against ground truth restricted to the processed frames."""
-    from .evaluate.mot import evaluate_tracking
+#: runs not closed yet: closed at interpreter exit, while their threads can still be joined
+_OPEN_RUNS: "weakref.WeakSet[TrackRun]" = weakref.WeakSet()
 
-    start = getattr(src, "start", 0)
-    lo, hi = start + 1, start + frames
-    gt = gt.select((gt.frames >= lo) & (gt.frames <= hi))
-    # rows with consider = 0 (occluded synthetic people, PETS people outside the area) are
-    # ignore regions: a box on them is neither a hit nor a false positive
-    res = evaluate_tracking(gt, pred, ignore_zero_marked=True)
-    keys = ("HOTA", "MOTA", "IDF1", "MOTP", "DetA", "AssA", "IDSW", "TP", "FP", "FN")
-    out = {k: float(res[k]) for k in keys if k in res}
-    out["recall"] = float(res.get("recall", 0.0))   # CLEAR's CLR_Re and CLR_Pr
-    out["precision"] = float(res.get("precision", 0.0))
-    return out
+
+@atexit.register
+def _close_open_runs() -> None:
+    for r in list(_OPEN_RUNS):
+        r.close()
+
+
+def run(source: Any, config: PipelineConfig | str | Path | None = None,
+        detections: Annotations | None = None) -> TrackRun:
+    """A :class:`TrackRun` over every frame of ``source`` (see :func:`open_source`)."""
+    return TrackRun(source, config, detections)
+
+
+def open_configured_source(source: Any, sc: SourceConfig) -> Source:
+    """Open ``source`` with the start/length and live-reconnection settings ``sc``
+    (``PipelineConfig.source``); a :class:`Source` is returned as it is."""
+    if isinstance(source, Source):
+        return source
+    return open_source(source, sc.start, sc.max_frames, reconnect_attempts=sc.reconnect_attempts,
+                       backoff=sc.reconnect_backoff, backoff_max=sc.reconnect_backoff_max)

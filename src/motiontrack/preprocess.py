@@ -2,56 +2,16 @@
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
-from typing import Sequence
 
 import cv2
 import numpy as np
 
 from .config import PreprocessConfig
 from .errors import InputError
+from .imaging import resolve_scale, scaled_size
 
-__all__ = ["preprocess", "to_gray", "pixel_window", "load_roi", "scaled_size", "resolve_scale",
-           "AUTO_PIXELS", "AUTO_MIN_SCALE"]
-
-#: automatic processing scale: about this many pixels are processed (384 x 288) ...
-AUTO_PIXELS = 384 * 288
-#: ... but frames are never reduced below half size (768 x 576 and larger frames get 0.5)
-AUTO_MIN_SCALE = 0.5
-
-
-def resolve_scale(scale: float, width: int, height: int) -> float:
-    """The processing scale for frames of ``width`` x ``height``: ``scale`` itself, or when it is
-    0 (automatic) ``min(1, max(0.5, sqrt(384*288 / (width*height))))`` — half size for PETS-sized
-    and larger frames, up to full size for small ones (a 320x240 frame at half size leaves
-    cars a few pixels wide)."""
-    if scale > 0:
-        return float(scale)
-    area = max(1, int(width) * int(height))
-    return float(min(1.0, max(AUTO_MIN_SCALE, (AUTO_PIXELS / area) ** 0.5)))
-
-
-def scaled_size(width: int, height: int, scale: float) -> tuple[int, int]:
-    """Processing size ``(w, h)`` for ``scale`` (at least 1 px each way)."""
-    return max(1, int(round(width * scale))), max(1, int(round(height * scale)))
-
-
-def pixel_window(box: Sequence[float] | np.ndarray, scale: float, shape: tuple[int, ...], margin: int = 0
-                 ) -> tuple[int, int, int, int]:
-    """The pixels ``(x1, y1, x2, y2)`` (end exclusive) that a box ``x, y, w, h`` in original-frame
-    pixels covers in an image of ``shape`` (h, w, ...) at processing scale ``scale``: the scaled
-    box widened to whole pixels, plus ``margin`` pixels on each side, cut to the image (empty
-    when ``x2 <= x1`` or ``y2 <= y1``)."""
-    x, y, bw, bh = (float(v) * scale for v in box)
-    h, w = shape[:2]
-    return (max(0, int(x) - margin), max(0, int(y) - margin),
-            min(w, math.ceil(x + bw) + margin), min(h, math.ceil(y + bh) + margin))
-
-
-def to_gray(image: np.ndarray) -> np.ndarray:
-    """A BGR image in gray; a gray (2-D) image as it is (not copied)."""
-    return cv2.cvtColor(image, cv2.COLOR_BGR2GRAY) if image.ndim == 3 else image
+__all__ = ["preprocess", "load_roi"]
 
 
 def preprocess(image: np.ndarray, cfg: PreprocessConfig) -> np.ndarray:

@@ -202,6 +202,11 @@ class FrameResult:
     extras: Mapping[str, object] = field(default_factory=dict, repr=False)
     earlier: tuple[tuple[int, Track], ...] = field(default=(), repr=False)
 
+    def reported(self) -> list[tuple[int, Track]]:
+        """``(frame index, track)`` rows this frame adds to a tracks file: its tracks, then the
+        tracks confirmed in it at their earlier, tentative frames (:attr:`earlier`)."""
+        return [*((self.index, t) for t in self.tracks), *self.earlier]
+
 
 #: frame numbers, ids and classes are int64 columns: readers refuse values at or beyond this
 INT_LIMIT = 2**62

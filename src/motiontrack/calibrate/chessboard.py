@@ -25,7 +25,7 @@ import numpy as np
 
 from ..errors import ConfigError, InputError
 from ..io.atomic import commit_temp, temp_path_for
-from ..preprocess import to_gray
+from ..imaging import to_gray
 from .tsai import _as_pixels, _as_world, _intersect_plane
 
 log = logging.getLogger(__name__)

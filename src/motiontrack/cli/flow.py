@@ -10,12 +10,8 @@
 from __future__ import annotations
 
 import argparse
-import json
 import logging
-import time
-from dataclasses import asdict, fields
-from pathlib import Path
-from typing import Any
+from dataclasses import fields
 
 log = logging.getLogger("motiontrack")
 
@@ -77,174 +73,50 @@ def _config(args):
     from ..config import load_config
     from ._common import run_overrides
 
-    return load_config(args.config, run_overrides(args))
+    overrides = run_overrides(args)
+    if args.no_video:
+        overrides.append("output.video=false")
+    if args.mask_video:
+        overrides.append("output.mask_video=true")
+    return load_config(args.config, overrides)
 
 
 def cmd_flow(args) -> int:
     from ..errors import ConfigError
+    from ..run import dense_flow_job, sparse_flow_job
+    from ._common import frame_loop, read_gt
 
     cfg = _config(args)
     if args.max_magnitude is not None and not args.max_magnitude > 0:
         raise ConfigError(f"--max-magnitude must be > 0, got {args.max_magnitude}")
-    params = sparse_params(args.params) if args.mode == "sparse" else None
-    if args.mode == "dense" and args.params:
-        raise ConfigError("--param applies to --mode sparse; dense flow takes "
-                          "--set motion.farneback.NAME=VALUE")
-    from ..pipeline import open_configured_source
-
-    src = open_configured_source(args.source, cfg)
-    try:
-        if args.mode == "sparse":
-            return _sparse(args, cfg, params, src)
-        return _dense(args, cfg, src)
-    finally:
-        src.close()
-
-
-def _finish(paths: dict[str, Path], summary: dict[str, Any], outcome) -> None:
-    """Write the summary, then let an interrupt or a failed source surface (RunOutcome)."""
-    from ..io.atomic import atomic_write_text
-
-    summary["outputs"] = {k: str(v) for k, v in paths.items() if v.exists() or k == "summary"}
-    atomic_write_text(paths["summary"], json.dumps(summary, indent=2) + "\n")
-    outcome.reraise()
-
-
-def _sparse(args, cfg, params, src) -> int:
-    import numpy as np
-
-    from ..annotate import annotate_frame
-    from ..config import save_config
-    from ..errors import RunOutcome
-    from ..io.atomic import atomic_open, check_writable
-    from ..io.mot import format_mot_rows
-    from ..io.video import VideoSink, extension_for
-    from ..tracking.flow import SparseFlowTracker, draw_feature_trails
-    from ..types import Annotations
-    from ._common import accuracy_line, frame_loop, read_gt
-
-    out = Path(args.out)
-    ext = extension_for(cfg.output.codec)
-    paths = {"tracks": out / "tracks.txt", "summary": out / "summary.json",
-             "config": out / "config.toml"}
-    if not args.no_video:
-        paths["video"] = out / f"annotated{ext}"
-    if args.mask_video:
-        paths["mask_video"] = out / f"mask{ext}"
-    check_writable(list(paths.values()), args.force)
-    gt = read_gt(args.gt) if args.gt else (src.ground_truth() if hasattr(src, "ground_truth") else None)
-    info = src.info
-    log.info("source %s", info.describe())
-    out.mkdir(parents=True, exist_ok=True)
-    save_config(cfg, paths["config"])
-    tracker = SparseFlowTracker((info.width, info.height), params, cfg.motion, cfg.cleanup,
-                                cfg.regions, cfg.preprocess)
-    fps = info.fps or 25.0
-    video = VideoSink(paths["video"], fps, cfg.output.codec) if "video" in paths else None
-    mask_video = VideoSink(paths["mask_video"], fps, cfg.output.codec) if "mask_video" in paths else None
-    rows_f: list[int] = []
-    rows_id: list[int] = []
-    rows_box: list[np.ndarray] = []
-    n = 0
-    outcome = RunOutcome()
-    t0 = time.perf_counter()
-    with atomic_open(paths["tracks"]) as fh, frame_loop(src.expected_frames()) as loop:
-        try:
-            with outcome:
-                for frame in src:
-                    tracks = tracker.update(frame.image)
-                    if tracks:
-                        boxes = np.array([t.box.as_array() for t in tracks])
-                        f = [frame.index + 1] * len(tracks)
-                        ids = [t.id for t in tracks]
-                        fh.write(format_mot_rows(f, ids, boxes, [t.score for t in tracks]))
-                        rows_f += f
-                        rows_id += ids
-                        rows_box.append(boxes)
-                    if video is not None:
-                        img = annotate_frame(frame.image, tracks, (), tracker.last_mask,
-                                             cfg.output.trail, cfg.output.mask_inset,
-                                             text=f"frame {frame.index}")
-                        shown = {t.id for t in tracks}
-                        draw_feature_trails(img, [tr for tr in tracker.trails() if tr[0] in shown])
-                        video.write(img)
-                    if mask_video is not None and tracker.last_mask is not None:
-                        mask_video.write(tracker.last_mask)
-                    n += 1
-                    loop.tick()  # SIGINT/SIGTERM: stop here, then finalise the outputs
-        finally:
-            for sink in (video, mask_video):
-                if sink is not None:
-                    sink.close()
-    seconds = time.perf_counter() - t0
-    status, interrupted = outcome.status, outcome.interrupted
-    if status != "complete":
-        log.warning("%s after %d frames; writing what was processed", status, n)
-    summary: dict[str, Any] = {
-        "source": info.name, "width": info.width, "height": info.height, "source_fps": info.fps,
-        "mode": "sparse", "params": asdict(params), "frames": n, "seconds": round(seconds, 3),
-        "fps": round(n / seconds, 2) if seconds > 0 else 0.0, "tracks": len(set(rows_id)),
-        "status": status, "interrupted": interrupted, "truncated": bool(src.truncated),
-    }
-    if gt is not None and n:
-        from ..pipeline import score_run
-
-        pred = Annotations.from_columns(
-            rows_f, rows_id, np.concatenate(rows_box) if rows_box else np.zeros((0, 4)))
-        summary["accuracy"] = score_run(gt, pred, n, src)
-    _finish(paths, summary, outcome)
-    lines = [f"frames    {n} in {seconds:.2f} s ({summary['fps']:.1f} fps)",
-             f"tracks    {summary['tracks']}"]
-    if "accuracy" in summary:
-        lines.append(accuracy_line(summary["accuracy"], ("HOTA", "MOTA", "IDF1")))
-    lines.append(f"outputs   {', '.join(summary['outputs'].values())}")
-    print("\n".join(lines))
+    if args.mode == "sparse":
+        gt = read_gt(args.gt) if args.gt else None
+        job = sparse_flow_job(args.source, cfg, args.out, sparse_params(args.params),
+                              force=args.force, gt=gt)
+    else:
+        if args.params:
+            raise ConfigError("--param applies to --mode sparse; dense flow takes "
+                              "--set motion.farneback.NAME=VALUE")
+        job = dense_flow_job(args.source, cfg, args.out, max_magnitude=args.max_magnitude,
+                             force=args.force)
+    log.info("source %s", job.info.describe())
+    with frame_loop(job.expected_frames()) as loop:
+        s = job.run(progress=loop.update, should_stop=loop.stop)
+    print("\n".join(_report(s)))
     return 0
 
 
-def _dense(args, cfg, src) -> int:
-    from ..errors import RunOutcome
-    from ..io.atomic import check_writable
-    from ..io.video import extension_for
-    from ..motion.dense_flow import write_flow_videos
-    from ._common import frame_loop
+def _report(s) -> list[str]:
+    from ._common import accuracy_line
 
-    out = Path(args.out)
-    ext = extension_for(cfg.output.codec)
-    paths = {"flow_video": out / f"flow{ext}", "summary": out / "summary.json"}
-    if args.mask_video:
-        paths["mask_video"] = out / f"mask{ext}"
-    check_writable(list(paths.values()), args.force)
-    info = src.info
-    log.info("source %s", info.describe())
-    out.mkdir(parents=True, exist_ok=True)
-    stats = None
-    t0 = time.perf_counter()
-    with frame_loop(src.expected_frames()) as loop, RunOutcome() as outcome:
-        stats = write_flow_videos(src, paths["flow_video"], info.fps or 25.0,
-                                  mask_path=paths.get("mask_video"), codec=cfg.output.codec,
-                                  params=cfg.motion.farneback,
-                                  max_magnitude=args.max_magnitude, progress=loop.update,
-                                  should_stop=loop.stop)
-        if stats.stopped:
-            raise KeyboardInterrupt
-    seconds = time.perf_counter() - t0
-    status, interrupted = outcome.status, outcome.interrupted
-    if status != "complete":
-        log.warning("%s; the videos hold what was processed", status)
-    summary: dict[str, Any] = {
-        "source": info.name, "width": info.width, "height": info.height, "source_fps": info.fps,
-        "mode": "dense", "farneback": asdict(cfg.motion.farneback),
-        "max_magnitude": args.max_magnitude, "seconds": round(seconds, 3),
-        "status": status, "interrupted": interrupted, "truncated": bool(src.truncated),
-    }
-    if stats is not None:
-        summary.update(asdict(stats))
-        summary["fps"] = round(stats.frames / seconds, 2) if seconds > 0 else 0.0
-    _finish(paths, summary, outcome)
-    if stats is not None:
-        print(f"frames    {stats.frames} in {seconds:.2f} s\n"
-              f"flow      mean {stats.mean_magnitude:.3f} px/frame, max "
-              f"{stats.max_magnitude:.2f}, moving {stats.moving_fraction:.1%} of pixels\n"
-              f"outputs   {', '.join(summary['outputs'].values())}")
-    return 0
+    lines = [f"frames    {s.frames} in {s.seconds:.2f} s ({s.fps:.1f} fps)"]
+    if s.extra["mode"] == "sparse":
+        lines.append(f"tracks    {s.tracks}")
+        if s.accuracy:
+            lines.append(accuracy_line(s.accuracy, ("HOTA", "MOTA", "IDF1")))
+    else:
+        e = s.extra
+        lines.append(f"flow      mean {e['mean_magnitude']:.3f} px/frame, max "
+                     f"{e['peak_magnitude']:.2f}, moving {e['moving_fraction']:.1%} of pixels")
+    lines.append(f"outputs   {', '.join(s.outputs.values())}")
+    return lines

@@ -48,7 +48,7 @@ def cmd_overlay(args) -> int:
     from tqdm import tqdm
 
     from ..errors import ConfigError
-    from ..overlay import render_overlay
+    from ..render.overlay import render_overlay
     from ._common import frame_range, read_gt
 
     from ..io.atomic import check_writable

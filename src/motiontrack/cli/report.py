@@ -18,7 +18,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 def cmd_report(args) -> int:
     from pathlib import Path
 
-    from ..evaluate.report import write_report
+    from ..studies.report import write_report
 
     from ..io.atomic import check_writable
 

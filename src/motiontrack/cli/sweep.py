@@ -46,8 +46,8 @@ def cmd_sweep(args) -> int:
 
     from ..config import load_config
     from ..errors import ConfigError
-    from ..evaluate.sweep import TABLE_FILE, load_study, run_sweep, study_from_args
-    from ..intermediate import parse_streams
+    from ..studies.sweep import TABLE_FILE, load_study, run_sweep, study_from_args
+    from ..render.streams import parse_streams
     from ._common import sigterm_as_interrupt
 
     if args.replay:
@@ -55,7 +55,7 @@ def cmd_sweep(args) -> int:
             raise ConfigError("--replay takes the study from DIR/study.json; do not give SOURCE, "
                               "--gt, --param, --sequences, --config or --set with it")
         study, meta = load_study(args.replay)
-        from ..evaluate.sweep import versions
+        from ..studies.sweep import versions
 
         now = versions()
         for k, v in (meta.get("versions") or {}).items():
@@ -89,7 +89,7 @@ def cmd_sweep(args) -> int:
 
 
 def _print_best(rows, keys) -> None:
-    from ..evaluate.sweep import summarise_runs
+    from ..studies.sweep import summarise_runs
 
     summary = summarise_runs(rows, keys)
     hdr = ["run"] + list(keys) + ["det_pixel_precision", "det_pixel_recall", "det_object_f1", "HOTA", "MOTA"]

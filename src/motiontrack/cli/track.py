@@ -88,7 +88,7 @@ def _viewer():
 
 def cmd_track(args) -> int:
     from ..io.mot import read_mot
-    from ..pipeline import TrackJob
+    from ..run import track_job
     from ._common import frame_loop, read_gt
 
     cfg = _build_config(args)
@@ -98,9 +98,9 @@ def cmd_track(args) -> int:
         det = read_mot(args.detections, kind="det")
         if args.min_score is not None:
             det = det.select(det.scores >= args.min_score)
-    job = TrackJob(args.source, cfg, args.out, force=args.force, gt=gt, detections=det,
-                   show=_viewer() if args.show else None, save=args.save)
-    log.info("source %s", job.src.info.describe())
+    job = track_job(args.source, cfg, args.out, force=args.force, gt=gt, detections=det,
+                    show=_viewer() if args.show else None, save=args.save)
+    log.info("source %s", job.info.describe())
     with frame_loop(job.expected_frames()) as loop:
         summary = job.run(progress=loop.update, should_stop=loop.stop)
     _print_summary(summary)

@@ -38,7 +38,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def _sequences(items, what):
     from ..errors import ConfigError
-    from ..evaluate.sweep import SequenceSpec, _abs, _default_name, read_manifest
+    from ..studies.sweep import SequenceSpec, _abs, _default_name, read_manifest
 
     out = []
     for it in items:
@@ -59,7 +59,7 @@ def cmd_tune(args) -> int:
 
     from ..config import load_config
     from ..errors import ConfigError
-    from ..evaluate.tune import parse_space, require_optuna, tune, write_tune_outputs
+    from ..studies.tune import parse_space, require_optuna, tune, write_tune_outputs
 
     from pathlib import Path
 

@@ -40,22 +40,51 @@ def _tmp_path(path: Path) -> Path:
     return _mkstemp(path, f".{path.name}.", ".part")
 
 
+class AtomicFile:
+    """A file written under a temporary name beside ``path`` and renamed onto it by
+    :meth:`commit`, or removed by :meth:`discard`: for outputs written across many calls."""
+
+    def __init__(self, path: str | Path, mode: str = "w", encoding: str | None = "utf-8") -> None:
+        self.path = Path(path)
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self.tmp = _tmp_path(self.path)
+        try:
+            self.fh: IO = open(self.tmp, mode, encoding=None if "b" in mode else encoding)
+        except BaseException:
+            self.tmp.unlink(missing_ok=True)
+            raise
+
+    def write(self, data) -> None:
+        self.fh.write(data)
+
+    def commit(self) -> None:
+        """Flush to disk and move the file to its final name."""
+        try:
+            self.fh.flush()
+            os.fsync(self.fh.fileno())
+            self.fh.close()
+            os.replace(self.tmp, self.path)
+        except BaseException:
+            self.discard()
+            raise
+
+    def discard(self) -> None:
+        """Close and remove the temporary file; the final name is left as it was."""
+        self.fh.close()
+        with contextlib.suppress(FileNotFoundError):
+            self.tmp.unlink()
+
+
 @contextlib.contextmanager
 def atomic_open(path: str | Path, mode: str = "w", encoding: str | None = "utf-8") -> Iterator[IO]:
     """Open a temporary file next to ``path``; rename onto ``path`` when the block succeeds."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = _tmp_path(path)
+    f = AtomicFile(path, mode, encoding)
     try:
-        with open(tmp, mode, encoding=None if "b" in mode else encoding, newline=None) as fh:
-            yield fh
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
+        yield f.fh
     except BaseException:
-        with contextlib.suppress(FileNotFoundError):
-            tmp.unlink()
+        f.discard()
         raise
+    f.commit()
 
 
 def atomic_write_text(path: str | Path, text: str) -> None:

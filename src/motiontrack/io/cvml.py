@@ -32,7 +32,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..types import Annotations
-from .annotations import XmlNode, parse_xml, read_bytes, xml_float, xml_int
+from .xmlsafe import XmlNode, parse_xml, read_bytes, xml_float, xml_int
 from .atomic import atomic_open
 
 __all__ = ["read_cvml", "parse_cvml", "write_cvml", "format_cvml"]

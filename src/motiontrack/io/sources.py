@@ -24,15 +24,21 @@ import cv2
 import numpy as np
 
 from ..errors import SourceError
-from ..types import Frame
+from ..registry import Registry
+from ..types import Annotations, Frame
 
 log = logging.getLogger(__name__)
 
 __all__ = ["SourceInfo", "Source", "VideoFileSource", "LiveSource", "ImageSequenceSource",
-           "SyntheticSource", "ArraySource", "open_source", "IMAGE_EXTENSIONS"]
+           "ArraySource", "SCHEMES", "open_source", "IMAGE_EXTENSIONS"]
 
 IMAGE_EXTENSIONS = (".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff", ".webp", ".ppm", ".pgm")
 _URL = re.compile(r"^[a-zA-Z][a-zA-Z0-9+.-]*://")
+
+#: sources named ``SCHEME:REST`` (e.g. ``synth:crossing``): scheme → factory called as
+#: ``factory(spec, start, max_frames)``. Packages above io register their own (``synth``
+#: registers itself when imported), so io depends on none of them.
+SCHEMES: "Registry[Source]" = Registry("source scheme")
 
 
 @dataclass(frozen=True)
@@ -76,6 +82,10 @@ class Source:
         that needs nothing but the frame (the pipeline's resizing and blurring) runs beside the
         consumer's instead of before it."""
         return ((frame, prepare(frame)) for frame in self)
+
+    def ground_truth(self) -> Annotations | None:
+        """The exact ground truth of a source that knows it (synthetic scenes), else None."""
+        return None
 
     def expected_frames(self) -> int | None:
         """Frames this iteration should yield, when known (for progress bars)."""
@@ -349,28 +359,6 @@ class ImageSequenceSource(_DecodedAhead):
             yield Frame(index=index, image=img, timestamp=index / fps)
 
 
-class SyntheticSource(Source):
-    """A synthetic scene (``synth:NAME?seed=..``) rendered on the fly, with exact ground truth."""
-
-    def __init__(self, spec: str, start: int = 0, max_frames: int = 0) -> None:
-        super().__init__(start, max_frames)
-        from ..synth import parse_synth_spec
-
-        self.scene = parse_synth_spec(spec)
-        s = self.scene
-        self.info = SourceInfo(name=spec, width=s.width, height=s.height, fps=float(s.fps),
-                               frame_count=s.n_frames)
-
-    def ground_truth(self):
-        return self.scene.ground_truth()
-
-    def __iter__(self) -> Iterator[Frame]:
-        end = self.scene.n_frames if not self.max_frames else min(self.scene.n_frames,
-                                                                  self.start + self.max_frames)
-        for i in range(self.start, end):
-            yield Frame(index=i, image=self.scene.frame(i), timestamp=i / self.scene.fps)
-
-
 class ArraySource(Source):
     """Frames from an in-memory sequence of images (tests, notebooks)."""
 
@@ -390,15 +378,17 @@ class ArraySource(Source):
 
 
 def open_source(spec: Any, start: int = 0, max_frames: int = 0, **live_options: Any) -> Source:
-    """Open ``spec``: a :class:`Source` (returned as is), ``synth:NAME``, a camera index (``0`` or
-    ``"0"``), a URL (``rtsp://``, ``http://``...), an image folder or glob, or a video file."""
+    """Open ``spec``: a :class:`Source` (returned as is), a registered scheme (:data:`SCHEMES`,
+    e.g. ``synth:NAME``), a camera index (``0`` or ``"0"``), a URL (``rtsp://``, ``http://``...),
+    an image folder or glob, or a video file."""
     if isinstance(spec, Source):
         return spec
     if isinstance(spec, int) or (isinstance(spec, str) and spec.isdigit()):
         return LiveSource(int(spec), start, max_frames, **live_options)
     spec = os.fspath(spec)
-    if spec.startswith("synth:"):
-        return SyntheticSource(spec, start, max_frames)
+    scheme, sep, _ = spec.partition(":")
+    if sep and scheme in SCHEMES:
+        return SCHEMES.get(scheme)(spec, start, max_frames)
     if _URL.match(spec) and not spec.startswith("file://"):
         return LiveSource(spec, start, max_frames, **live_options)
     if spec.startswith("file://"):

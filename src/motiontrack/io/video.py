@@ -155,6 +155,17 @@ class VideoSink:
                 commit_temp(self._tmp, self.path)
                 self._tmp = None
 
+    def discard(self) -> None:
+        """Stop writing and remove the temporary file (nothing appears under :attr:`path`)."""
+        writer, self._writer = self._writer, None
+        try:
+            if writer is not None:
+                writer.release()
+        finally:
+            if self._tmp is not None:
+                self._tmp.unlink(missing_ok=True)
+                self._tmp = None
+
     def __enter__(self) -> "VideoSink":
         return self
 

@@ -7,7 +7,7 @@ import cv2
 import numpy as np
 
 from ..config import check_knn_samples
-from ..preprocess import to_gray
+from ..imaging import to_gray
 from .base import DETECTORS, MotionDetector
 
 #: the random generator is seeded with ``seed * _SEED_STRIDE + frame``: seeds do not share

@@ -30,7 +30,7 @@ import cv2
 import numpy as np
 
 from ..types import Region
-from ..preprocess import pixel_window, to_gray
+from ..imaging import pixel_window, to_gray
 
 __all__ = ["GhostFilter", "outline_ratio", "edge_strength"]
 

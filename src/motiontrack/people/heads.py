@@ -33,7 +33,7 @@ from typing import Sequence
 import numpy as np
 from scipy.ndimage import minimum_filter1d
 
-from ..preprocess import pixel_window
+from ..imaging import pixel_window
 from ..types import Box, Region
 
 __all__ = ["Head", "height_profile", "detect_heads", "detect_heads_many", "detect_heads_in_regions",

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from ..preprocess import to_gray
+from ..imaging import to_gray
 from ..types import Box, Region
 
 __all__ = ["nms", "HOGParams", "HOGPeopleDetector"]

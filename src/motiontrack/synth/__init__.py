@@ -21,6 +21,7 @@ from .scenes import (
     parse_synth_spec,
     scene_summaries,
 )
+from .source import SyntheticSource
 
 __all__ = [
     "SCENES",
@@ -28,6 +29,7 @@ __all__ = [
     "make_scene",
     "parse_synth_spec",
     "scene_summaries",
+    "SyntheticSource",
     "Person",
     "Column",
     "Lighting",

@@ -11,7 +11,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from ..preprocess import pixel_window
+from ..imaging import pixel_window
 
 __all__ = ["histograms", "bhattacharyya", "BINS"]
 

@@ -37,7 +37,8 @@ import numpy as np
 
 from ..config import CleanupConfig, MotionConfig, PreprocessConfig, RegionsConfig
 from ..errors import ConfigError
-from ..preprocess import preprocess, to_gray
+from ..imaging import to_gray
+from ..preprocess import preprocess
 from ..types import Box, Track, TrackState
 
 log = logging.getLogger(__name__)
@@ -480,7 +481,7 @@ class SparseFlowTracker:
 
 def draw_feature_trails(img: np.ndarray, trails: list[tuple[int, np.ndarray]]) -> None:
     """Draw each feature point's trail and current position in its object's colour (in place)."""
-    from ..annotate import color_for
+    from ..render.annotate import color_for
 
     for oid, tr in trails:
         color = color_for(oid)

@@ -33,15 +33,29 @@ import math
 import os
 import platform
 import sys
+import tempfile
 from dataclasses import dataclass, field
 from decimal import Decimal, InvalidOperation
 from pathlib import Path
 from typing import Any, Callable, Iterable, Mapping, Sequence
 
+import cv2
 import numpy as np
 
+from .. import __version__
+from ..config import PipelineConfig, apply_overrides, from_dict, save_config, to_dict
 from ..errors import ConfigError, InputError
+from ..evaluate.framewise import evaluate_framewise
+from ..evaluate.mot import evaluate_tracking
+from ..io.annotations import read_annotations
+from ..io.atomic import atomic_write_bytes, atomic_write_text, check_writable
+from ..io.mot import read_mot
 from ..io.tomlfile import read_toml
+from ..pipeline import completes_tracks, fill_gap_frames, open_configured_source
+from ..run.job import Job
+from ..run.processors import TrackProcessor
+from ..run.writers import IntermediateWriter, RegionsWriter, TracksWriter
+from ..synth import parse_synth_spec
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -299,8 +313,6 @@ class Study:
         if len(set(names)) != len(names):
             raise ConfigError(f"sequence names must be unique, got {names}")
         # every grid point must give a valid config: fail before any run starts
-        from ..config import PipelineConfig, apply_overrides, from_dict
-
         base = from_dict(PipelineConfig, dict(self.base_config))
         for key, values in self.grid:
             for v in values:
@@ -350,10 +362,6 @@ class Study:
 
 def versions() -> dict[str, str]:
     """Versions that can change the numbers of a study."""
-    import cv2
-
-    from .. import __version__
-
     return {"motiontrack": __version__, "python": platform.python_version(), "numpy": np.__version__,
             "opencv": cv2.__version__, "platform": platform.platform()}
 
@@ -373,26 +381,16 @@ def load_study(folder: str | Path) -> tuple[Study, dict[str, Any]]:
 # ------------------------------------------------------------------------------- one run
 def _load_gt(seq: SequenceSpec):
     if seq.gt is None:
-        from ..synth import parse_synth_spec
-
         return parse_synth_spec(seq.source).ground_truth()
-    from ..io.annotations import read_annotations
-
     return read_annotations(seq.gt, mot_kind="gt")
-
-
-def _annotations(frames: list[int], boxes: list[np.ndarray], ids: list[int], scores: list[float]):
-    from ..types import Annotations
-
-    if not frames:
-        return Annotations.empty()
-    return Annotations.from_columns(frames, ids, np.asarray(boxes, dtype=np.float64).reshape(-1, 4),
-                                    scores=np.asarray(scores, dtype=np.float64))
 
 
 def execute_run(spec: RunSpec) -> dict[str, Any]:
     """Run the pipeline for one run × sequence and score it (pure apart from optional
     intermediate videos written under ``spec.out_dir``).
+
+    The run is a :class:`~motiontrack.run.job.Job` writing its tracks (as ``motiontrack track``
+    writes them) and its regions to a temporary folder of the worker; they are scored from there.
 
     Returns
     -------
@@ -401,64 +399,24 @@ def execute_run(spec: RunSpec) -> dict[str, Any]:
         ``tracks.txt`` and ``regions.txt`` (MOTChallenge CSV, 1-based frames) for the caller to
         write, so that remote workers need no shared file system.
     """
-    from ..config import PipelineConfig, apply_overrides, from_dict
-    from ..io.mot import format_mot_rows
-    from ..pipeline import (Pipeline, completes_tracks, fill_gap_frames, open_configured_source,
-                            reported)
-    from ..tracking.gaps import fill_gaps
-    from .framewise import evaluate_framewise
-    from .mot import evaluate_tracking
-
     cfg = apply_overrides(from_dict(PipelineConfig, dict(spec.base_config)), spec.overrides())
     seq = spec.sequence
     gt = _load_gt(seq)
-    src = open_configured_source(seq.source, cfg)
-    info = src.info
-    pipe = Pipeline(cfg, (info.width, info.height), fps=info.fps)
-    writer = None
-    if spec.save and spec.out_dir:
-        from ..intermediate import IntermediateWriter
-
-        writer = IntermediateWriter(Path(spec.out_dir) / spec.run_dir(), spec.save,
-                                    fps=info.fps or 25.0, codec=cfg.output.codec)
-    rf: list[int] = []
-    rb: list[np.ndarray] = []
-    ri: list[int] = []
-    rs: list[float] = []
-    tf: list[int] = []
-    tb: list[np.ndarray] = []
-    ti: list[int] = []
-    ts: list[float] = []
-    n = 0
-    first = None
-    try:
-        for frame in src:
-            res = pipe.process(frame)
-            f = res.index + 1
-            first = f if first is None else first
-            for j, r in enumerate(res.regions, 1):
-                rf.append(f), rb.append(r.box.as_array()), ri.append(j), rs.append(r.score)
-            for k, t in reported(res):
-                tf.append(k + 1), tb.append(t.box.as_array()), ti.append(t.id), ts.append(t.score)
-            if writer is not None:
-                writer.write(res, pipe.detector)
-            n += 1
-    finally:
-        src.close()
-        if writer is not None:
-            writer.close()
-    regions = _annotations(rf, rb, ri, rs)
-    tracks = _annotations(tf, tb, ti, ts)
-    if completes_tracks(cfg, external=False):
-        # as `motiontrack track` writes them (tracker.fill_motion): short gaps filled, sorted
-        tracks = fill_gaps(tracks, fill_gap_frames(cfg, info.fps, external=False)).sorted()
-    lo = first if first is not None else 1
-    hi = lo + n - 1
+    with tempfile.TemporaryDirectory(prefix="motiontrack-run-") as tmp:
+        job = _run_job(spec, cfg, Path(tmp))
+        summary = job.run()
+        tracks = read_mot(job.paths["tracks"], kind="results")
+        regions = read_mot(job.paths["regions"], kind="results")
+        files = {f"{spec.run_dir()}/{name}.txt": job.paths[name].read_text(encoding="utf-8")
+                 for name in ("tracks", "regions")}
+    info = job.info
+    lo = job.source.start + 1
+    hi = lo + summary.frames - 1
     gt = gt.select((gt.frames >= lo) & (gt.frames <= hi))
     size = (float(info.width), float(info.height))
     row: dict[str, Any] = {"run": spec.run, "sequence": seq.name, "group": seq.group}
     row.update({k: v for k, v in spec.params})
-    row["frames"] = n
+    row["frames"] = summary.frames
     row["n_tracks"] = int(len(np.unique(tracks.ids))) if len(tracks) else 0
     det = evaluate_framewise(gt, regions, spec.xi, frame_size=size, frames=(lo, hi))[0]
     trk = evaluate_framewise(gt, tracks, spec.xi, frame_size=size, frames=(lo, hi))[0]
@@ -469,12 +427,25 @@ def execute_run(spec: RunSpec) -> dict[str, Any]:
     # consider = 0 rows are ignore regions, as when `motiontrack track --gt` scores a run
     mot = evaluate_tracking(gt, tracks, ignore_zero_marked=True)
     row.update({k: float(mot[k]) for k in TRACKING_KEYS if k in mot})
-    files = {
-        f"{spec.run_dir()}/tracks.txt": format_mot_rows(tracks.frames, tracks.ids, tracks.boxes,
-                                                        tracks.scores),
-        f"{spec.run_dir()}/regions.txt": format_mot_rows(rf, ri, np.asarray(rb).reshape(-1, 4), rs),
-    }
     return {"row": row, "files": files}
+
+
+def _run_job(spec: RunSpec, cfg: PipelineConfig, tmp: Path) -> Job:
+    """The job of one run: the tracks (completed as ``motiontrack track`` completes them,
+    ``tracker.fill_motion``) and the regions, plus the intermediate movies asked for."""
+    src = open_configured_source(spec.sequence.source, cfg.source)
+    try:
+        max_gap = (fill_gap_frames(cfg, src.info.fps, external=False)
+                   if completes_tracks(cfg, external=False) else None)
+        writers: list = [TracksWriter(tmp, max_gap=max_gap), RegionsWriter(tmp)]
+        if spec.save and spec.out_dir:
+            writers.append(IntermediateWriter(Path(spec.out_dir) / spec.run_dir(), spec.save,
+                                              cfg.output.codec))
+        proc = TrackProcessor(cfg, src.info, needs_background="background" in spec.save)
+        return Job(src, proc, writers, tmp, force=True)
+    except BaseException:
+        src.close()
+        raise
 
 
 def _f1(p: float, r: float) -> float:
@@ -487,8 +458,6 @@ def _f1(p: float, r: float) -> float:
 # ------------------------------------------------------------------------------- executors
 def _worker_init() -> None:
     """One OpenCV thread per worker process: the runs are the parallelism."""
-    import cv2
-
     cv2.setNumThreads(1)
 
 
@@ -583,8 +552,6 @@ def write_table(rows: Sequence[Mapping[str, Any]], path: str | Path) -> list[str
 
     Returns the paths written.
     """
-    from ..io.atomic import atomic_write_bytes, atomic_write_text
-
     path = Path(path)
     cols = list(rows[0].keys()) if rows else ["run", "sequence"]
     buf = io.StringIO()
@@ -671,9 +638,6 @@ def run_sweep(study: Study, out_dir: str | Path, *, jobs: int = 1, cluster: str 
     runs),
     ``runs/rNNN/<sequence>/{tracks,regions}.txt`` and, with ``figures``, ``figures/*.png|svg``.
     """
-    from ..config import PipelineConfig, from_dict, save_config
-    from ..io.atomic import atomic_write_text, check_writable
-
     out = Path(out_dir)
     check_writable([out / STUDY_FILE, out / TABLE_FILE], force)
     out.mkdir(parents=True, exist_ok=True)
@@ -728,8 +692,6 @@ def study_from_args(sources: Sequence[str], gt: Sequence[str] | None, params: It
                     save: Iterable[str] = ()) -> Study:
     """Build a :class:`Study` from command-line style inputs (``SOURCE``, ``--gt``, ``--param``,
     ``--sequences``)."""
-    from ..config import to_dict
-
     seqs: list[SequenceSpec] = []
     gts = list(gt or [])
     if manifest is not None:

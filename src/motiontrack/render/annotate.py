@@ -7,7 +7,7 @@ from typing import Sequence
 import cv2
 import numpy as np
 
-from .types import Region, Track
+from ..types import Region, Track
 
 __all__ = ["color_for", "draw_tracks", "draw_regions", "draw_mask_inset", "annotate_frame",
            "draw_label"]

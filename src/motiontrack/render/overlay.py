@@ -16,8 +16,8 @@ import cv2
 import numpy as np
 
 from .annotate import draw_label
-from .errors import ConfigError
-from .types import Annotations
+from ..errors import ConfigError
+from ..types import Annotations
 
 log = logging.getLogger(__name__)
 
@@ -90,9 +90,9 @@ def render_overlay(source: Any, out: str | Path | None, runs: Sequence[tuple[str
     png_frames : 1-based frame numbers also written as ``png_dir/frame_%06d.png``.
     png_dir : folder for the stills (default: next to ``out``).
     """
-    from .io.atomic import atomic_write_bytes
-    from .io.sources import open_source
-    from .io.video import VideoSink
+    from ..io.atomic import atomic_write_bytes
+    from ..io.sources import open_source
+    from ..io.video import VideoSink
 
     if out is None and not png_frames:
         raise ConfigError("nothing to write: give an output video or --png-frames")

@@ -17,8 +17,8 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from .config import RegionsConfig
-from .types import Box, Region
+from ..config import RegionsConfig
+from ..types import Box, Region
 
 __all__ = ["find_regions", "components", "filter_regions", "merge_regions", "merge_distance"]
 

@@ -35,7 +35,7 @@ def _color(track_id: int | None, color) -> tuple[int, int, int]:
     if track_id is None:
         return (0, 255, 255)
     try:
-        from ..annotate import color_for
+        from .annotate import color_for
 
         return tuple(int(c) for c in color_for(track_id))
     except Exception:  # pragma: no cover - annotate unavailable

@@ -1,0 +1,155 @@
+"""The jobs of the commands: which processor and which writers each one runs.
+
+``track_job`` is ``motiontrack track``; ``follow_job``, ``sparse_flow_job`` and
+``dense_flow_job`` are ``follow`` and ``flow``. Sweeps and tuning compose their own writers
+(:func:`motiontrack.studies.sweep.execute_run`).
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import replace
+from pathlib import Path
+from typing import Any, Callable, Iterable
+
+import numpy as np
+
+from ..config import PipelineConfig, save_config
+from ..evaluate.score import score_run
+from ..io.sources import Source
+from ..imaging import scaled_size
+from ..io.video import extension_for
+from ..pipeline import completes_tracks, fill_gap_frames, open_configured_source
+from ..render.streams import parse_streams
+from ..tracking.flow import SparseFlowParams
+from ..tracking.single import SingleTracker, follow_accuracy
+from ..types import Annotations, Box
+from .job import Job
+from .processors import DenseFlowProcessor, FollowProcessor, SparseFlowProcessor, TrackProcessor
+from .writers import (IntermediateWriter, MaskVideoWriter, ScoreWriter, TracksWriter, VideoWriter,
+                      ViewerWriter)
+
+log = logging.getLogger(__name__)
+
+__all__ = ["track_job", "follow_job", "sparse_flow_job", "dense_flow_job"]
+
+
+def _opened(source: Any, cfg: PipelineConfig, build: Callable[[Source], Job]) -> Job:
+    """``build(source)`` with the source opened, closed again when building fails."""
+    src = open_configured_source(source, cfg.source)
+    try:
+        return build(src)
+    except BaseException:
+        src.close()
+        raise
+
+
+def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: bool = False,
+              gt: Annotations | None = None, detections: Annotations | None = None,
+              show: Callable[[np.ndarray], bool] | None = None,
+              save: Iterable[str] | str = ()) -> Job:
+    """``motiontrack track``: ``tracks.txt``, the annotated video, the mask video and the
+    intermediate movies as ``cfg.output`` and ``save`` ask, the live view with ``show``,
+    ``gt.txt`` and the accuracy with ground truth (given, or the source's own), ``summary.json``
+    and ``config.toml``."""
+    out = Path(out_dir)
+    streams = parse_streams(save)
+    codec = cfg.output.codec
+    camera = None
+    if cfg.measure.camera:
+        from ..calibrate import load_camera
+
+        camera = load_camera(cfg.measure.camera)
+
+    def build(src: Source) -> Job:
+        truth = gt if gt is not None else src.ground_truth()
+        external = detections is not None
+        proc = TrackProcessor(cfg, src.info, detections,
+                              needs_background="background" in streams)
+        if not external:
+            info, scale = src.info, proc.pipe.scale
+            log.info("processing at scale %.3g (%dx%d)", scale,
+                     *scaled_size(info.width, info.height, scale))
+        fill = (fill_gap_frames(cfg, src.info.fps, external) if completes_tracks(cfg, external)
+                else None)
+        tracks = TracksWriter(out, camera, fill)
+        writers = [tracks]
+        if cfg.output.video:
+            writers.append(VideoWriter("video", out / f"annotated{extension_for(codec)}", codec))
+        if cfg.output.mask_video:
+            writers.append(MaskVideoWriter(out, codec))
+        if streams:
+            writers.append(IntermediateWriter(out, streams, codec))
+        if show is not None:
+            writers.append(ViewerWriter(show))
+        if truth is not None:
+            writers.append(ScoreWriter(out, truth, tracks, score_run))
+        return Job(src, proc, writers, out, force=force, config=(save_config, cfg))
+
+    return _opened(source, cfg, build)
+
+
+def follow_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, tracker: SingleTracker,
+               box: Box, name: str, *, params: dict[str, Any] | None = None,
+               video: bool = True, force: bool = False, gt: Annotations | None = None,
+               gt_id: int | None = None) -> Job:
+    """``motiontrack follow``: ``tracks.txt`` (id 1), the annotated video, ``summary.json`` with
+    the per-frame IoU against one ground-truth object when there is ground truth."""
+    out = Path(out_dir)
+    codec = cfg.output.codec
+
+    def score(truth: Annotations, pred: Annotations, frames: int, start: int) -> dict[str, float]:
+        return follow_accuracy(truth, replace(pred, meta={"last_frame": start + frames}), gt_id)
+
+    def build(src: Source) -> Job:
+        truth = gt if gt is not None else src.ground_truth()
+        tracks = TracksWriter(out)
+        writers = [tracks]
+        if video:
+            writers.append(VideoWriter("video", out / f"annotated{extension_for(codec)}", codec))
+        if truth is not None:
+            writers.append(ScoreWriter(out, truth, tracks, score, write_gt=False))
+        return Job(src, FollowProcessor(tracker, box, name, params), writers, out, force=force)
+
+    return _opened(source, cfg, build)
+
+
+def sparse_flow_job(source: Any, cfg: PipelineConfig, out_dir: str | Path,
+                    params: SparseFlowParams, *, force: bool = False,
+                    gt: Annotations | None = None) -> Job:
+    """``motiontrack flow --mode sparse``: ``tracks.txt``, the annotated video with feature
+    trails, the mask video, ``summary.json`` (accuracy with ground truth) and ``config.toml``."""
+    out = Path(out_dir)
+    codec = cfg.output.codec
+
+    def build(src: Source) -> Job:
+        truth = gt if gt is not None else src.ground_truth()
+        tracks = TracksWriter(out)
+        writers = [tracks]
+        if cfg.output.video:
+            writers.append(VideoWriter("video", out / f"annotated{extension_for(codec)}", codec))
+        if cfg.output.mask_video:
+            writers.append(MaskVideoWriter(out, codec))
+        if truth is not None:
+            writers.append(ScoreWriter(out, truth, tracks, score_run, write_gt=False))
+        return Job(src, SparseFlowProcessor(cfg, src.info, params), writers, out, force=force,
+                   config=(save_config, cfg))
+
+    return _opened(source, cfg, build)
+
+
+def dense_flow_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *,
+                   max_magnitude: float | None = None, force: bool = False) -> Job:
+    """``motiontrack flow --mode dense``: the flow colour video ``flow<ext>``, the
+    flow-magnitude mask video, ``summary.json`` with magnitude statistics."""
+    out = Path(out_dir)
+    codec = cfg.output.codec
+
+    def build(src: Source) -> Job:
+        writers = [VideoWriter("flow_video", out / f"flow{extension_for(codec)}", codec)]
+        if cfg.output.mask_video:
+            writers.append(MaskVideoWriter(out, codec))
+        return Job(src, DenseFlowProcessor(cfg.motion.farneback, max_magnitude), writers, out,
+                   force=force)
+
+    return _opened(source, cfg, build)

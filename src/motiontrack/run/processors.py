@@ -1,0 +1,190 @@
+"""Per-frame processors of a :class:`~motiontrack.run.job.Job`: what each command does to a frame.
+
+* :class:`TrackProcessor` — the pipeline (motion or external detections → regions → tracks);
+* :class:`FollowProcessor` — one object from a given box with a single-object tracker;
+* :class:`SparseFlowProcessor` — Lucas–Kanade feature points grouped into objects;
+* :class:`DenseFlowProcessor` — Farnebäck flow as a colour picture and a motion mask.
+
+Each yields one :class:`~motiontrack.types.FrameResult` per frame and draws its own annotated
+picture of it; the writers do the rest.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict
+from typing import Any, Iterator
+
+import cv2
+import numpy as np
+
+from ..config import FarnebackParams, PipelineConfig
+from ..io.sources import Source, SourceInfo
+from ..motion.dense_flow import DenseFlow
+from ..pipeline import Pipeline
+from ..render.annotate import annotate_frame, draw_label
+from ..render.flow import flow_to_bgr
+from ..tracking.flow import SparseFlowParams, SparseFlowTracker, draw_feature_trails
+from ..tracking.single import SingleTracker, follow
+from ..types import Annotations, Box, FrameResult, Track, TrackState
+
+__all__ = ["TrackProcessor", "FollowProcessor", "SparseFlowProcessor", "DenseFlowProcessor"]
+
+#: centre points kept for a followed object's trail
+_FOLLOW_TRAIL = 64
+
+
+class TrackProcessor:
+    """The pipeline on every frame (:meth:`~motiontrack.pipeline.Pipeline.results`).
+
+    ``needs_background``: a writer reads the detector's background after each frame (the
+    ``background`` intermediate movie), so detection of the next frame must not run meanwhile.
+    """
+
+    def __init__(self, cfg: PipelineConfig, info: SourceInfo,
+                 detections: Annotations | None = None, needs_background: bool = False) -> None:
+        self.cfg = cfg
+        self.external = detections is not None
+        # every stage is built now: a bad plug-in name or ROI fails before anything is written
+        self.pipe = Pipeline(cfg, (info.width, info.height), detections, info.fps)
+        self.pipe.sequential = self.pipe.sequential or needs_background
+
+    def results(self, source: Source) -> Iterator[FrameResult]:
+        return self.pipe.results(source)
+
+    def annotate(self, result: FrameResult) -> np.ndarray:
+        out = self.cfg.output
+        img = annotate_frame(result.frame, result.tracks, result.regions, result.mask, out.trail,
+                             out.mask_inset, text=f"frame {result.index}")
+        if self.pipe.people is not None:
+            from ..render.people import draw_people
+
+            draw_people(img, result.extras, inplace=True)
+        return img
+
+    def background(self) -> np.ndarray | None:
+        return self.pipe.detector.background() if self.pipe.detector is not None else None
+
+    def summary(self) -> dict[str, Any]:
+        # the scale detection ran at (``preprocess.scale = 0`` is resolved per frame size)
+        return {} if self.external else {"processing_scale": round(self.pipe.scale, 4)}
+
+
+class FollowProcessor:
+    """A single-object tracker started on ``box`` in the first frame (id 1 in the tracks)."""
+
+    def __init__(self, tracker: SingleTracker, box: Box, name: str,
+                 params: dict[str, Any] | None = None) -> None:
+        self.tracker = tracker
+        self.box = box
+        self.name = name
+        self.params = dict(params or {})
+        self.tracked = 0
+        self._history: list[tuple[float, float]] = []
+        self._label = ""
+
+    def results(self, source: Source) -> Iterator[FrameResult]:
+        for index, image, ok, box, score in follow(source, self.tracker, self.box):
+            tracks: tuple[Track, ...] = ()
+            if ok and box is not None:
+                self.tracked += 1
+                self._history.append(box.center)
+                del self._history[:-_FOLLOW_TRAIL]
+                tracks = (Track(id=1, box=box, state=TrackState.CONFIRMED, score=score,
+                                history=tuple(self._history)),)
+            self._label = f"{self.name} {score:.2f}" if ok else f"{self.name}: lost"
+            yield FrameResult(index=index, timestamp=0.0, frame=image, mask=None, regions=(),
+                              tracks=tracks)
+
+    def annotate(self, result: FrameResult) -> np.ndarray:
+        img = annotate_frame(result.frame, result.tracks, text=f"frame {result.index}")
+        draw_label(img, self._label, (4, 20), (40, 40, 40) if result.tracks else (0, 0, 200))
+        return img
+
+    def background(self) -> np.ndarray | None:
+        return None
+
+    def summary(self) -> dict[str, Any]:
+        b = self.box
+        return {"tracker": self.name, "params": self.params, "box": [b.x, b.y, b.w, b.h],
+                "frames_tracked": self.tracked}
+
+
+class SparseFlowProcessor:
+    """Shi–Tomasi features in moving regions followed by pyramidal Lucas–Kanade and grouped into
+    objects (:class:`~motiontrack.tracking.flow.SparseFlowTracker`)."""
+
+    def __init__(self, cfg: PipelineConfig, info: SourceInfo,
+                 params: SparseFlowParams | None = None) -> None:
+        self.cfg = cfg
+        self.params = params or SparseFlowParams()
+        self.tracker = SparseFlowTracker((info.width, info.height), self.params, cfg.motion,
+                                         cfg.cleanup, cfg.regions, cfg.preprocess)
+
+    def results(self, source: Source) -> Iterator[FrameResult]:
+        for frame in source:
+            tracks = self.tracker.update(frame.image)
+            yield FrameResult(index=frame.index, timestamp=frame.timestamp, frame=frame.image,
+                              mask=self.tracker.last_mask, regions=(), tracks=tuple(tracks))
+
+    def annotate(self, result: FrameResult) -> np.ndarray:
+        out = self.cfg.output
+        img = annotate_frame(result.frame, result.tracks, (), result.mask, out.trail,
+                             out.mask_inset, text=f"frame {result.index}")
+        shown = {t.id for t in result.tracks}
+        draw_feature_trails(img, [tr for tr in self.tracker.trails() if tr[0] in shown])
+        return img
+
+    def background(self) -> np.ndarray | None:
+        return None
+
+    def summary(self) -> dict[str, Any]:
+        return {"mode": "sparse", "params": asdict(self.params)}
+
+
+class DenseFlowProcessor:
+    """Farnebäck flow of every frame: its colour picture (hue = direction, brightness =
+    magnitude, :func:`~motiontrack.render.flow.flow_to_bgr`) is the annotated frame and its
+    flow-magnitude mask the motion mask; magnitude statistics (px/frame, over all pixels of all
+    frames after the first) go to the summary."""
+
+    def __init__(self, params: FarnebackParams | None = None,
+                 max_magnitude: float | None = None) -> None:
+        self.params = params or FarnebackParams()
+        self.max_magnitude = max_magnitude
+        self.flow = DenseFlow(self.params)
+        self._last: np.ndarray | None = None
+        self._frames = 0
+        self._total = 0.0
+        self._count = 0
+        self._moving = 0
+        self._peak = 0.0
+
+    def results(self, source: Source) -> Iterator[FrameResult]:
+        for frame in source:
+            flow, mask = self.flow.apply(frame.image)
+            if self._frames > 0:
+                self._measure(flow, mask)
+            self._frames += 1
+            self._last = flow
+            yield FrameResult(index=frame.index, timestamp=frame.timestamp, frame=frame.image,
+                              mask=mask, regions=(), tracks=())
+
+    def _measure(self, flow: np.ndarray, mask: np.ndarray) -> None:
+        mag = cv2.magnitude(flow[..., 0], flow[..., 1])
+        self._total += float(mag.sum())
+        self._count += mag.size
+        self._peak = max(self._peak, float(mag.max()))
+        self._moving += int(np.count_nonzero(mask))
+
+    def annotate(self, result: FrameResult) -> np.ndarray:
+        return flow_to_bgr(self._last, self.max_magnitude)
+
+    def background(self) -> np.ndarray | None:
+        return None
+
+    def summary(self) -> dict[str, Any]:
+        n = self._count
+        return {"mode": "dense", "farneback": asdict(self.params),
+                "max_magnitude": self.max_magnitude,
+                "mean_magnitude": self._total / n if n else 0.0,
+                "peak_magnitude": self._peak, "moving_fraction": self._moving / n if n else 0.0}

@@ -1,0 +1,247 @@
+"""Output writers of a :class:`~motiontrack.run.job.Job`: one class per kind of output.
+
+Each writer streams its file under a temporary name while the job runs and commits it when the
+job closes it (or removes it when the job failed), so a file under its final name is always
+complete. A new output of a command is one new writer here.
+"""
+
+from __future__ import annotations
+
+import logging
+from pathlib import Path
+from typing import Any, Callable, Iterable
+
+import numpy as np
+
+from ..io.atomic import AtomicFile
+from ..io.mot import format_mot_rows, read_mot, write_mot
+from ..io.video import VideoSink, extension_for
+from ..render.streams import parse_streams, stream_image
+from ..tracking.gaps import fill_gaps
+from ..types import Annotations, FrameResult
+from .job import JobContext, JobSummary, Writer
+
+log = logging.getLogger(__name__)
+
+__all__ = ["TracksWriter", "RegionsWriter", "ScoreWriter", "VideoWriter", "MaskVideoWriter",
+           "IntermediateWriter", "ViewerWriter"]
+
+
+class TracksWriter(Writer):
+    """``tracks.txt``: MOTChallenge result rows, streamed frame by frame.
+
+    Parameters
+    ----------
+    out : the output folder.
+    camera : a calibrated camera: world positions (metres) of each box's foot point in columns
+        8-9, and per-track speed, path length and height in ``summary.json``.
+    max_gap : when the run ends, a track's gaps of up to this many frames are filled by
+        interpolation (:func:`~motiontrack.tracking.gaps.fill_gaps`) and the file is rewritten
+        sorted by frame, then id (None = the streamed file is final; see
+        :func:`~motiontrack.pipeline.fill_gap_frames`).
+
+    Rows of tracks confirmed in a frame at their earlier, tentative frames
+    (:attr:`FrameResult.earlier`) are streamed as they come, out of frame order; the rewrite sorts
+    them.
+    """
+
+    def __init__(self, out: Path, camera: Any = None, max_gap: int | None = None) -> None:
+        self.paths = {"tracks": Path(out) / "tracks.txt"}
+        self.camera = camera
+        self.max_gap = max_gap
+        self.ids: set[int] = set()
+        self.backfilled = 0
+        self._file: AtomicFile | None = None
+        self._final: Annotations | None = None
+        self._fps = 25.0
+
+    def start(self, ctx: JobContext) -> None:
+        self._fps = ctx.fps
+        self._file = AtomicFile(self.paths["tracks"])
+
+    def write(self, result: FrameResult) -> None:
+        rows = result.reported()
+        self.backfilled += len(result.earlier)
+        if not rows:
+            return
+        boxes = np.array([t.box.as_array() for _, t in rows])
+        tid = [t.id for _, t in rows]
+        world = self._world(boxes) if self.camera is not None else None
+        self._file.write(format_mot_rows([f + 1 for f, _ in rows], tid, boxes,
+                                         [t.score for _, t in rows], world))
+        self.ids.update(tid)
+
+    def close(self, keep: bool) -> None:
+        if self._file is not None:
+            self._file.commit() if keep else self._file.discard()
+            self._file = None
+
+    def final(self) -> Annotations:
+        """The finished tracks file as a table (read back once: nothing accumulates in memory
+        per frame while the job runs)."""
+        if self._final is None:
+            self._final = read_mot(self.paths["tracks"], kind="results")
+        return self._final
+
+    def finish(self, summary: JobSummary) -> None:
+        summary.tracks = len(self.ids)
+        if self.max_gap is not None:
+            self._complete(summary, self.max_gap)
+        if self.camera is not None:
+            from ..calibrate import track_measurements
+
+            pred = self.final()
+            summary.extra["measurements"] = {
+                str(k): v for k, v in track_measurements(pred.frames, pred.ids, pred.boxes,
+                                                         self.camera, self._fps).items()}
+
+    def _complete(self, summary: JobSummary, max_gap: int) -> None:
+        """Rewrite the file sorted by frame, then id, with each track's short gaps filled; the
+        filled rows get their world position from the camera."""
+        pred = self.final()
+        filled = fill_gaps(pred, max_gap)
+        summary.extra["backfilled_rows"] = self.backfilled
+        summary.extra["filled_rows"] = len(filled) - len(pred)
+        if self.camera is not None:
+            new = (filled.world == -1.0).all(axis=1)
+            filled.world[new] = self._world(filled.boxes[new])
+        write_mot(filled, self.paths["tracks"], kind="results")   # sorted by frame, then id
+        log.info("tracks.txt: %d rows at tentative frames, %d filled in gaps of up to %d frames",
+                 self.backfilled, len(filled) - len(pred), max_gap)
+        self._final = filled
+
+    def _world(self, boxes: np.ndarray) -> np.ndarray:
+        """Ground-plane positions ``(x, y, 0)`` in metres of the boxes' foot points."""
+        from ..calibrate import world_positions
+
+        return np.column_stack([world_positions(boxes, self.camera), np.zeros(len(boxes))])
+
+
+class RegionsWriter(Writer):
+    """``regions.txt``: the motion regions of every frame as MOTChallenge rows (id = the region's
+    number in its frame, from 1): what the detection stage found, for framewise scoring."""
+
+    def __init__(self, out: Path) -> None:
+        self.paths = {"regions": Path(out) / "regions.txt"}
+        self._file: AtomicFile | None = None
+
+    def start(self, ctx: JobContext) -> None:
+        self._file = AtomicFile(self.paths["regions"])
+
+    def write(self, result: FrameResult) -> None:
+        if result.regions:
+            boxes = np.array([r.box.as_array() for r in result.regions])
+            n = len(result.regions)
+            self._file.write(format_mot_rows([result.index + 1] * n, range(1, n + 1), boxes,
+                                             [r.score for r in result.regions]))
+
+    def close(self, keep: bool) -> None:
+        if self._file is not None:
+            self._file.commit() if keep else self._file.discard()
+            self._file = None
+
+
+class ScoreWriter(Writer):
+    """The run scored against ground truth (``summary.json``'s ``accuracy``) and, with
+    ``write_gt``, the ground truth written as ``gt.txt`` beside the tracks.
+
+    ``score(gt, pred, frames, start)`` gets the finished tracks of ``tracks`` (a
+    :class:`TracksWriter` before this writer in the job), the frames processed and the source's
+    first frame index.
+    """
+
+    def __init__(self, out: Path, gt: Annotations, tracks: TracksWriter,
+                 score: Callable[[Annotations, Annotations, int, int], dict[str, float]],
+                 write_gt: bool = True) -> None:
+        self.paths = {"gt": Path(out) / "gt.txt"} if write_gt else {}
+        self.gt = gt
+        self.tracks = tracks
+        self.score = score
+        self._start = 0
+
+    def start(self, ctx: JobContext) -> None:
+        self._start = ctx.start
+
+    def finish(self, summary: JobSummary) -> None:
+        summary.accuracy = self.score(self.gt, self.tracks.final(), summary.frames, self._start)
+        if "gt" in self.paths:
+            write_mot(self.gt, self.paths["gt"], kind="gt")
+
+
+class VideoWriter(Writer):
+    """A video of one picture per frame: by default the processor's annotated frame
+    (:meth:`~motiontrack.run.job.Processor.annotate`), or ``picture(result)`` (frames where it
+    gives None are skipped)."""
+
+    def __init__(self, key: str, path: Path, codec: str,
+                 picture: Callable[[FrameResult], np.ndarray | None] | None = None) -> None:
+        self.paths = {key: Path(path)}
+        self.codec = codec
+        self.picture = picture
+        self._sink: VideoSink | None = None
+        self._ctx: JobContext | None = None
+
+    def start(self, ctx: JobContext) -> None:
+        self._ctx = ctx
+        (path,) = self.paths.values()
+        self._sink = VideoSink(path, ctx.fps, self.codec)
+
+    def write(self, result: FrameResult) -> None:
+        img = (self._ctx.annotated(result) if self.picture is None else self.picture(result))
+        if img is not None:
+            self._sink.write(img)
+
+    def close(self, keep: bool) -> None:
+        if self._sink is not None:
+            self._sink.close() if keep else self._sink.discard()
+            self._sink = None
+
+
+def MaskVideoWriter(out: Path, codec: str) -> VideoWriter:
+    """``mask<ext>``: the cleaned motion mask of every frame (processing scale)."""
+    return VideoWriter("mask_video", Path(out) / f"mask{extension_for(codec)}", codec,
+                       picture=lambda r: r.mask)
+
+
+class IntermediateWriter(Writer):
+    """Intermediate movies (``--save background,difference,motion,annotated``): one video per
+    stream of :mod:`motiontrack.render.streams`, named after it."""
+
+    def __init__(self, out: Path, streams: Iterable[str] | str, codec: str) -> None:
+        self.streams = parse_streams(streams)
+        self.paths = {s: Path(out) / f"{s}{extension_for(codec)}" for s in self.streams}
+        self.codec = codec
+        self._sinks: dict[str, VideoSink] = {}
+        self._ctx: JobContext | None = None
+
+    def start(self, ctx: JobContext) -> None:
+        self._ctx = ctx
+        self._sinks = {s: VideoSink(p, ctx.fps, self.codec) for s, p in self.paths.items()}
+
+    def write(self, result: FrameResult) -> None:
+        for s, sink in self._sinks.items():
+            img = stream_image(s, result, self._ctx.processor.background())
+            if img is not None:
+                sink.write(img)
+
+    def close(self, keep: bool) -> None:
+        for sink in self._sinks.values():
+            sink.close() if keep else sink.discard()
+        self._sinks = {}
+
+
+class ViewerWriter(Writer):
+    """A live view: ``show(image)`` with every annotated frame; when it returns False the run
+    ends after this frame with status ``"stopped by user"``."""
+
+    def __init__(self, show: Callable[[np.ndarray], bool]) -> None:
+        self.paths = {}
+        self.show = show
+        self._ctx: JobContext | None = None
+
+    def start(self, ctx: JobContext) -> None:
+        self._ctx = ctx
+
+    def write(self, result: FrameResult) -> None:
+        if not self.show(self._ctx.annotated(result)):
+            self._ctx.request_stop("stopped by user")
