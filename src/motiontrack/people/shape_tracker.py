@@ -32,7 +32,7 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-from ..preprocess import to_gray
+from ..imaging import to_gray
 from ..types import Box
 from . import bspline
 from .shape_model import ShapeModel, apply_similarity, fit_similarity, invert_similarity
@@ -362,38 +362,54 @@ class ShapeTracker:
             off, strength = search_normals(edges, pts - origin, nrm, half, p.edge_threshold)
             found = strength > 0
             if fg is not None:
-                inner = np.rint(pts - origin - 2.0 * nrm).astype(np.int64)
-                fh, fw = fg.shape[:2]
-                ok = (inner[:, 0] >= 0) & (inner[:, 0] < fw) & (inner[:, 1] >= 0) & (inner[:, 1] < fh)
-                visible = np.zeros(len(pts), bool)
-                visible[ok] = fg[inner[ok, 1], inner[ok, 0]] > 0
+                visible = _visible_points(fg, pts, nrm, origin)
                 if it == 0:
                     visible_frac = float(visible.mean()) if len(visible) else 0.0
                 found &= visible
             support = float(found.mean()) if len(found) else 0.0
             if support < p.min_support:
                 break
-            target = pts + off[:, None] * nrm
-            model_pts = self._B @ self.model.shape(b)
-            new_pose = fit_similarity(model_pts[found], target[found], strength[found])
-            if np.hypot(new_pose[0], new_pose[1]) <= 0:
+            solved = self._solve(b, pts + off[:, None] * nrm, strength, found, s0)
+            if solved is None:
                 break
-            new_pose = self._limit_pose(new_pose)
-            s_new = np.hypot(new_pose[0], new_pose[1])
-            s_lim = np.clip(s_new, s0 * (1 - p.max_scale_change), s0 * (1 + p.max_scale_change))
-            if s_lim != s_new:
-                # keep the fitted outline's centre while limiting its scale
-                c_model = model_pts.mean(axis=0)
-                centre = apply_similarity(new_pose, c_model[None, :])[0]
-                new_pose[:2] *= s_lim / s_new
-                new_pose[2:] += centre - apply_similarity(new_pose, c_model[None, :])[0]
-            local = apply_similarity(invert_similarity(new_pose), target)
-            # Points without an edge keep the model's own position (no information there).
-            local[~found] = model_pts[~found]
-            ctrl_local = self._pinv @ local
-            b = self.model.constrain(self.model.project(ctrl_local))
-            pose = new_pose
+            pose, b = solved
         return pose, b, support, visible_frac
+
+    def _solve(self, b: np.ndarray, target: np.ndarray, strength: np.ndarray, found: np.ndarray,
+               s0: float) -> tuple[np.ndarray, np.ndarray] | None:
+        """Step 3 (Cootes et al. 1995, section 5.2): pose and constrained weights for the edge
+        points ``target`` ``(K, 2)`` (work px) that the sample points of weights ``b`` found.
+
+        The pose is the ``strength``-weighted similarity from the model outline to the ``found``
+        points, its tilt and its scale change from ``s0`` limited; the points mapped back into the
+        model frame give control points (pseudo-inverse of the sampling matrix) whose projection
+        onto the modes is constrained to ``D_m <= D_max``. ``None`` when the pose degenerates.
+        """
+        model_pts = self._B @ self.model.shape(b)
+        new_pose = fit_similarity(model_pts[found], target[found], strength[found])
+        if np.hypot(new_pose[0], new_pose[1]) <= 0:
+            return None
+        new_pose = self._limit_scale(self._limit_pose(new_pose), model_pts, s0)
+        local = apply_similarity(invert_similarity(new_pose), target)
+        # Points without an edge keep the model's own position (no information there).
+        local[~found] = model_pts[~found]
+        ctrl_local = self._pinv @ local
+        return new_pose, self.model.constrain(self.model.project(ctrl_local))
+
+    def _limit_scale(self, pose: np.ndarray, model_pts: np.ndarray, s0: float) -> np.ndarray:
+        """``pose`` with its scale held within ``max_scale_change`` of ``s0``, about the centre of
+        the outline ``model_pts`` (model frame), so a partly occluded person's outline does not
+        collapse. Modifies and returns ``pose``."""
+        p = self.params
+        s_new = np.hypot(pose[0], pose[1])
+        s_lim = np.clip(s_new, s0 * (1 - p.max_scale_change), s0 * (1 + p.max_scale_change))
+        if s_lim != s_new:
+            # keep the fitted outline's centre while limiting its scale
+            c_model = model_pts.mean(axis=0)
+            centre = apply_similarity(pose, c_model[None, :])[0]
+            pose[:2] *= s_lim / s_new
+            pose[2:] += centre - apply_similarity(pose, c_model[None, :])[0]
+        return pose
 
     def _box(self, pose: np.ndarray, b: np.ndarray) -> np.ndarray:
         dense = self._Bbox @ apply_similarity(pose, self.model.shape(b))
@@ -436,47 +452,36 @@ class ShapeTracker:
         Returns
         -------
         list of FittedShape
-            One per tracked person (iterable as ``(track_id, outline (K, 2), box)``), sorted by id.
+            One per tracked person kept this frame (iterable as ``(track_id, outline (K, 2),
+            box)``), in fitting order: nearest the camera (lowest foot point) first.
         """
-        p = self.params
-        H, W = frame.shape[:2]
-        if background is not None:
-            h, w = background.shape[:2]
-            img = work
-            if img is None or img.shape[:2] != (h, w):
-                img = frame
-                if (h, w) != (H, W):
-                    # a smaller background comes from the pipeline's preprocessing: mimic it
-                    img = cv2.resize(frame, (w, h), interpolation=cv2.INTER_AREA)
-                    img = cv2.GaussianBlur(img, (5, 5), 0)
-            bg = background
-            if img.ndim != bg.ndim:
-                img, bg = to_gray(img), to_gray(bg)
-            diff_pair = (img, bg)
-        elif mask is not None:
-            h, w = mask.shape[:2]
-            diff_pair = (mask, np.zeros_like(mask))
-        else:
-            h, w = H, W
-            gray = to_gray(frame)
-            diff_pair = (gray, np.zeros_like(gray))
-        sx, sy = w / W, h / H
-        fg_full = None
-        if mask is not None and background is not None:
-            fg_full = mask if mask.shape[:2] == (h, w) else cv2.resize(
-                mask, (w, h), interpolation=cv2.INTER_NEAREST)
-        to_work = np.array([sx, sy, sx, sy])
+        view = _work_view(frame, background, mask, work)
+        self._predict()
+        self._adopt_tracks(tracks, heads, view)
+        return self._measure_people(view)
 
-        # Predict every person (step 1).
+    # ------------------------------------------------------------------ the steps of update
+    def _predict(self) -> None:
+        """Step 1: every person's pose moves on by its velocity (scale and rotation have none),
+        its tilt limited, and counts one more frame unseen by the region tracker
+        (:meth:`_adopt_tracks` resets that when the person's track is reported)."""
         for person in self.people.values():
             person.pose = self._limit_pose(person.pose + person.vel)
             person.unseen += 1
 
-        # Births and re-initialisation from the region tracker.
+    def _adopt_tracks(self, tracks, heads, view: _WorkView) -> None:
+        """Births and re-initialisation from the region tracker's ``tracks``.
+
+        A new track gets the mean shape in its box, unless its box overlaps another person's
+        outline box by ``duplicate_iou`` (most likely a duplicate of that person). A track
+        measured this frame (``time_since_update == 0``) updates its shape's agreement; a shape
+        that has drifted away from it is placed anew (:meth:`_drifted`), keeping its velocity.
+        """
+        p = self.params
         head_list = list(heads or ())
         boxes_now = {tid: self._box(q.pose, q.b) for tid, q in self.people.items()}
         for tr in tracks:
-            tb = tr.box.as_array() * to_work
+            tb = tr.box.as_array() * view.to_work
             person = self.people.get(tr.id)
             crowded = any(_iou(ob, tb) >= p.duplicate_iou for oid, ob in boxes_now.items()
                           if oid != tr.id)
@@ -486,88 +491,215 @@ class ShapeTracker:
                     continue
                 person.agreement = _iou(boxes_now[tr.id], tb)
                 person.disagree = person.disagree + 1 if person.agreement < p.reinit_iou else 0
-                # Re-initialise only a shape that has drifted away from its measured track and
-                # either lost its edges or stayed away for a while, and not where another
-                # person's shape is (ambiguous boxes).
-                if crowded or person.disagree == 0 or (person.coast < p.reinit_coast
-                                                       and person.disagree < p.reinit_frames):
+                if crowded or not self._drifted(person):
                     continue
             elif crowded:
                 continue
-            hx = None
-            for hd in head_list:
-                if tr.box.x <= hd.x <= tr.box.x2 and tr.box.y - 0.1 * tr.box.h <= hd.y <= tr.box.y + 0.4 * tr.box.h:
-                    hx = hd.x * sx
-                    break
-            new = _Person(self._init_pose(tb, hx), np.zeros(self.model.n_modes))
+            new = _Person(self._init_pose(tb, _head_x(tr.box, head_list, view.sx)),
+                          np.zeros(self.model.n_modes))
             if person is not None:
                 new.vel[2:] = person.vel[2:]
             self.people[tr.id] = new
 
+    def _drifted(self, person: _Person) -> bool:
+        """Whether a shape has drifted away from its measured track (IoU below ``reinit_iou``)
+        and either lost its edges (coasting ``reinit_coast`` frames) or stayed away
+        ``reinit_frames`` frames in a row: then it follows something else and is placed anew.
+        (A crowded track, whose box another person's shape overlaps, is ambiguous and never
+        re-initialises.)"""
+        p = self.params
+        return not (person.disagree == 0 or (person.coast < p.reinit_coast
+                                             and person.disagree < p.reinit_frames))
+
+    def _measure_people(self, view: _WorkView) -> list[FittedShape]:
+        """Steps 2–4 for every person, front to back; drops the people lost or out of the image.
+
+        Occlusion reasoning: fit front to back (lower foot point = nearer the camera on a ground
+        plane seen from above); a person's sample points inside the outline of someone nearer
+        are occluded and ignored (Siebel's thesis, section 4.4.3).
+        """
         out: list[FittedShape] = []
         drop = []
-        # Occlusion reasoning: fit front to back (lower foot point = nearer the camera on a
-        # ground plane seen from above); a person's sample points inside the outline of someone
-        # nearer are occluded and ignored (Siebel's thesis, section 4.4.3).
         boxes = {tid: self._box(q.pose, q.b) for tid, q in self.people.items()}
         order = sorted(self.people, key=lambda t: -(boxes[t][1] + boxes[t][3]))
         fitted_polys: list[tuple[float, np.ndarray, np.ndarray]] = []  # (foot y, box, outline)
         for tid in order:
-            person = self.people[tid]
-            box = boxes[tid]
-            foot = box[1] + box[3]
-            half = max(p.min_search, p.search * box[3]) + 2
-            x1 = int(max(0, np.floor(box[0] - half)))
-            y1 = int(max(0, np.floor(box[1] - half)))
-            x2 = int(min(w, np.ceil(box[0] + box[2] + half)))
-            y2 = int(min(h, np.ceil(box[1] + box[3] + half)))
-            if x2 - x1 < 3 or y2 - y1 < 3:
+            shape = self._measure_person(tid, boxes[tid], view, fitted_polys)
+            if shape is None:
                 drop.append(tid)
-                continue
-            edges = difference_gradients(diff_pair[0][y1:y2, x1:x2], diff_pair[1][y1:y2, x1:x2])
-            fg = fg_full[y1:y2, x1:x2] if fg_full is not None else None
-            front = [poly for fy, fb, poly in fitted_polys
-                     if fy > foot + p.occlusion_margin * box[3] and _iou(fb, box) > 0]
-            if front:
-                occ = np.zeros((y2 - y1, x2 - x1), np.uint8)
-                cv2.fillPoly(occ, [np.rint(poly - [x1, y1]).astype(np.int32) for poly in front], 1)
-                base = fg if fg is not None else np.full_like(occ, 255)
-                fg = np.where(occ > 0, 0, base).astype(np.uint8)
-            pose, b, support, visible = self._fit(person, edges, np.array([x1, y1], np.float64), fg)
-            person.support = support
-            if support >= p.min_support and visible >= p.min_visible:
-                # Step 4: alpha-beta correction; position has velocity, scale/rotation do not.
-                r = pose - person.pose
-                person.pose = person.pose + p.alpha * r
-                if min(support, visible) >= p.velocity_support:
-                    person.vel[2:] = person.vel[2:] + p.beta * r[2:]
-                person.b = b
-                person.coast = 0
             else:
-                # No edges, or mostly hidden (by the scene or a nearer person): coast on the
-                # prediction.
-                person.coast += 1
-            if person.coast > p.max_coast or person.unseen > p.max_coast:
-                drop.append(tid)
-                continue
-            ctrl, pts, nrm = self._outline(person.pose, person.b)
-            bx = self._box(person.pose, person.b)
-            fitted_polys.append((bx[1] + bx[3], bx, self._Bbox @ ctrl))
-            if bx[2] <= 0 or bx[3] <= 0 or bx[0] >= w or bx[1] >= h or bx[0] + bx[2] <= 0 \
-                    or bx[1] + bx[3] <= 0:
-                drop.append(tid)
-                continue
-            scale_back = np.array([1 / sx, 1 / sy])
-            ob = bx / to_work
-            out.append(FittedShape(
-                track_id=tid, outline=pts * scale_back, control=ctrl * scale_back,
-                box=Box(float(ob[0]), float(ob[1]), float(ob[2]), float(ob[3])),
-                support=support, coasting=person.coast, normals=nrm,
-                search=max(p.min_search, p.search * bx[3]) / sy, unseen=person.unseen,
-                visible=visible, agreement=person.agreement))
+                out.append(shape)
         for tid in drop:
             self.people.pop(tid, None)
         return out
+
+    def _measure_person(self, tid: int, box: np.ndarray, view: _WorkView,
+                        fitted_polys: list[tuple[float, np.ndarray, np.ndarray]]
+                        ) -> FittedShape | None:
+        """Steps 2–4 for one person whose predicted outline box is ``box`` (work px).
+
+        ``fitted_polys`` holds the outlines of the people already fitted (nearer the camera); this
+        person's is appended. ``None`` when the person is to be dropped: search window too small,
+        coasting or unseen longer than ``max_coast``, or outline outside the image.
+        """
+        p = self.params
+        person = self.people[tid]
+        window = _search_window(box, max(p.min_search, p.search * box[3]) + 2, view.w, view.h)
+        if window is None:
+            return None
+        x1, y1, x2, y2 = window
+        edges = difference_gradients(view.diff[0][y1:y2, x1:x2], view.diff[1][y1:y2, x1:x2])
+        fg = self._visible_mask(view, window, box, fitted_polys)
+        pose, b, support, visible = self._fit(person, edges, np.array([x1, y1], np.float64), fg)
+        self._correct(person, pose, b, support, visible)
+        if person.coast > p.max_coast or person.unseen > p.max_coast:
+            return None
+        ctrl, pts, nrm = self._outline(person.pose, person.b)
+        bx = self._box(person.pose, person.b)
+        fitted_polys.append((bx[1] + bx[3], bx, self._Bbox @ ctrl))
+        if bx[2] <= 0 or bx[3] <= 0 or bx[0] >= view.w or bx[1] >= view.h or bx[0] + bx[2] <= 0 \
+                or bx[1] + bx[3] <= 0:
+            return None
+        scale_back = np.array([1 / view.sx, 1 / view.sy])
+        ob = bx / view.to_work
+        return FittedShape(
+            track_id=tid, outline=pts * scale_back, control=ctrl * scale_back,
+            box=Box(float(ob[0]), float(ob[1]), float(ob[2]), float(ob[3])),
+            support=support, coasting=person.coast, normals=nrm,
+            search=max(p.min_search, p.search * bx[3]) / view.sy, unseen=person.unseen,
+            visible=visible, agreement=person.agreement)
+
+    def _visible_mask(self, view: _WorkView, window: tuple[int, int, int, int], box: np.ndarray,
+                      fitted_polys: list[tuple[float, np.ndarray, np.ndarray]]
+                      ) -> np.ndarray | None:
+        """The motion mask inside ``window`` with the outlines of nearer people overlapping ``box``
+        cleared (occluders: foot point lower by more than ``occlusion_margin`` of the height);
+        ``None`` when there is neither a mask nor an occluder."""
+        x1, y1, x2, y2 = window
+        fg = view.fg[y1:y2, x1:x2] if view.fg is not None else None
+        foot = box[1] + box[3]
+        front = [poly for fy, fb, poly in fitted_polys
+                 if fy > foot + self.params.occlusion_margin * box[3] and _iou(fb, box) > 0]
+        if front:
+            occ = np.zeros((y2 - y1, x2 - x1), np.uint8)
+            cv2.fillPoly(occ, [np.rint(poly - [x1, y1]).astype(np.int32) for poly in front], 1)
+            base = fg if fg is not None else np.full_like(occ, 255)
+            fg = np.where(occ > 0, 0, base).astype(np.uint8)
+        return fg
+
+    def _correct(self, person: _Person, pose: np.ndarray, b: np.ndarray, support: float,
+                 visible: float) -> None:
+        """Step 4: alpha-beta correction with the fitted ``pose`` and weights ``b`` when enough
+        sample points found an edge and enough of the outline is visible; otherwise (no edges,
+        or mostly hidden by the scene or a nearer person) the person coasts on the prediction."""
+        p = self.params
+        person.support = support
+        if support >= p.min_support and visible >= p.min_visible:
+            # position has velocity, scale/rotation do not
+            r = pose - person.pose
+            person.pose = person.pose + p.alpha * r
+            if min(support, visible) >= p.velocity_support:
+                person.vel[2:] = person.vel[2:] + p.beta * r[2:]
+            person.b = b
+            person.coast = 0
+        else:
+            person.coast += 1
+
+
+@dataclass(frozen=True)
+class _WorkView:
+    """The images of one frame the shapes are fitted in, at the work (background) resolution.
+
+    Attributes
+    ----------
+    diff : pair of (h, w[, 3]) uint8
+        Image and reference whose difference image holds the edges.
+    fg : (h, w) uint8 or None
+        Motion mask (visibility of sample points); None without both a background and a mask.
+    w, h : int
+        Work size, px.
+    sx, sy : float
+        Work pixels per original pixel.
+    """
+
+    diff: tuple[np.ndarray, np.ndarray]
+    fg: np.ndarray | None
+    w: int
+    h: int
+    sx: float
+    sy: float
+
+    @property
+    def to_work(self) -> np.ndarray:
+        """Factors taking a box ``(x, y, w, h)`` from original to work pixels."""
+        return np.array([self.sx, self.sy, self.sx, self.sy])
+
+
+def _work_view(frame: np.ndarray, background: np.ndarray | None, mask: np.ndarray | None,
+               work: np.ndarray | None) -> _WorkView:
+    """The difference-image pair and the motion mask at the background's resolution (see
+    :meth:`ShapeTracker.update` for the arguments): frame and background; else the mask and
+    zeros; else the grey frame and zeros."""
+    H, W = frame.shape[:2]
+    if background is not None:
+        h, w = background.shape[:2]
+        img = work
+        if img is None or img.shape[:2] != (h, w):
+            img = frame
+            if (h, w) != (H, W):
+                # a smaller background comes from the pipeline's preprocessing: mimic it
+                img = cv2.resize(frame, (w, h), interpolation=cv2.INTER_AREA)
+                img = cv2.GaussianBlur(img, (5, 5), 0)
+        bg = background
+        if img.ndim != bg.ndim:
+            img, bg = to_gray(img), to_gray(bg)
+        diff_pair = (img, bg)
+    elif mask is not None:
+        h, w = mask.shape[:2]
+        diff_pair = (mask, np.zeros_like(mask))
+    else:
+        h, w = H, W
+        gray = to_gray(frame)
+        diff_pair = (gray, np.zeros_like(gray))
+    fg_full = None
+    if mask is not None and background is not None:
+        fg_full = mask if mask.shape[:2] == (h, w) else cv2.resize(
+            mask, (w, h), interpolation=cv2.INTER_NEAREST)
+    return _WorkView(diff_pair, fg_full, w, h, w / W, h / H)
+
+
+def _head_x(box: Box, heads: list, sx: float) -> float | None:
+    """Work-pixel x of the first head near the top of ``box`` (original px): inside it
+    horizontally, between 10 % of its height above its top and 40 % below; None when none is."""
+    for hd in heads:
+        if box.x <= hd.x <= box.x2 and box.y - 0.1 * box.h <= hd.y <= box.y + 0.4 * box.h:
+            return hd.x * sx
+    return None
+
+
+def _search_window(box: np.ndarray, half: float, w: int, h: int
+                   ) -> tuple[int, int, int, int] | None:
+    """``(x1, y1, x2, y2)``: ``box`` (work px) grown by ``half`` on every side and cut to the
+    ``w`` × ``h`` image; None when less than 3 px remain either way."""
+    x1 = int(max(0, np.floor(box[0] - half)))
+    y1 = int(max(0, np.floor(box[1] - half)))
+    x2 = int(min(w, np.ceil(box[0] + box[2] + half)))
+    y2 = int(min(h, np.ceil(box[1] + box[3] + half)))
+    if x2 - x1 < 3 or y2 - y1 < 3:
+        return None
+    return x1, y1, x2, y2
+
+
+def _visible_points(fg: np.ndarray, pts: np.ndarray, nrm: np.ndarray, origin: np.ndarray
+                    ) -> np.ndarray:
+    """Boolean ``(K,)``: sample point k is visible, i.e. its inside neighbour (2 px in from the
+    outline along the normal) is foreground in ``fg``, a mask crop whose corner is ``origin``."""
+    inner = np.rint(pts - origin - 2.0 * nrm).astype(np.int64)
+    fh, fw = fg.shape[:2]
+    ok = (inner[:, 0] >= 0) & (inner[:, 0] < fw) & (inner[:, 1] >= 0) & (inner[:, 1] < fh)
+    visible = np.zeros(len(pts), bool)
+    visible[ok] = fg[inner[ok, 1], inner[ok, 0]] > 0
+    return visible
 
 
 def _iou(a: np.ndarray, b: np.ndarray) -> float:
