@@ -30,7 +30,7 @@ import cv2
 
 from motiontrack.config import PipelineConfig
 from motiontrack.motion.cleanup import clean_mask
-from motiontrack.pipeline import Pipeline
+from motiontrack.pipeline import Detection, Motion, Pipeline
 from motiontrack.preprocess import preprocess
 from motiontrack.types import Frame
 
@@ -55,16 +55,16 @@ def one_run(frames: list, cfg: PipelineConfig, fps: float) -> dict[str, float]:
         t2 = clock()
         mask = clean_mask(raw, cfg.cleanup)
         t3 = clock()
-        extras = {"raw_mask": raw, "small": small}
         if pipe.ghosts is not None:
             mask, regions = pipe.ghosts.regions(small, mask, pipe._find, pipe.scale)
         else:
             regions = pipe._find(mask)
         t4 = clock()
+        heads = None
         if regions:
-            regions = pipe._split_upright(mask, regions, extras)
+            regions, heads = pipe._split_upright(mask, regions)
         t5 = clock()
-        pipe.track(frame, mask, regions, extras)
+        pipe.track(frame, Detection(Motion(mask, raw, small), mask, regions, heads))
         t6 = clock()
         for name, a, b in zip(STAGES, (t0, t1, t2, t3, t4, t5), (t1, t2, t3, t4, t5, t6)):
             spent[name] += b - a

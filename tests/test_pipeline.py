@@ -14,18 +14,15 @@ from motiontrack.io.mot import read_mot
 from motiontrack.motion import DETECTORS
 from motiontrack.synth import parse_synth_spec
 from motiontrack.tracking.association import iou_matrix
-from motiontrack.types import Annotations, FrameResult
+from motiontrack.types import FrameResult
+
+from conftest import tracks_of
 
 
 def run_scene(spec, overrides=()):
     """Tracks of a run as Annotations, plus the per-frame results."""
-    cfg = load_config(None, list(overrides))
-    rows, results = [], []
-    for res in motiontrack.track(spec, cfg):
-        results.append(res)
-        rows += [(res.index + 1, t.id, *t.box.as_array()) for t in res.tracks]
-    a = np.array(rows, float).reshape(-1, 6)
-    return Annotations.from_columns(a[:, 0], a[:, 1], a[:, 2:6]), results
+    results = list(motiontrack.track(spec, load_config(None, list(overrides))))
+    return tracks_of(results), results
 
 
 def test_python_api_yields_frame_results():
@@ -97,11 +94,8 @@ def test_pets09_well_above_the_tutorial_baseline(data):
     gt = read_mot(data("pets09-s2l1", "gt_mot15.txt"), kind="gt")
     scores = []
     for seed in range(3):
-        rows = []
-        for res in motiontrack.track(str(video), load_config(None, [f"motion.knn.seed={seed}"])):
-            rows += [(res.index + 1, t.id, *t.box.as_array()) for t in res.tracks]
-        a = np.array(rows, float)
-        pred = Annotations.from_columns(a[:, 0], a[:, 1], a[:, 2:6])
+        cfg = load_config(None, [f"motion.knn.seed={seed}"])
+        pred = tracks_of(motiontrack.track(str(video), cfg))
         r = evaluate_tracking(gt, pred, ignore_zero_marked=True)
         scores.append({"recall": r["TP"] / (r["TP"] + r["FN"]),
                        "precision": r["TP"] / (r["TP"] + r["FP"]),
@@ -110,13 +104,8 @@ def test_pets09_well_above_the_tutorial_baseline(data):
     # The identity scores of one run hang on a swap or two inside the group at the sign post, so
     # the floors hold the mean of three seeds of the KNN model (benchmarks/cold_start.py).
     # Measured (seeds 0, 1, 2): recall 0.840, precision 0.900, MOTA 0.739, IDF1 0.814, HOTA 0.581
-    # (seed 0 alone: 0.843, 0.906, 0.748, 0.823, 0.584). Session 9, before the pixel-level ghost
-    # test: 0.841, 0.896, 0.735, 0.812, 0.579. Session 8, before a track's share of a
-    # merged blob held its size: 0.836, 0.890, 0.725, 0.811, 0.575. Session 7, before overlap
-    # matches went first (assign_in_stages): 0.834, 0.883, 0.716, 0.782, 0.559. Session 6 (seed
-    # 0, before the KNN priming and the ghost filter): 0.822, 0.886, 0.709, 0.799, 0.579; with
-    # MOG2 and no appearance model 0.742, 0.856, 0.612, 0.770, 0.532. The floors sit 0.01-0.02
-    # under the measured means, above the issue's targets (0.70 / 0.65 / 0.55).
+    # (seed 0 alone: 0.843, 0.906, 0.748, 0.823, 0.584). The floors sit 0.01-0.02 under these
+    # means.
     assert mean["recall"] >= 0.82 and mean["precision"] >= 0.88
     assert mean["MOTA"] >= 0.72 and mean["IDF1"] >= 0.79 and mean["HOTA"] >= 0.565
 
@@ -136,14 +125,9 @@ def test_pets09_cold_starts_lose_the_ghosts_of_people_standing_in_the_first_fram
     def mean_mota(pixels: bool) -> float:
         scores = []
         for start in (60, 160, 210):
-            rows = [(res.index + 1, t.id, *t.box.as_array())
-                    for res in motiontrack.track(str(video), load_config(
-                        None, [f"source.start={start}", f"motion.ghost_pixels={str(pixels).lower()}"]))
-                    for t in res.tracks]
-            a = np.array(rows, float).reshape(-1, 6)
-            r = evaluate_tracking(gt.select(gt.frames > start),
-                                  Annotations.from_columns(a[:, 0], a[:, 1], a[:, 2:6]),
-                                  ignore_zero_marked=True)
+            pred = tracks_of(motiontrack.track(str(video), load_config(
+                None, [f"source.start={start}", f"motion.ghost_pixels={str(pixels).lower()}"])))
+            r = evaluate_tracking(gt.select(gt.frames > start), pred, ignore_zero_marked=True)
             scores.append(r["MOTA"])
         return float(np.mean(scores))
 
@@ -155,18 +139,12 @@ def test_pets09_cold_starts_lose_the_ghosts_of_people_standing_in_the_first_fram
 @pytest.mark.data
 def test_pets09_people_preset_splits_groups_by_heads(data):
     # head-based splitting separates people walking together: measured MOTA 0.758, IDF1 0.838,
-    # HOTA 0.591 on these 300 frames (session 10; session 9 0.767, 0.846, 0.595; session 7 0.755, 0.751, 0.545; session 6, before
-    # the KNN priming and the ghost filter: 0.705, 0.619, 0.478). The identity scores hang on one or two swaps: with other seeds of
-    # KNN's random generator (session 6) MOTA 0.687-0.714, IDF1 0.555-0.755, HOTA 0.441-0.549
-    # (MOG2 without the appearance model: 0.602, 0.763, 0.526).
+    # HOTA 0.591 on these 300 frames. The identity scores hang on one or two swaps, so the floors
+    # leave room under them.
     video = data("pets09-s2l1", "video.avi")
     gt = read_mot(data("pets09-s2l1", "gt_mot15.txt"), kind="gt")
-    rows = []
-    for res in motiontrack.track(str(video), load_config(None, preset="people")):
-        rows += [(res.index + 1, t.id, *t.box.as_array()) for t in res.tracks]
-    a = np.array(rows, float)
-    r = evaluate_tracking(gt, Annotations.from_columns(a[:, 0], a[:, 1], a[:, 2:6]),
-                          ignore_zero_marked=True)
+    pred = tracks_of(motiontrack.track(str(video), load_config(None, preset="people")))
+    r = evaluate_tracking(gt, pred, ignore_zero_marked=True)
     assert r["MOTA"] >= 0.72 and r["IDF1"] >= 0.75 and r["HOTA"] >= 0.55
 
 
@@ -236,8 +214,8 @@ def test_people_preset_runs_heads_and_shapes_and_draws_them(tmp_path):
     assert cfg.people.enabled and cfg.people.heads and cfg.people.shapes
     cfg = load_config(None, preset="people")
     results = list(motiontrack.track("synth:crossing?n_frames=60", cfg))
-    assert any(r.extras.get("heads") for r in results)
-    assert any(r.extras.get("shapes") for r in results)
+    assert any(r.people.heads for r in results)
+    assert any(r.people.shapes for r in results)
 
 
 def test_unknown_preset(capsys):
@@ -291,7 +269,7 @@ def test_head_splitting_without_shapes_keeps_detection_in_its_worker_thread():
         pipe = Pipeline(cfg, (src.info.width, src.info.height), None, src.info.fps)
         assert pipe.sequential is False
         pipe.sequential = sequential
-        outputs.append([(r.index, [(t.id, t.box) for t in r.tracks], len(r.extras["heads"]))
+        outputs.append([(r.index, [(t.id, t.box) for t in r.tracks], len(r.people.heads) if r.people else 0)
                         for r in pipe.results(src)])
     assert outputs[0] == outputs[1]
     assert sum(n for _i, _t, n in outputs[0]) > 0
@@ -313,8 +291,8 @@ def test_track_job_keeps_the_shapes_in_order_with_detection(tmp_path):
     assert job.processor.pipe.sequential is True
     job.run()
     written = np.loadtxt(tmp_path / "out" / "tracks.txt", delimiter=",", ndmin=2)[:, :6]
-    expected = np.array([(r.index + 1, t.id, *t.box.as_array()) for r in run(spec, cfg)
-                         for t in r.tracks])
+    tracks = tracks_of(run(spec, cfg))
+    expected = np.column_stack([tracks.frames, tracks.ids, tracks.boxes])
     np.testing.assert_allclose(written, expected, atol=0.006)   # tracks.txt keeps 2 decimals
     no_shapes = load_config(None, ["people.enabled=true", "people.shapes=false",
                                    "output.video=false"])
@@ -327,8 +305,9 @@ def test_track_job_keeps_the_shapes_in_order_with_detection(tmp_path):
 def test_bridge_lets_go_of_an_object_at_the_image_border(border_rule, monkeypatch):
     # The walker leaves at the left edge; the "detector" stops seeing it once its box is within
     # 10 px of the edge. The KCF bridge carries it on towards the edge and lets go when its box
-    # reaches the border (on PETS, bridges held there stuck to the background and cost precision:
-    # MOTA with the KCF bridge 0.51 -> 0.58 with the rule). Patched out, the bridge goes on.
+    # reaches the border (on PETS, bridges held there stick to the background and cost precision:
+    # MOTA with the KCF bridge 0.51 without the rule, 0.58 with it). Patched out, the bridge
+    # goes on.
     from motiontrack.io.sources import open_source
     from motiontrack.pipeline import Pipeline
     from motiontrack.tracking import bridge as bridge_mod
@@ -351,8 +330,8 @@ def test_bridge_lets_go_of_an_object_at_the_image_border(border_rule, monkeypatc
 
 def test_knn_masks_do_not_depend_on_the_threads_random_state():
     # OpenCV's KNN draws from the calling thread's random generator; unseeded, a second run in
-    # the same thread (or one after anything else used the generator) gave other masks. The
-    # detector seeds it per frame, so every run is the same, in any thread.
+    # the same thread (or one after anything else used the generator) would give other masks.
+    # The detector seeds it per frame, so every run is the same, in any thread.
     import threading
 
     import cv2

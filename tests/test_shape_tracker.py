@@ -18,6 +18,8 @@ from motiontrack.people.shape_tracker import (
 from motiontrack.tracking.association import iou_matrix
 from motiontrack.types import Box, Track, TrackState
 
+from conftest import tracks_of
+
 
 def _track(tid: int, box, tsu: int = 0) -> Track:
     return Track(id=tid, box=Box(*map(float, box)), state=TrackState.CONFIRMED, time_since_update=tsu)
@@ -113,11 +115,11 @@ def test_people_stage_end_to_end_on_the_walker(walker):
 
     regions = components(mask)
     tracks = [_track(1, gt.at(first + 1).boxes[0])]
-    out, extras = stage.process(scene.frame(first), bg, mask, regions, tracks)
-    assert len(extras["heads"]) == 1
-    assert abs(extras["heads"][0].x - (gt.at(first + 1).boxes[0, 0] + gt.at(first + 1).boxes[0, 2] / 2)) < 12
-    assert len(extras["shapes"]) == 1 and extras["shapes"][0].track_id == 1
-    assert extras["hypotheses"] == [] and extras["hypotheses_by_track"] == {}
+    out, found = stage.process(scene.frame(first), bg, mask, regions, tracks)
+    assert len(found.heads) == 1
+    assert abs(found.heads[0].x - (gt.at(first + 1).boxes[0, 0] + gt.at(first + 1).boxes[0, 2] / 2)) < 12
+    assert len(found.shapes) == 1 and found.shapes[0].track_id == 1
+    assert found.hypotheses == () and found.hypotheses_by_track == {}
     assert len(out) == len(regions)
 
 
@@ -129,13 +131,13 @@ def test_people_stage_offers_a_hypothesis_for_an_uncovered_person(walker):
     for i in (first, first + 1):
         stage.process(scene.frame(i), bg, None, [], [_track(5, gt.at(i + 1).boxes[0])])
     # next frame: the motion detector lost the person (no regions) and the tracker lost the track
-    out, extras = stage.process(scene.frame(first + 2), bg, None, [], [])
+    out, found = stage.process(scene.frame(first + 2), bg, None, [], [])
     # the hypothesis is offered to track 5 only (the pipeline hands it to that lost track); it is
     # not a region, so it can never start a new track
     assert out == []
-    assert list(extras["hypotheses_by_track"]) == [5]
-    (hyp,) = extras["hypotheses"]
-    assert hyp.score == 0.5 and extras["hypotheses_by_track"][5] == hyp
+    assert list(found.hypotheses_by_track) == [5]
+    (hyp,) = found.hypotheses
+    assert hyp.score == 0.5 and found.hypotheses_by_track[5] == hyp
     assert iou_matrix(hyp.box.as_array()[None], gt.at(first + 3).boxes)[0, 0] > 0.6
 
 
@@ -143,8 +145,8 @@ def test_no_hypothesis_for_a_shape_never_checked_against_its_track(walker):
     scene, gt, first = walker
     stage = PeopleStage(PeopleConfig(enabled=True, hypotheses=True, heads=False))
     stage.process(scene.frame(first), scene.background, None, [], [_track(5, gt.at(first + 1).boxes[0])])
-    out, extras = stage.process(scene.frame(first + 1), scene.background, None, [], [])
-    assert out == [] and extras["hypotheses_by_track"] == {}
+    out, found = stage.process(scene.frame(first + 1), scene.background, None, [], [])
+    assert out == [] and found.hypotheses_by_track == {}
 
 
 def test_people_config_validates():
@@ -158,6 +160,7 @@ def test_people_config_validates():
 
 def test_draw_people_marks_outlines_heads_normals_and_hypotheses(walker):
     from motiontrack.render.people import draw_people
+    from motiontrack.types import PeopleFrame
 
     scene, gt, first = walker
     bg = scene.background
@@ -166,15 +169,15 @@ def test_draw_people_marks_outlines_heads_normals_and_hypotheses(walker):
     from motiontrack.motion.regions import components
 
     img = scene.frame(first)
-    _, extras = stage.process(img, bg, mask, components(mask), [_track(1, gt.at(first + 1).boxes[0])])
-    drawn = draw_people(img, extras, control_points=True, normals=True)
+    _, found = stage.process(img, bg, mask, components(mask), [_track(1, gt.at(first + 1).boxes[0])])
+    drawn = draw_people(img, found, control_points=True, normals=True)
     assert drawn.shape == img.shape and not np.array_equal(drawn, img)
     assert np.array_equal(img, scene.frame(first))  # input untouched
     changed = np.any(drawn != img, axis=2)
     ys, xs = np.nonzero(changed)
     x, y, w, h = gt.at(first + 1).boxes[0]
     assert x - 15 <= xs.mean() <= x + w + 15 and y - 15 <= ys.mean() <= y + h + 15
-    assert np.array_equal(draw_people(img, {}), img)  # nothing to draw
+    assert np.array_equal(draw_people(img, PeopleFrame()), img)  # nothing to draw
 
 
 # ------------------------------------------------------- regions cut off by the image border
@@ -227,19 +230,18 @@ def test_border_extension_needs_a_cut_region_and_a_good_outline(case):
 
 @pytest.mark.parametrize("scene", ["column", "crossing"])
 def test_shape_tracker_raises_recall_on_column_and_crossing(scene):
-    # Issue 7's evidence: with the people preset, switching the active shape tracker on raises
-    # recall (CLEAR, IoU 0.5) and costs at most 0.02 precision on synthetic types 3 and 4.
+    # With the people preset, switching the active shape tracker on raises recall (CLEAR, IoU
+    # 0.5) and costs at most 0.02 precision on synthetic types 3 and 4.
     # Measured: column 0.986 -> 0.993 (the person entering across the border is extended past it
     # by the outline). The column case uses MOG2 with the 5x5 blur, which cuts the entering
     # person at the border; the default KNN detector sees all of them there (recall 0.993 with or
     # without shapes). Crossing, mean of seeds 0-2 (the merged blob is split along the outlines):
-    # 0.983 -> 0.990, precision 0.993 -> 0.997. Since the tracker holds each share's size
-    # (session 9) seed 0 alone no longer shows it (0.995 either way; seed 1: 0.964 -> 0.989).
+    # 0.983 -> 0.990, precision 0.993 -> 0.997; seed 0 alone does not show it (0.995 either way;
+    # seed 1: 0.964 -> 0.989), hence the mean over three seeds.
     from motiontrack.config import load_config
     from motiontrack.evaluate.mot import evaluate_tracking
     from motiontrack.pipeline import run
     from motiontrack.synth import parse_synth_spec
-    from motiontrack.types import Annotations
 
     specs = ([f"synth:{scene}"] if scene == "column"
              else [f"synth:{scene}?seed={k}" for k in range(3)])
@@ -250,11 +252,7 @@ def test_shape_tracker_raises_recall_on_column_and_crossing(scene):
                     else [])
         cfg = load_config(None, ["people.enabled=true", f"people.shapes={str(shapes).lower()}",
                                  *detector])
-        rows = [(r.index + 1, t.id, *t.box.as_array()) for r in run(spec, cfg)
-                for t in r.tracks]
-        a = np.array(rows, float)
-        res = evaluate_tracking(gt, Annotations.from_columns(a[:, 0], a[:, 1], a[:, 2:6]),
-                                ignore_zero_marked=True)
+        res = evaluate_tracking(gt, tracks_of(run(spec, cfg)), ignore_zero_marked=True)
         tp, fp, fn = res["TP"], res["FP"], res["FN"]
         return tp / (tp + fn), tp / (tp + fp)
 

@@ -252,7 +252,7 @@ def test_stream_images():
     raw[1, 2] = 255
     mask = np.zeros((4, 6), np.uint8)
     res = FrameResult(index=0, timestamp=0.0, frame=np.zeros((8, 12, 3), np.uint8), mask=mask,
-                      regions=(), tracks=(), extras={"raw_mask": raw})
+                      regions=(), tracks=(), raw_mask=raw)
 
     assert (stream_image("difference", res) == raw).all()
     assert (stream_image("motion", res) == mask).all()

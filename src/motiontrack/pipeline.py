@@ -14,7 +14,7 @@ import atexit
 import logging
 import statistics
 import weakref
-from dataclasses import replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Iterable, Iterator
 
@@ -22,14 +22,18 @@ import numpy as np
 
 from . import synth as _synth  # noqa: F401  (registers the synth: sources)
 from .config import PipelineConfig, SourceConfig, load_config
+from .imaging import pixel_window, resolve_scale, scaled_size
 from .io.sources import Source, open_source, prefetch
 from .motion import create_detector
 from .motion.cleanup import clean_mask
-from .imaging import pixel_window, resolve_scale, scaled_size
-from .preprocess import load_roi, preprocess
+from .motion.ghosts import GhostFilter
 from .motion.regions import find_regions
+from .people import PeopleStage, head_params
+from .people.heads import split_regions_by_heads
+from .preprocess import load_roi, preprocess
+from .tracking.bridge import Bridge
 from .tracking.tracker import TRACKERS
-from .types import Annotations, Box, Frame, FrameResult, Region
+from .types import Annotations, Box, Frame, FrameResult, PeopleFrame, Region
 
 log = logging.getLogger(__name__)
 
@@ -81,6 +85,30 @@ def fill_gap_frames(cfg: PipelineConfig, fps: float | None, external: bool) -> i
     return int(round(cfg.tracker.fill_gaps_s * (fps or 25.0)))
 
 
+@dataclass(frozen=True)
+class Motion:
+    """The image work of one frame (:meth:`Pipeline.motion`): the cleaned motion ``mask`` and
+    the detector's ``raw_mask`` at processing scale, the preprocessed frame ``small`` they came
+    from; with external detections only ``detections`` (``mask`` is None)."""
+
+    mask: np.ndarray | None
+    raw_mask: np.ndarray | None = None
+    small: np.ndarray | None = None
+    detections: list[Region] = field(default_factory=list)
+
+
+@dataclass(frozen=True)
+class Detection:
+    """The motion stage's result for one frame (:meth:`Pipeline.detect`): its :class:`Motion`,
+    the mask the regions were found in (the ghost filter may clear parts of it), the regions,
+    and the heads ``people.auto_split`` found (None when it searched no region)."""
+
+    motion: Motion
+    mask: np.ndarray | None
+    regions: list[Region]
+    heads: tuple | None = None
+
+
 class Pipeline:
     """Per-frame processing with all stage state (background model, tracker).
 
@@ -124,28 +152,20 @@ class Pipeline:
                                        and completes_tracks(cfg, detections is not None))
         self.people = None
         if cfg.people.enabled:
-            from .people import PeopleStage
-
             self.people = PeopleStage(cfg.people)
         #: head detector settings for ``people.auto_split`` (None = off): merged regions are split
         #: between heads, with the people stage off, while the scene's regions are upright
         self.auto_heads: dict[str, float] | None = None
         if (not cfg.people.enabled and cfg.people.auto_split and cfg.people.heads
                 and cfg.people.split and self.detector is not None):
-            from .people import head_params
-
             self.auto_heads = head_params(cfg.people)
         self._upright: float | None = None   # running mean of the frames' median region h/w
         self.ghosts = None
         if cfg.motion.ghost_ratio > 0 and self.detector is not None:
-            from .motion.ghosts import GhostFilter
-
             self.ghosts = GhostFilter(cfg.motion.ghost_ratio, pixels=cfg.motion.ghost_pixels)
         self._prev_tracks: tuple = ()
         self.bridge = None
         if cfg.tracker.bridge != "none":
-            from .tracking.bridge import Bridge
-
             self.bridge = Bridge(cfg.tracker.bridge, cfg.tracker.bridge_frames)
         self.frames_seen = 0
         #: run detection and tracking in one thread (needed when a later stage reads the
@@ -181,12 +201,10 @@ class Pipeline:
                 mask[y1:y2, x1:x2] = True
         return mask
 
-    def detect(self, frame: Frame, index: int, small: np.ndarray | None = None
-               ) -> tuple[np.ndarray | None, list[Region], dict[str, Any]]:
-        """Motion stage of one frame: ``(mask, regions, extras)``. ``index`` counts frames from
-        the start of this run (for the warm-up); ``small`` is :meth:`prepare`'s image of the
-        frame when already made."""
-        return self.regions_of(index, *self.motion(frame, small))
+    def detect(self, frame: Frame, index: int, small: np.ndarray | None = None) -> Detection:
+        """Motion stage of one frame. ``index`` counts frames from the start of this run (for
+        the warm-up); ``small`` is :meth:`prepare`'s image of the frame when already made."""
+        return self.regions_of(index, self.motion(frame, small))
 
     def prepare(self, frame: Frame) -> np.ndarray | None:
         """The frame at processing scale, preprocessed (None with external detections): the
@@ -194,104 +212,94 @@ class Pipeline:
         ahead can do it in its thread (:meth:`~motiontrack.io.sources.Source.prepared`)."""
         return preprocess(frame.image, self.pre_cfg) if self.detector is not None else None
 
-    def motion(self, frame: Frame, small: np.ndarray | None = None
-               ) -> tuple[np.ndarray | None, dict[str, Any]]:
-        """First half of :meth:`detect`, the image work (OpenCV, which releases the GIL):
-        ``(mask, extras)``; with external detections ``(None, {"detections": regions})``."""
+    def motion(self, frame: Frame, small: np.ndarray | None = None) -> Motion:
+        """First half of :meth:`detect`, the image work (OpenCV, which releases the GIL)."""
         if self._det_index is not None:
-            return None, {"detections": _regions_from_detections(
-                self.detections, self._det_index.get(frame.index + 1))}
+            return Motion(None, detections=_regions_from_detections(
+                self.detections, self._det_index.get(frame.index + 1)))
         if small is None:
             small = self.prepare(frame)
         raw = self.detector.apply(small, self._protect_mask(small.shape[:2]))
         if self.roi is not None:
             raw = np.bitwise_and(raw, self.roi)
-        return clean_mask(raw, self.cfg.cleanup), {"raw_mask": raw, "small": small}
+        return Motion(clean_mask(raw, self.cfg.cleanup), raw_mask=raw, small=small)
 
-    def regions_of(self, index: int, mask: np.ndarray | None, extras: dict[str, Any]
-                   ) -> tuple[np.ndarray | None, list[Region], dict[str, Any]]:
+    def regions_of(self, index: int, motion: Motion) -> Detection:
         """Second half of :meth:`detect`: the mask's regions, split between heads while the
         scene is upright (``people.auto_split``)."""
+        mask = motion.mask
         if mask is None:
-            return None, extras["detections"], {}
+            return Detection(motion, None, motion.detections)
         if self.ghosts is not None:   # it learns its background in the warm-up frames too
-            mask, regions = self.ghosts.regions(extras["small"], mask, self._find, self.scale)
+            mask, regions = self.ghosts.regions(motion.small, mask, self._find, self.scale)
         else:
             regions = self._find(mask)
         if index < self.cfg.motion.warmup:
             regions = []
+        heads = None
         if regions:
-            regions = self._split_upright(mask, regions, extras)
-        return mask, regions, extras
+            regions, heads = self._split_upright(mask, regions)
+        return Detection(motion, mask, regions, heads)
 
     def _find(self, mask: np.ndarray) -> list[Region]:
         return find_regions(mask, self.cfg.regions, self.scale, self.image_size)
 
-    def _split_upright(self, mask: np.ndarray, regions: list[Region], extras: dict[str, Any]
-                       ) -> list[Region]:
+    def _split_upright(self, mask: np.ndarray, regions: list[Region]
+                       ) -> tuple[list[Region], tuple | None]:
         """``people.auto_split``: while the scene's regions are upright (a running mean of each
         frame's median height/width at least ``people.upright_ratio``: people, not cars), split
-        every region clearly wider than that typical shape between the heads found in it."""
+        every region clearly wider than that typical shape between the heads found in it.
+        Returns the regions and the heads found (None when no region was searched)."""
         if self.auto_heads is None:
-            return regions
+            return regions, None
         ratio = self.cfg.people.upright_ratio
         shapes = [r.box.h / r.box.w for r in regions]
         shape = float(statistics.median(shapes))   # a tenth of np.median's cost on a short list
         self._upright = (shape if self._upright is None
                          else (1 - _SCENE_RATE) * self._upright + _SCENE_RATE * shape)
         if self._upright < ratio:
-            return regions
+            return regions, None
         # searched for heads: regions a third wider than the scene's typical one (a lone person
         # is left alone; two people side by side are twice as wide)
         wide = [s < _WIDE * self._upright for s in shapes]
         if not any(wide):
-            return regions
-        from .people.heads import split_regions_by_heads
-
-        regions, extras["heads"] = split_regions_by_heads(
+            return regions, None
+        regions, heads = split_regions_by_heads(
             mask, regions, mask.shape[1] / self.image_size[0], search=wide, **self.auto_heads)
-        return regions
+        return regions, tuple(heads)
 
-    def track(self, frame: Frame, mask: np.ndarray | None, regions: list[Region],
-              extras: dict[str, Any]) -> FrameResult:
+    def track(self, frame: Frame, det: Detection) -> FrameResult:
         """Tracking stage of one frame, after :meth:`detect` (and the people stage, when on)."""
+        regions, mask, small = det.regions, det.mask, det.motion.small
+        people = PeopleFrame(heads=det.heads) if det.heads is not None else None
         if self.people is not None:
             background = self.detector.background() if self.detector is not None else None
-            regions, people_extras = self.people.process(
-                frame.image, background, mask, regions, self._prev_tracks, work=extras.get("small"))
-            extras = {**extras, **people_extras}
-        owned = self.bridge.measurements(self.tracker, frame.image) if self.bridge else None
-        hyps = extras.get("hypotheses_by_track") if self.cfg.people.hypotheses else None
-        outlines = extras.get("located_by_track")
-        located = None
-        if hyps or outlines:
-            meta = self.tracker.meta
-            index = {m.tid: i for i, m in enumerate(meta) if m.tid > 0}  # public id -> track index
-        if hyps:
+            regions, people = self.people.process(frame.image, background, mask, regions,
+                                                  self._prev_tracks, work=small)
+        owned = self.bridge.measurements(self.tracker.views(), frame.image) if self.bridge else None
+        hyps = located = None
+        if people is not None:
             # the shape tracker's box of a person the motion detector lost is a hypothesis for
             # that one (lost) track only; it never starts a track (thesis §4.5)
-            owned = dict(owned or {})
-            for tid, region in hyps.items():
-                i = index.get(tid)
-                if i is not None and meta[i].tsu > 0 and i not in owned:
-                    owned[i] = region.box.as_array()
-        if outlines:
+            if self.cfg.people.hypotheses and people.hypotheses_by_track:
+                hyps = {tid: r.box.as_array() for tid, r in people.hypotheses_by_track.items()}
             # fitted outlines of tracked people: where each one is inside a merged region
-            located = {index[tid]: box for tid, box in outlines.items() if tid in index}
+            located = people.located_by_track or None
         tracks = self.tracker.update(regions, dt=self._frame_gap(frame), owned=owned,
-                                     image=extras.get("small"), mask=mask, scale=self.scale,
-                                     located=located, frame=frame.index)
+                                     image=small, mask=mask, scale=self.scale, located=located,
+                                     frame=frame.index, hypotheses=hyps)
         if self.bridge is not None:
             self.bridge.remember(frame.image, tracks)
         self._prev_tracks = tuple(tracks)
         self.frames_seen += 1
         return FrameResult(index=frame.index, timestamp=frame.timestamp, frame=frame.image,
-                           mask=mask, regions=tuple(regions), tracks=tuple(tracks), extras=extras,
+                           mask=mask, regions=tuple(regions), tracks=tuple(tracks),
+                           raw_mask=det.motion.raw_mask, people=people,
                            earlier=tuple(self.tracker.confirmed_earlier))
 
     def process(self, frame: Frame) -> FrameResult:
         """Both stages of one frame."""
-        return self.track(frame, *self.detect(frame, self.frames_seen))
+        return self.track(frame, self.detect(frame, self.frames_seen))
 
     def results(self, frames: Iterable[Frame]) -> Iterator[FrameResult]:
         """:meth:`process` over ``frames``. A :class:`Source` that decodes ahead in a thread
@@ -305,15 +313,15 @@ class Pipeline:
         try:
             if self.sequential or (self.detector is not None and self.detector.protect):
                 for frame, small in prepared:
-                    yield self.track(frame, *self.detect(frame, self.frames_seen, small))
+                    yield self.track(frame, self.detect(frame, self.frames_seen, small))
                 return
             # the worker does the image work; regions and head splitting (Python, holding the
             # GIL) run here, so the worker's OpenCV calls do not wait for the GIL behind them
             # (measured about 5% faster than detecting regions in the worker)
             detected = prefetch((f, self.motion(f, small)) for f, small in prepared)
             try:
-                for k, (frame, (mask, extras)) in enumerate(detected):
-                    yield self.track(frame, *self.regions_of(k, mask, extras))
+                for k, (frame, motion) in enumerate(detected):
+                    yield self.track(frame, self.regions_of(k, motion))
             finally:
                 detected.close()
         finally:

@@ -25,6 +25,7 @@ __all__ = [
     "Track",
     "Frame",
     "FrameResult",
+    "PeopleFrame",
     "Annotations",
     "INT_LIMIT",
 ]
@@ -184,13 +185,45 @@ class Frame:
 
 
 @dataclass(frozen=True)
+class PeopleFrame:
+    """What the people stage found in one frame (:class:`motiontrack.people.PeopleStage`).
+
+    Attributes
+    ----------
+    heads : tuple of :class:`motiontrack.people.heads.Head`
+        Heads found in the motion regions (also those of ``people.auto_split``).
+    shapes : tuple of :class:`motiontrack.people.shape_tracker.FittedShape`
+        Active shapes fitted this frame, one per tracked person.
+    hog : tuple of Region
+        HOG people detections.
+    hypotheses : tuple of Region
+        Fitted boxes offered to lost people (``people.hypotheses``), for drawing.
+    hypotheses_by_track : mapping of track id → Region
+        The fitted box of every tracked person no region covers: the tracker may apply it to
+        that one lost track, never start a track from it.
+    located_by_track : mapping of track id → (4,) float64 box
+        Where each tracked person's outline was fitted this frame (``people.shape_split``): its
+        share of a merged region.
+    """
+
+    heads: tuple = ()
+    shapes: tuple = ()
+    hog: tuple[Region, ...] = ()
+    hypotheses: tuple[Region, ...] = ()
+    hypotheses_by_track: Mapping[int, Region] = field(default_factory=dict)
+    located_by_track: Mapping[int, np.ndarray] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
 class FrameResult:
     """What the pipeline yields for each frame.
 
     ``mask`` is the cleaned motion mask (``uint8``, 0/255) at processing resolution, or ``None``
-    when detections came from elsewhere. ``earlier`` holds the tracks confirmed in this frame at
-    the earlier frames where they were still tentative, as ``(frame index, Track)`` pairs (empty
-    unless ``tracker.backfill`` applies to the run).
+    when detections came from elsewhere; ``raw_mask`` the detector's mask before clean-up.
+    ``people`` is what the people stage (or ``people.auto_split``'s head search) found, when it
+    ran. ``earlier`` holds the tracks confirmed in this frame at the earlier frames where they
+    were still tentative, as ``(frame index, Track)`` pairs (empty unless ``tracker.backfill``
+    applies to the run).
     """
 
     index: int
@@ -199,7 +232,8 @@ class FrameResult:
     mask: np.ndarray | None = field(repr=False)
     regions: tuple[Region, ...]
     tracks: tuple[Track, ...]
-    extras: Mapping[str, object] = field(default_factory=dict, repr=False)
+    raw_mask: np.ndarray | None = field(default=None, repr=False)
+    people: PeopleFrame | None = field(default=None, repr=False)
     earlier: tuple[tuple[int, Track], ...] = field(default=(), repr=False)
 
     def reported(self) -> list[tuple[int, Track]]:

@@ -9,13 +9,14 @@
 :class:`PeopleStage` wires them for the pipeline, one call per frame::
 
     stage = PeopleStage(cfg.people)
-    regions, extras = stage.process(frame.image, background, mask, regions, tracks, work=small)
-    tracks = tracker.update(regions)
+    regions, found = stage.process(frame.image, background, mask, regions, tracks, work=small)
+    tracks = tracker.update(regions, hypotheses=..., located=...)
 
 ``tracks`` are the region tracker's tracks from the previous frame (the stage runs before the
 tracker update). ``regions`` come back with merged regions split at heads and HOG detections when
 HOG is on. For people whose shape is still tracked but no region covers them any more (the motion
-detector lost them), ``extras["hypotheses_by_track"]`` holds the fitted shape's box per track id;
+detector lost them), ``found.hypotheses_by_track`` (a :class:`~motiontrack.types.PeopleFrame`)
+holds the fitted shape's box per track id;
 with ``hypotheses`` on, the pipeline offers it to that one lost track as a measurement that can
 never start a new track (Siebel's thesis, section 4.5: the region tracker takes the shape's box as
 its hypothesis). See ``docs/people.md``.
@@ -29,7 +30,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from ..config import PeopleConfig
-from ..types import Region
+from ..types import PeopleFrame, Region
 
 log = logging.getLogger(__name__)
 
@@ -94,7 +95,7 @@ class PeopleStage:
 
     def process(self, frame_img: np.ndarray, background: np.ndarray | None, mask: np.ndarray | None,
                 regions: Sequence[Region], tracks: Sequence[Any], work: np.ndarray | None = None
-                ) -> tuple[list[Region], dict[str, Any]]:
+                ) -> tuple[list[Region], PeopleFrame]:
         """One frame.
 
         Parameters
@@ -118,28 +119,26 @@ class PeopleStage:
         -------
         regions_out : list of Region
             Regions for the region tracker.
-        extras : dict
-            ``heads`` (list of Head), ``shapes`` (list of FittedShape), ``hypotheses`` (list of
-            Region: fitted boxes of lost people when ``hypotheses`` is on, for drawing),
-            ``hypotheses_by_track`` (``{track_id: Region}``: the fitted box of every tracked
-            person no region covers, whatever ``hypotheses`` says — for a region tracker that
-            can apply a hypothesis to that one track without ever starting a new track from it),
-            ``hog`` (list of Region).
+        found : PeopleFrame
+            Heads, fitted shapes, HOG detections, the hypotheses for lost people (when
+            ``hypotheses`` is on, for drawing), the fitted box of every tracked person no region
+            covers by track id (whatever ``hypotheses`` says — for a region tracker that can
+            apply a hypothesis to that one track without ever starting a new track from it), and
+            the fitted outlines' boxes by track id (``shape_split``).
         """
         c = self.cfg
         H, W = frame_img.shape[:2]
         regions = list(regions)
-        extras: dict[str, Any] = {"heads": [], "shapes": [], "hypotheses": [], "hog": [],
-                                  "hypotheses_by_track": {}}
+        found: dict[str, Any] = {}
         # 1. heads, and splitting merged regions between them.
-        out, extras["heads"] = self.split_regions(mask, regions, W)
+        out, found["heads"] = self.split_regions(mask, regions, W)
         # 2. HOG, alone or inside motion regions.
         if self.hog is not None:
             if self._frame % c.hog_every == 0:
                 self._hog_cache = (self.hog.detect(frame_img) if c.hog == "alone"
                                    else self.hog.detect_in_regions(frame_img, regions))
             dets = self._hog_cache
-            extras["hog"] = list(dets)
+            found["hog"] = tuple(dets)
             if c.hog == "alone":
                 out = list(dets)
             else:
@@ -147,12 +146,12 @@ class PeopleStage:
         # 3. shapes, and hypotheses for people no region covers.
         if self.shape_tracker is not None:
             shapes = self.shape_tracker.update(frame_img, background, out, tracks,
-                                               heads=extras["heads"], mask=mask, work=work)
-            extras["shapes"] = shapes
+                                               heads=found["heads"], mask=mask, work=work)
+            found["shapes"] = tuple(shapes)
             if c.shape_split:
                 # outlines fitted this frame, of people already compared with their track (an
                 # outline never measured against its track's box is not trusted to split)
-                extras["located_by_track"] = {s.track_id: s.box.as_array() for s in shapes
+                found["located_by_track"] = {s.track_id: s.box.as_array() for s in shapes
                                               if s.coasting == 0 and s.agreement >= 0}
             if c.refine and shapes:
                 out = _refine(shapes, out, c.hypothesis_iou, c.refine_support)
@@ -161,7 +160,7 @@ class PeopleStage:
             if shapes:
                 # Every tracked person no region covers, for a region tracker that can apply a
                 # hypothesis to that one track (never starting a new track from it).
-                extras["hypotheses_by_track"] = _by_track(shapes, out, c, W, H)
+                found["hypotheses_by_track"] = _by_track(shapes, out, c, W, H)
             if c.hypotheses and shapes:
                 # Only for people the region tracker has lost (or that were already being
                 # offered): a hypothesis for a reported track would compete with its own region.
@@ -172,11 +171,12 @@ class PeopleStage:
                 hyps, ids = _uncovered(eligible, shapes, out, c.hypothesis_iou,
                                        c.hypothesis_score, W, H)
                 self._hyp_active = set(ids)
-                extras["hypotheses"] = hyps
+                found["hypotheses"] = tuple(hyps)
             else:
                 self._hyp_active = set()
         self._frame += 1
-        return out, extras
+        found["heads"] = tuple(found["heads"])
+        return out, PeopleFrame(**found)
 
 
 def _replace_with_detections(regions: list[Region], dets: list[Region]) -> list[Region]:

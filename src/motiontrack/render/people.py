@@ -1,16 +1,19 @@
 """Drawing for the people modules: spline outlines, control points, heads, search normals.
 
 Every function draws on a *copy* unless ``inplace=True`` and returns the image; coordinates are
-original-frame pixels; colours are BGR. Track colours come from :func:`motiontrack.annotate.color_for`
-so an outline has the same colour as its track's box.
+original-frame pixels; colours are BGR. Track colours come from
+:func:`motiontrack.render.annotate.color_for` so an outline has the same colour as its track's box.
 """
 
 from __future__ import annotations
 
-from typing import Iterable, Sequence
+from typing import Iterable
 
 import cv2
 import numpy as np
+
+from ..types import PeopleFrame
+from .annotate import color_for
 
 __all__ = ["draw_outline", "draw_control_points", "draw_heads", "draw_normals", "draw_people"]
 
@@ -34,12 +37,7 @@ def _color(track_id: int | None, color) -> tuple[int, int, int]:
         return tuple(int(c) for c in color)
     if track_id is None:
         return (0, 255, 255)
-    try:
-        from .annotate import color_for
-
-        return tuple(int(c) for c in color_for(track_id))
-    except Exception:  # pragma: no cover - annotate unavailable
-        return (0, 255, 255)
+    return tuple(int(c) for c in color_for(track_id))
 
 
 def draw_outline(img: np.ndarray, outline: np.ndarray, color=(0, 255, 255), thickness: int = 1,
@@ -87,17 +85,17 @@ def draw_normals(img: np.ndarray, points: np.ndarray, normals: np.ndarray, half:
     return out
 
 
-def draw_people(img: np.ndarray, extras: dict, *, outlines: bool = True, control_points: bool = False,
-                heads: bool = True, normals: bool = False, hypotheses: bool = True,
-                inplace: bool = False) -> np.ndarray:
-    """Draw a :class:`~motiontrack.people.PeopleStage` frame's ``extras`` on ``img``.
+def draw_people(img: np.ndarray, people: PeopleFrame, *, outlines: bool = True,
+                control_points: bool = False, heads: bool = True, normals: bool = False,
+                hypotheses: bool = True, inplace: bool = False) -> np.ndarray:
+    """Draw what the people stage found in a frame (:class:`~motiontrack.types.PeopleFrame`) on
+    ``img``.
 
     Outlines use the track colour; hypotheses (boxes offered for lost people) are dashed-looking
     thin white boxes; search normals are the debug view.
     """
     out = _target(img, inplace)
-    shapes: Sequence = extras.get("shapes", ()) or ()
-    for s in shapes:
+    for s in people.shapes:
         col = _color(getattr(s, "track_id", None), None)
         if normals and getattr(s, "normals", None) is not None:
             draw_normals(out, s.outline, s.normals, s.search, inplace=True)
@@ -106,9 +104,9 @@ def draw_people(img: np.ndarray, extras: dict, *, outlines: bool = True, control
         if control_points:
             draw_control_points(out, s.control, inplace=True)
     if heads:
-        draw_heads(out, extras.get("heads", ()) or (), inplace=True)
+        draw_heads(out, people.heads, inplace=True)
     if hypotheses:
-        for r in extras.get("hypotheses", ()) or ():
+        for r in people.hypotheses:
             b = r.box
             p1, p2 = _fixed([[b.x, b.y], [b.x2, b.y2]])
             cv2.rectangle(out, (int(p1[0]), int(p1[1])), (int(p2[0]), int(p2[1])), (255, 255, 255), 1,

@@ -56,7 +56,7 @@ def stream_image(name: str, result: FrameResult, background: np.ndarray | None =
             return np.zeros(mask.shape[:2], np.uint8)
         return np.asarray(background, dtype=np.uint8)
     if name == "difference":
-        raw = result.extras.get("raw_mask") if result.extras else None
+        raw = result.raw_mask
         return None if raw is None else np.asarray(raw, dtype=np.uint8)
     if name == "motion":
         return None if result.mask is None else np.asarray(result.mask, dtype=np.uint8)

@@ -23,6 +23,7 @@ from ..motion.dense_flow import DenseFlow
 from ..pipeline import Pipeline
 from ..render.annotate import annotate_frame, draw_label
 from ..render.flow import flow_to_bgr
+from ..render.people import draw_people
 from ..tracking.flow import SparseFlowParams, SparseFlowTracker, draw_feature_trails
 from ..tracking.single import SingleTracker, follow
 from ..types import Annotations, Box, FrameResult, Track, TrackState
@@ -55,10 +56,8 @@ class TrackProcessor:
         out = self.cfg.output
         img = annotate_frame(result.frame, result.tracks, result.regions, result.mask, out.trail,
                              out.mask_inset, text=f"frame {result.index}")
-        if self.pipe.people is not None:
-            from ..render.people import draw_people
-
-            draw_people(img, result.extras, inplace=True)
+        if self.pipe.people is not None and result.people is not None:
+            draw_people(img, result.people, inplace=True)
         return img
 
     def background(self) -> np.ndarray | None:

@@ -14,11 +14,13 @@ never moved) is not kept alive.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Sequence
 
 import numpy as np
 
 from ..types import Box, TrackState
 from .single import SINGLE_TRACKERS, SingleTracker, clip_box
+from .tracker import TrackView
 
 __all__ = ["Bridge"]
 
@@ -54,39 +56,38 @@ class Bridge:
         self._last_seen: dict[int, tuple[np.ndarray, np.ndarray]] = {}
         self._spent: set[int] = set()   # bridged once; not again until detection finds them
 
-    def measurements(self, tracker, image: np.ndarray) -> dict[int, np.ndarray]:
-        """Boxes ``(x, y, w, h)`` for this frame keyed by the index of the track they belong to
-        in ``tracker.meta`` (call before ``tracker.update``)."""
+    def measurements(self, tracks: Sequence[TrackView], image: np.ndarray) -> dict[int, np.ndarray]:
+        """Boxes ``(x, y, w, h)`` for this frame keyed by the id of the track they belong to;
+        ``tracks`` are the tracker's :meth:`~motiontrack.tracking.tracker.MultiObjectTracker.views`
+        before this frame's update."""
         h, w = image.shape[:2]
         out: dict[int, np.ndarray] = {}
         alive: set[int] = set()
-        for i, m in enumerate(tracker.meta):
-            if m.tid <= 0:
-                continue
-            alive.add(m.tid)
-            carried = self._carried.get(m.tid)
-            if m.tsu == 0 and not m.bridged:             # motion detection has it
-                self._carried.pop(m.tid, None)
-                self._spent.discard(m.tid)
+        for m in tracks:
+            alive.add(m.id)
+            carried = self._carried.get(m.id)
+            if m.time_since_update == 0 and not m.bridged:             # motion detection has it
+                self._carried.pop(m.id, None)
+                self._spent.discard(m.id)
                 continue
             if carried is None:
-                if m.state != TrackState.LOST or not m.moved or m.tid in self._spent:
+                if m.state != TrackState.LOST or not m.moved or m.id in self._spent:
                     continue
-                seen = self._last_seen.get(m.tid)
+                seen = self._last_seen.get(m.id)
                 start = None if seen is None else clip_box(Box(*map(float, seen[1])), w, h)
                 if start is None or start.w < 4 or start.h < 4 or _at_border(start, w, h):
                     continue
                 carried = _Carried(SINGLE_TRACKERS.create(self.method))
                 carried.sot.init(seen[0], start)
-                self._carried[m.tid] = carried
+                self._carried[m.id] = carried
             ok, box, _score = carried.sot.update(image)
             carried.frames += 1
             if (not ok or box is None or carried.frames > self.max_frames
                     or _at_border(box, w, h)):
-                del self._carried[m.tid]
-                self._spent.add(m.tid)
+                del self._carried[m.id]
+                self._spent.add(m.id)
                 continue
-            out[i] = box.as_array()
+            out[m.id] = box.as_array()
         for store in (self._carried, self._last_seen):
             for tid in [t for t in store if t not in alive]:
                 del store[tid]

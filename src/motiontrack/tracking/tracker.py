@@ -27,7 +27,8 @@ from __future__ import annotations
 
 import math
 from collections import deque
-from typing import Sequence
+from dataclasses import dataclass
+from typing import Mapping, Sequence
 
 import numpy as np
 
@@ -40,7 +41,7 @@ from .association import (INF_COST, assign_in_stages, association_cost, center_d
                           iou_matrix)
 from .merge import anchor_partial, split_merged
 
-__all__ = ["TRACKERS", "MultiObjectTracker"]
+__all__ = ["TRACKERS", "MultiObjectTracker", "TrackView"]
 
 TRACKERS: Registry["MultiObjectTracker"] = Registry("tracker")
 
@@ -60,6 +61,17 @@ def _recent_velocity(history: deque, k: int) -> np.ndarray | None:
         return None
     pts = np.array([history[i] for i in range(len(history) - n, len(history))], np.float64)
     return np.median(np.diff(pts, axis=0), axis=0)
+
+
+@dataclass(frozen=True)
+class TrackView:
+    """A named track as :meth:`MultiObjectTracker.views` shows it to other stages."""
+
+    id: int
+    state: TrackState
+    time_since_update: int
+    moved: bool
+    bridged: bool
 
 
 class _TrackState:
@@ -131,20 +143,23 @@ class MultiObjectTracker:
     # ------------------------------------------------------------------------------- update
     def update(self, detections: Sequence[Region] | np.ndarray,
                scores: np.ndarray | None = None, dt: int = 1,
-               owned: dict[int, np.ndarray] | None = None, image: np.ndarray | None = None,
+               owned: Mapping[int, np.ndarray] | None = None, image: np.ndarray | None = None,
                mask: np.ndarray | None = None, scale: float = 1.0,
-               located: dict[int, np.ndarray] | None = None,
-               frame: int | None = None) -> list[Track]:
+               located: Mapping[int, np.ndarray] | None = None,
+               frame: int | None = None,
+               hypotheses: Mapping[int, np.ndarray] | None = None) -> list[Track]:
         """One tracking step with this frame's detections (regions or an (M, 4) box array).
 
         ``dt`` is the number of frame periods since the previous update: more than 1 after a gap
         (dropped frames, a live source that reconnected), so predictions move on by the elapsed
-        time and tracks age accordingly. ``owned`` maps a track index (in :attr:`meta`) to a
-        measurement that can only belong to that track (e.g. from a single-object tracker
-        bridging a detection miss, see :mod:`motiontrack.tracking.bridge`); it is used only when no
-        detection matches the track. ``image`` and ``mask`` (processing scale ``scale``) feed the
+        time and tracks age accordingly. ``owned`` maps a track id to a measurement that can only
+        belong to that track (e.g. from a single-object tracker bridging a detection miss, see
+        :mod:`motiontrack.tracking.bridge`); it is used only when no detection matches the track.
+        ``hypotheses`` maps a track id to a box offered for it only while it is lost and owns no
+        other measurement (the active shape tracker's fitted box of a person the motion detector
+        lost, thesis §4.5); like owned measurements, it never starts a track. ``image`` and ``mask`` (processing scale ``scale``) feed the
         appearance model (:mod:`motiontrack.tracking.appearance`) when ``appearance_weight`` > 0.
-        ``located`` maps a track index to its box found in this frame by other means (the active
+        ``located`` maps a track id to its box found in this frame by other means (the active
         shape tracker's fitted outline): when a merged blob is split, such a track's share is
         that box cut to the blob rather than its moved prediction (see
         :func:`~motiontrack.tracking.merge.split_merged`). ``frame`` labels this update in
@@ -164,6 +179,7 @@ class MultiObjectTracker:
         self.frame_count += 1
         self.confirmed_earlier = []
 
+        owned, located = self._by_index(owned, located, hypotheses)
         held = self.x[:, 2:4].copy()   # sizes before this step's size velocity (merged blobs)
         pred = self.predict(dt)
         det, det_scores, owner, n_real = self._measurements(pred, det, det_scores, owned, located,
@@ -181,6 +197,23 @@ class MultiObjectTracker:
         return self._snapshots(self.frame_count - 1 if frame is None else frame)
 
     # ------------------------------------------------------------------------ update steps
+    def _by_index(self, owned: Mapping[int, np.ndarray] | None,
+                  located: Mapping[int, np.ndarray] | None,
+                  hypotheses: Mapping[int, np.ndarray] | None
+                  ) -> tuple[dict[int, np.ndarray] | None, dict[int, np.ndarray] | None]:
+        """The owned (plus the applicable hypotheses) and located boxes keyed by track index
+        instead of track id; ids of no current track are dropped."""
+        if not (owned or located or hypotheses):
+            return None, None
+        index = {m.tid: i for i, m in enumerate(self.meta) if m.tid > 0}
+        by_index = {index[tid]: box for tid, box in (owned or {}).items() if tid in index}
+        for tid, box in (hypotheses or {}).items():
+            i = index.get(tid)
+            if i is not None and self.meta[i].tsu > 0 and i not in by_index:
+                by_index[i] = box
+        where = {index[tid]: box for tid, box in (located or {}).items() if tid in index}
+        return by_index or None, where or None
+
     def _measurements(self, pred: np.ndarray, det: np.ndarray, det_scores: np.ndarray,
                       owned: dict[int, np.ndarray] | None,
                       located: dict[int, np.ndarray] | None = None,
@@ -431,6 +464,13 @@ class MultiObjectTracker:
                 age=m.age, time_since_update=m.tsu, history=tuple(m.history), score=m.score,
             ))
         return out
+
+    def views(self) -> list[TrackView]:
+        """What other stages may know of every named track (ids > 0), before this frame's
+        update: state, frames since its last measurement, whether it has moved and whether its
+        last measurement came from a bridge."""
+        return [TrackView(m.tid, m.state, m.tsu, m.moved, m.bridged)
+                for m in self.meta if m.tid > 0]
 
     def moving_boxes(self, margin: float = 0.1) -> np.ndarray:
         """Boxes (N, 4) where established tracks that have travelled at least one body height are
