@@ -12,7 +12,7 @@ from motiontrack.io.mot import read_mot
 from motiontrack.pipeline import Pipeline, run
 from motiontrack.types import Annotations
 
-from conftest import require
+from conftest import require, tracks_of
 
 FRAMES = 300
 
@@ -39,12 +39,8 @@ def _detections(gt: Annotations, jitter: float, seed: int = 0) -> Annotations:
 
 def _score(video: str, gt: Annotations, det: Annotations) -> dict[str, float]:
     cfg = load_config(None, [f"source.max_frames={FRAMES}"])
-    rows = [(r.index + 1, t.id, *t.box.as_array()) for r in run(video, cfg, detections=det)
-            for t in r.tracks]
-    a = np.array(rows, float).reshape(-1, 6)
     return evaluate_tracking(gt.select(gt.frames <= FRAMES),
-                             Annotations.from_columns(a[:, 0], a[:, 1], a[:, 2:6]),
-                             ignore_zero_marked=True)
+                             tracks_of(run(video, cfg, detections=det)), ignore_zero_marked=True)
 
 
 def test_perfect_detections_are_tracked_whole(pets):
@@ -60,7 +56,7 @@ def test_perfect_detections_are_tracked_whole(pets):
 def test_jittered_detector_boxes_are_not_split(pets):
     """A detector's box is one object: the region tracker's split of merged motion blobs must not
     cut a jittered box that overlaps a neighbour's prediction into synthetic shares (with the
-    split, these three draws had 28, 53 and 88 identity switches and MOTA 0.90, 0.85, 0.82)."""
+    split, these three draws give 28, 53 and 88 identity switches and MOTA 0.90, 0.85, 0.82)."""
     video, gt = pets
     res = [_score(video, gt, _detections(gt, 0.05, seed)) for seed in range(3)]
     assert max(r["IDSW"] for r in res) <= 10, [r["IDSW"] for r in res]   # 4, 7, 3

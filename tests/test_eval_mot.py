@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from conftest import require
+from conftest import ann, require
 from motiontrack.cli import main
 from motiontrack.errors import InputError
 from motiontrack.evaluate import mot
@@ -19,17 +19,6 @@ from motiontrack.types import Annotations
 
 GOLDEN = Path(__file__).parent / "golden"
 NA = len(mot.ALPHAS)
-
-
-def ann(rows, gt=False):
-    """Annotations from ``(frame, id, x, y, w, h[, consider, class])`` tuples."""
-    if not rows:
-        return Annotations.empty()
-    a = np.asarray(rows, dtype=float)
-    kw = {}
-    if gt and a.shape[1] >= 8:
-        kw = {"consider": a[:, 6] != 0, "classes": a[:, 7]}
-    return Annotations.from_columns(a[:, 0], a[:, 1], a[:, 2:6], **kw)
 
 
 def flat(gt_rows, pred_rows, **kw):

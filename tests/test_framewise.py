@@ -13,13 +13,7 @@ from motiontrack.evaluate.framewise import METRIC_KEYS, evaluate_framewise, fram
 from motiontrack.io.viper import read_viper
 from motiontrack.types import Annotations
 
-
-def ann(rows, consider=None):
-    """rows: [(frame, id, x, y, w, h), ...] -> Annotations."""
-    if not rows:
-        return Annotations.empty()
-    a = np.asarray(rows, dtype=np.float64)
-    return Annotations.from_columns(a[:, 0], a[:, 1], a[:, 2:6], consider=consider)
+from conftest import ann
 
 
 # ---------------------------------------------------------------------------------------------

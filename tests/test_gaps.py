@@ -18,16 +18,13 @@ from motiontrack.tracking.association import iou_matrix
 from motiontrack.tracking.gaps import fill_gaps
 from motiontrack.types import Annotations
 
-
-def _tracks(rows):
-    a = np.array(rows, float)
-    return Annotations.from_columns(a[:, 0], a[:, 1], a[:, 2:6], scores=a[:, 6])
+from conftest import ann
 
 
 def test_a_gap_is_filled_linearly_frame_by_frame():
     # id 1 seen at frames 1 and 4 (two frames missing), id 2 at 1 and 2 (no gap)
-    t = _tracks([[1, 1, 0, 0, 10, 20, 0.9], [4, 1, 30, 6, 16, 20, 0.6],
-                 [1, 2, 50, 50, 10, 10, 1.0], [2, 2, 52, 50, 10, 10, 1.0]])
+    t = ann([[1, 1, 0, 0, 10, 20, 0.9], [4, 1, 30, 6, 16, 20, 0.6],     # column 7: the score
+             [1, 2, 50, 50, 10, 10, 1.0], [2, 2, 52, 50, 10, 10, 1.0]])
     out = fill_gaps(t, 2)
     assert len(out) == 6
     # sorted by frame, then id
@@ -43,9 +40,9 @@ def test_a_gap_is_filled_linearly_frame_by_frame():
 
 
 def test_only_short_gaps_of_one_identity_are_filled():
-    t = _tracks([[1, 1, 0, 0, 10, 10, 1], [5, 1, 40, 0, 10, 10, 1],     # 3 missing: too long
-                 [1, 2, 0, 50, 10, 10, 1], [3, 3, 20, 50, 10, 10, 1],    # two ids: never joined
-                 [1, -1, 0, 90, 10, 10, 1], [3, -1, 20, 90, 10, 10, 1]])  # anonymous rows
+    t = ann([[1, 1, 0, 0, 10, 10, 1], [5, 1, 40, 0, 10, 10, 1],     # 3 missing: too long
+             [1, 2, 0, 50, 10, 10, 1], [3, 3, 20, 50, 10, 10, 1],    # two ids: never joined
+             [1, -1, 0, 90, 10, 10, 1], [3, -1, 20, 90, 10, 10, 1]])  # anonymous rows
     assert len(fill_gaps(t, 2)) == len(t)
     filled = fill_gaps(t, 3)
     assert len(filled) == len(t) + 3
@@ -61,7 +58,7 @@ def test_many_gaps_in_one_call():
         seen = frames[rng.random(100) > 0.3]
         for f in seen:
             rows.append([f, tid, f * 2.0, tid * 40.0, 10, 20, 1])
-    t = _tracks(rows)
+    t = ann(rows)
     out = fill_gaps(t, 100)
     for tid in (1, 2, 3):
         mine = out.select(out.ids == tid)

@@ -12,13 +12,8 @@ from motiontrack.errors import ConfigError
 from motiontrack.studies.sweep import run_sweep, study_from_args
 from motiontrack.io.sources import ArraySource
 from motiontrack.render.overlay import GT_COLOR, PALETTE, draw_overlay, render_overlay
-from motiontrack.types import Annotations
 
-
-def boxes_ann(rows):
-    """rows: (frame, id, x, y, w, h)."""
-    a = np.asarray(rows, dtype=float).reshape(-1, 6)
-    return Annotations.from_columns(a[:, 0], a[:, 1], a[:, 2:6])
+from conftest import ann
 
 
 def test_draw_overlay_colours_and_legend():
@@ -42,8 +37,8 @@ def test_palette_is_distinct():
 
 def test_render_overlay_video_and_pngs(tmp_path):
     frames = [np.full((48, 64, 3), 40 + 10 * i, np.uint8) for i in range(6)]
-    gt = boxes_ann([(f, 1, 5 + f, 5, 10, 20) for f in range(1, 7)])
-    run = boxes_ann([(f, 3, 6 + f, 6, 10, 20) for f in range(2, 7)])
+    gt = ann([(f, 1, 5 + f, 5, 10, 20) for f in range(1, 7)])
+    run = ann([(f, 3, 6 + f, 6, 10, 20) for f in range(2, 7)])
     res = render_overlay(ArraySource(frames, fps=10), tmp_path / "ov.avi", [("run", run)], gt,
                          frames=(2, 5), png_frames=[3, 9], codec="mjpg")
     assert res.frames == 4                                  # frames 2..5
