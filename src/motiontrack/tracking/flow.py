@@ -1,6 +1,6 @@
 """Sparse optical-flow tracking: feature points inside moving regions, grouped into objects.
 
-Each frame (numbers match the comments in :meth:`SparseFlowTracker.update`):
+Each frame (the steps of :meth:`SparseFlowTracker.update`, each a method of its own):
 
 1. Motion mask from a motion detector (default MOG2), cleaned with :func:`~motiontrack.motion.clean_mask`;
    its connected components ("blobs") above the region size limits.
@@ -160,6 +160,15 @@ class _Object:
     measured: bool = True
 
 
+def _median_motion(d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Median displacement ``(2,)`` float64 of one object's points ``d`` ``(n, 2)``, and which of
+    them move unlike it: ``(n,)`` bool, off the median by more than 2 px and than its length."""
+    d = d.astype(np.float64)
+    m = np.median(d, axis=0)
+    dev = np.linalg.norm(d - m, axis=1)
+    return m, dev > max(2.0, float(np.linalg.norm(m)))
+
+
 def _union_box(stats: np.ndarray) -> np.ndarray:
     """Union of component boxes ``(K, >=4)`` x, y, w, h → (4,)."""
     x1 = stats[:, 0].min()
@@ -303,18 +312,36 @@ class SparseFlowTracker:
 
     # ------------------------------------------------------------------------------ update
     def update(self, image: np.ndarray) -> list[Track]:
-        """Process one frame ``(H, W, 3)`` or ``(H, W)`` uint8 and return the reported tracks."""
+        """Process one frame ``(H, W, 3)`` or ``(H, W)`` uint8 and return the reported tracks
+        (steps 1–5 of the module docstring)."""
         if image.shape[:2] != (self.height, self.width):
             raise ConfigError(f"frame size {image.shape[1]}x{image.shape[0]} differs from the "
                               f"tracker's {self.width}x{self.height}")
-        p = self.p
         gray = to_gray(image)
-        # 1. motion mask and blobs
+        labels, stats = self._motion_blobs(image)
+        disp = self._move_points(gray)
+        claims, med = self._group_points(labels, disp)
+        owned = self._move_objects(claims, med, stats)
+        self._take_unclaimed_blobs(gray, labels, stats, claims, owned)
+        self._redetect(gray, labels, owned)
+        self._drop_stray_points()
+        out = self._lifecycle()
+        self.frames_seen += 1
+        return out
+
+    # ------------------------------------------------------------------------ steps of update
+    def _motion_blobs(self, image: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Step 1: the cleaned motion mask (kept as :attr:`last_mask`) and its blobs within the
+        region size limits: labels ``(H, W) int32`` (0 = none) and stats ``(K+1, 5)``."""
         mask = self._motion_mask(image)
         self.last_mask = mask
-        labels, stats = self._blobs(mask)
+        return self._blobs(mask)
 
-        # 2. move the points with forward-backward checked LK
+    def _move_points(self, gray: np.ndarray) -> np.ndarray:
+        """Step 2: move every point with forward-backward checked pyramidal LK from the previous
+        frame, dropping those that fail; their trails move on. Returns the displacements
+        ``(P, 2) float32`` of the surviving points."""
+        p = self.p
         disp = np.zeros((len(self.pts), 2), np.float32)
         if self._prev is not None and len(self.pts):
             new, good, _ = forward_backward_lk(self._prev, gray, self.pts, p.win_size, p.levels,
@@ -327,25 +354,30 @@ class SparseFlowTracker:
             self._trail[:, -1] = self.pts
             self._trail_len = np.minimum(self._trail_len + 1, self._trail.shape[1])
         self._prev = gray
+        return disp
 
-        # 3. group: per object, median displacement, outlier rejection, blob claims
+    def _group_points(self, labels: np.ndarray, disp: np.ndarray
+                      ) -> tuple[dict[int, list[int]], dict[int, np.ndarray]]:
+        """Step 3, grouping: per object, the median displacement of its points; points moving
+        unlike it are dropped (background caught at the silhouette's edge); an object with at
+        least ``min_points`` points claims each blob holding ``claim_fraction`` of them.
+
+        Returns ``claims`` (blob label → claiming object ids) and ``med`` (object id → median
+        displacement ``(2,)``, px).
+        """
+        p = self.p
         lab = labels[np.clip(np.round(self.pts[:, 1]).astype(int), 0, self.height - 1),
                      np.clip(np.round(self.pts[:, 0]).astype(int), 0, self.width - 1)]
         keep = np.ones(len(self.pts), bool)
         claims: dict[int, list[int]] = {}
         med: dict[int, np.ndarray] = {}
-        for oid, obj in self.objects.items():
+        for oid in self.objects:
             idx = np.flatnonzero(self.owner == oid)
             if len(idx) == 0:
                 continue
-            d = disp[idx].astype(np.float64)
-            m = np.median(d, axis=0)
-            # points moving unlike their object (background caught at the silhouette's edge)
-            dev = np.linalg.norm(d - m, axis=1)
-            bad = dev > max(2.0, float(np.linalg.norm(m)))
+            med[oid], bad = _median_motion(disp[idx])
             keep[idx[bad]] = False
             idx = idx[~bad]
-            med[oid] = m
             if len(idx) < p.min_points:
                 continue
             labs, counts = np.unique(lab[idx], return_counts=True)
@@ -354,14 +386,20 @@ class SparseFlowTracker:
                 if lb > 0 and c >= need:
                     claims.setdefault(int(lb), []).append(oid)
         self._keep_points(keep)
-        lab = lab[keep]
+        return claims, med
 
+    def _move_objects(self, claims: dict[int, list[int]], med: dict[int, np.ndarray],
+                      stats: np.ndarray) -> dict[int, list[int]]:
+        """Step 3, boxes: an object owning blobs (claimed by it alone) takes their union box; one
+        sharing its blob (crossing) or without a blob moves by its points' median displacement
+        when it has ``min_points`` of them; any other coasts on its velocity, unmeasured.
+
+        Returns ``owned``: object id → labels of the blobs it owns.
+        """
         owned: dict[int, list[int]] = {}
         for lb, oids in claims.items():
             if len(oids) == 1:
                 owned.setdefault(oids[0], []).append(lb)
-        claimed = set(claims)
-
         for oid, obj in self.objects.items():
             n_pts = int((self.owner == oid).sum())
             obj.age += 1
@@ -370,7 +408,7 @@ class SparseFlowTracker:
                 obj.velocity = (new_box[:2] + new_box[2:] / 2) - (obj.box[:2] + obj.box[2:] / 2)
                 obj.box = new_box
                 obj.measured = True
-            elif oid in med and n_pts >= p.min_points:
+            elif oid in med and n_pts >= self.p.min_points:
                 # shared blob (crossing) or no blob: move with the object's own points
                 obj.velocity = med[oid]
                 obj.box = obj.box + np.r_[med[oid], 0.0, 0.0]
@@ -378,15 +416,20 @@ class SparseFlowTracker:
             else:
                 obj.box = obj.box + np.r_[obj.velocity, 0.0, 0.0]
                 obj.measured = False
+        return owned
 
-        # 4. blobs no object claimed: part of a coasting/fragmented object, or a new object
-        n_labels = len(stats)
-        present = np.zeros(n_labels, bool)
+    def _take_unclaimed_blobs(self, gray: np.ndarray, labels: np.ndarray, stats: np.ndarray,
+                              claims: dict[int, list[int]], owned: dict[int, list[int]]) -> None:
+        """Step 4: each blob no object claimed starts a new object with fresh features when it
+        overlaps none, is part of a coasting or fragmented object when that object covers at
+        least half of it (:meth:`_join_blob`), and is left alone when it only touches one.
+        ``owned`` gains the blobs taken."""
+        present = np.zeros(len(stats), bool)
         present[np.unique(labels)] = True
         present[0] = False
         for lb in np.flatnonzero(present):
             lb = int(lb)
-            if lb in claimed:
+            if lb in claims:
                 continue
             bbox = stats[lb, :4].astype(np.float64)
             best, best_ov = None, 0.0
@@ -394,29 +437,43 @@ class SparseFlowTracker:
                 ov = _overlap_fraction(bbox, obj.box)
                 if ov > best_ov:
                     best, best_ov = oid, ov
-            if best is not None and best_ov >= 0.5:
-                obj = self.objects[best]
-                shared = any(best in oids and len(oids) > 1 for oids in claims.values())
-                if not shared:
-                    if obj.measured and best in owned:
-                        obj.box = _union_box(np.vstack([obj.box, bbox]))
-                    elif not obj.measured:
-                        obj.box = bbox  # re-acquired
-                        obj.measured = True
-                    owned.setdefault(best, []).append(lb)
-                continue
-            if best is not None and best_ov > 0.0:
-                continue  # touches an object: wait until it separates or is claimed
-            oid = self._next_id
-            self._next_id += 1
-            obj = _Object(id=oid, box=bbox)
-            self.objects[oid] = obj
-            owned[oid] = [lb]
-            claimed.add(lb)
-            self._add_points(self._detect(gray, np.where(labels == lb, 255, 0).astype(np.uint8),
-                                          bbox, p.per_object), oid)
+            if best is None:
+                self._start_object(gray, labels, lb, bbox, owned)
+            elif best_ov >= 0.5:
+                self._join_blob(best, lb, bbox, claims, owned)
+            # otherwise it only touches an object: wait until it separates or is claimed
 
-        # 4b. periodic re-detection inside each object's own blobs
+    def _join_blob(self, oid: int, lb: int, bbox: np.ndarray, claims: dict[int, list[int]],
+                   owned: dict[int, list[int]]) -> None:
+        """Blob ``lb`` (box ``bbox``) joins object ``oid`` unless that object shares a blob with
+        another: a measured owner grows its box over it, an unmeasured object is re-acquired with
+        the blob's box."""
+        obj = self.objects[oid]
+        shared = any(oid in oids and len(oids) > 1 for oids in claims.values())
+        if shared:
+            return
+        if obj.measured and oid in owned:
+            obj.box = _union_box(np.vstack([obj.box, bbox]))
+        elif not obj.measured:
+            obj.box = bbox  # re-acquired
+            obj.measured = True
+        owned.setdefault(oid, []).append(lb)
+
+    def _start_object(self, gray: np.ndarray, labels: np.ndarray, lb: int, bbox: np.ndarray,
+                      owned: dict[int, list[int]]) -> None:
+        """A new object on blob ``lb`` with up to ``per_object`` Shi–Tomasi features inside it."""
+        oid = self._next_id
+        self._next_id += 1
+        self.objects[oid] = _Object(id=oid, box=bbox)
+        owned[oid] = [lb]
+        self._add_points(self._detect(gray, np.where(labels == lb, 255, 0).astype(np.uint8),
+                                      bbox, self.p.per_object), oid)
+
+    def _redetect(self, gray: np.ndarray, labels: np.ndarray, owned: dict[int, list[int]]) -> None:
+        """Step 4b: every ``redetect_every`` frames of an object's age, or when it holds fewer
+        than half of ``per_object`` points, top its points up with features inside its own
+        blobs."""
+        p = self.p
         for oid, obj in self.objects.items():
             if oid not in owned:
                 continue
@@ -426,21 +483,28 @@ class SparseFlowTracker:
             blob = np.isin(labels, owned[oid]).astype(np.uint8) * 255
             self._add_points(self._detect(gray, blob, obj.box, p.per_object - n_pts), oid)
 
-        # drop points that left their object's box (static background points)
-        if len(self.pts):
-            keep = np.ones(len(self.pts), bool)
-            for oid, obj in self.objects.items():
-                idx = np.flatnonzero(self.owner == oid)
-                if len(idx) == 0:
-                    continue
-                b = obj.box
-                mx, my = 0.1 * b[2], 0.1 * b[3]
-                x, y = self.pts[idx, 0], self.pts[idx, 1]
-                keep[idx] = ((x >= b[0] - mx) & (x <= b[0] + b[2] + mx)
-                             & (y >= b[1] - my) & (y <= b[1] + b[3] + my))
-            self._keep_points(keep)
+    def _drop_stray_points(self) -> None:
+        """Drop points more than 10 % of the box size outside their object's box (static
+        background points the object walked away from)."""
+        if not len(self.pts):
+            return
+        keep = np.ones(len(self.pts), bool)
+        for oid, obj in self.objects.items():
+            idx = np.flatnonzero(self.owner == oid)
+            if len(idx) == 0:
+                continue
+            b = obj.box
+            mx, my = 0.1 * b[2], 0.1 * b[3]
+            x, y = self.pts[idx, 0], self.pts[idx, 1]
+            keep[idx] = ((x >= b[0] - mx) & (x <= b[0] + b[2] + mx)
+                         & (y >= b[1] - my) & (y <= b[1] + b[3] + my))
+        self._keep_points(keep)
 
-        # 5. lifecycle and output
+    def _lifecycle(self) -> list[Track]:
+        """Step 5: count hits and misses; delete an object missed more than ``max_lost`` frames
+        or out of the image (with its points); clip the others' boxes to the image, extend their
+        history and report the measured ones at least ``confirm_frames`` old."""
+        p = self.p
         out: list[Track] = []
         for oid in list(self.objects):
             obj = self.objects[oid]
@@ -461,15 +525,19 @@ class SparseFlowTracker:
                 del obj.history[:-p.history]
             if obj.age < p.confirm_frames or not obj.measured:
                 continue
-            n_pts = int((self.owner == oid).sum())
-            out.append(Track(
-                id=oid, box=Box(*(float(v) for v in clipped)), state=TrackState.CONFIRMED,
-                velocity=(float(obj.velocity[0]), float(obj.velocity[1])), hits=obj.hits,
-                age=obj.age, time_since_update=obj.missed, history=tuple(obj.history),
-                score=float(min(1.0, n_pts / p.per_object)),
-            ))
-        self.frames_seen += 1
+            out.append(self._track(obj))
         return out
+
+    def _track(self, obj: _Object) -> Track:
+        """The reported :class:`Track` of ``obj``; its score is its share of ``per_object`` points."""
+        p = self.p
+        n_pts = int((self.owner == obj.id).sum())
+        return Track(
+            id=obj.id, box=Box(*(float(v) for v in obj.box)), state=TrackState.CONFIRMED,
+            velocity=(float(obj.velocity[0]), float(obj.velocity[1])), hits=obj.hits,
+            age=obj.age, time_since_update=obj.missed, history=tuple(obj.history),
+            score=float(min(1.0, n_pts / p.per_object)),
+        )
 
     def trails(self) -> list[tuple[int, np.ndarray]]:
         """Recent positions of every feature point: ``[(object id, (k, 2) float32), ...]``,
