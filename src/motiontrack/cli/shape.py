@@ -69,8 +69,7 @@ def _seeds(text: str) -> list[int]:
 def cmd_train(args) -> int:
     from pathlib import Path
 
-    from ..people.training import (outlines_from_synth, outlines_from_video, save_model,
-                                   train_shape_model)
+    from ..people.training import save_model, train_shape_model
 
     if args.control_points < 4:
         raise ConfigError(f"--control-points must be >= 4, got {args.control_points}")
@@ -81,31 +80,8 @@ def cmd_train(args) -> int:
     out = Path(args.out)
     if out.exists() and not args.force:
         raise ConfigError(f"{out} exists; use --force to overwrite")
-    if args.source.startswith("synth:"):
-        if args.gt:
-            raise ConfigError("--gt is not used with synth: sources (their ground truth is exact)")
-        from ..synth import SCENES
-
-        names = [n.strip() for n in args.source[len("synth:"):].split(",") if n.strip()]
-        bad = [n for n in names if n not in SCENES]
-        if not names or bad:
-            raise ConfigError(f"unknown synthetic scene(s) {bad or names}; valid: {', '.join(SCENES)}")
-        seeds = _seeds(args.seeds)
-        shapes = []
-        for n in names:
-            shapes.extend(outlines_from_synth(n, seeds=seeds, n_control=args.control_points,
-                                              every=args.every, min_height=args.min_height))
-        meta = {"source": args.source, "seeds": seeds, "every": args.every}
-    else:
-        if not args.gt:
-            raise ConfigError("a video source needs --gt (ground-truth boxes of the people)")
-        from ._common import read_gt
-
-        gt = read_gt(args.gt)
-        shapes = list(outlines_from_video(args.source, gt, n_control=args.control_points,
-                                          every=args.every, min_height=args.min_height,
-                                          max_frames=args.max_frames))
-        meta = {"source": str(args.source), "gt": str(args.gt), "every": args.every}
+    shapes, meta = (_synth_outlines(args) if args.source.startswith("synth:")
+                    else _video_outlines(args))
     if len(shapes) < 2:
         raise ConfigError(f"found {len(shapes)} usable outline(s) of isolated people; need at least 2 "
                           "(try --every 1, a lower --min-height or more frames)")
@@ -114,6 +90,39 @@ def cmd_train(args) -> int:
     print(f"{out}: {model.n_control} control points, {model.n_modes} modes explaining "
           f"{model.meta['explained']:.3f} of the variance, from {len(shapes)} outlines")
     return 0
+
+
+def _synth_outlines(args) -> tuple[list, dict]:
+    """Training outlines and provenance from ``synth:NAME[,NAME...]`` with ``--seeds``."""
+    from ..people.training import outlines_from_synth
+    from ..synth import SCENES
+
+    if args.gt:
+        raise ConfigError("--gt is not used with synth: sources (their ground truth is exact)")
+    names = [n.strip() for n in args.source[len("synth:"):].split(",") if n.strip()]
+    bad = [n for n in names if n not in SCENES]
+    if not names or bad:
+        raise ConfigError(f"unknown synthetic scene(s) {bad or names}; valid: {', '.join(SCENES)}")
+    seeds = _seeds(args.seeds)
+    shapes = []
+    for n in names:
+        shapes.extend(outlines_from_synth(n, seeds=seeds, n_control=args.control_points,
+                                          every=args.every, min_height=args.min_height))
+    return shapes, {"source": args.source, "seeds": seeds, "every": args.every}
+
+
+def _video_outlines(args) -> tuple[list, dict]:
+    """Training outlines and provenance from a video source with ``--gt``."""
+    from ..people.training import outlines_from_video
+    from ._common import read_gt
+
+    if not args.gt:
+        raise ConfigError("a video source needs --gt (ground-truth boxes of the people)")
+    gt = read_gt(args.gt)
+    shapes = list(outlines_from_video(args.source, gt, n_control=args.control_points,
+                                      every=args.every, min_height=args.min_height,
+                                      max_frames=args.max_frames))
+    return shapes, {"source": str(args.source), "gt": str(args.gt), "every": args.every}
 
 
 def cmd_info(args) -> int:
