@@ -195,7 +195,7 @@ def _reg(box):
 
 
 def test_region_at_the_border_takes_the_outline_beyond_it():
-    from motiontrack.people import _extend_at_border
+    from motiontrack.people.stage import _extend_at_border
 
     W, H = 640, 480
     region = _reg((0, 296, 19, 75))           # a person entering on the left, cut at x = 0
@@ -211,7 +211,7 @@ def test_region_at_the_border_takes_the_outline_beyond_it():
 
 @pytest.mark.parametrize("case", ["inside", "weak", "coasting", "no_overlap", "not_past"])
 def test_border_extension_needs_a_cut_region_and_a_good_outline(case):
-    from motiontrack.people import _extend_at_border
+    from motiontrack.people.stage import _extend_at_border
 
     region, shape = _reg((0, 296, 19, 75)), dict(box=(-10, 298, 27, 77))
     if case == "inside":          # the region does not touch the border
@@ -229,6 +229,7 @@ def test_border_extension_needs_a_cut_region_and_a_good_outline(case):
 
 
 @pytest.mark.parametrize("scene", ["column", "crossing"])
+@pytest.mark.slow
 def test_shape_tracker_raises_recall_on_column_and_crossing(scene):
     # With the people preset, switching the active shape tracker on raises recall (CLEAR, IoU
     # 0.5) and costs at most 0.02 precision on synthetic types 3 and 4.

@@ -12,10 +12,14 @@ import dataclasses
 import sys
 import typing
 from dataclasses import dataclass, field, fields, is_dataclass
+from importlib import resources
 from pathlib import Path
 from typing import Any, Iterable
 
+import tomli_w
+
 from .errors import ConfigError
+from .io.atomic import atomic_write_text
 from .io.tomlfile import parse_toml, read_toml
 
 if sys.version_info >= (3, 11):
@@ -335,7 +339,7 @@ class OutputConfig(_Section):
 
 @dataclass(frozen=True)
 class PeopleConfig(_Section):
-    """People stage (issue 7). Every module can be switched off for ablation studies.
+    """People stage. Every module can be switched off for ablation studies.
 
     Lengths are original-frame pixels unless stated otherwise.
     """
@@ -466,8 +470,6 @@ def from_dict(cls: type, data: dict[str, Any], where: str = "") -> Any:
 
 def presets() -> dict[str, str]:
     """Shipped presets: name → first comment line (``motiontrack list``)."""
-    from importlib import resources
-
     out = {}
     for entry in sorted(resources.files("motiontrack").joinpath("data", "presets").iterdir(),
                         key=lambda e: e.name):
@@ -490,8 +492,6 @@ def load_config(path: str | Path | None = None, overrides: Iterable[str] = (),
     then ``--set`` overrides; each layer changes only the keys it names."""
     data: dict[str, Any] = {}
     if preset:
-        from importlib import resources
-
         names = presets()
         if preset not in names:
             raise ConfigError(f"unknown preset {preset!r}; valid presets: {', '.join(names)}")
@@ -540,8 +540,4 @@ def _set_path(obj: Any, path: list[str], value: Any, full: str) -> Any:
 
 def save_config(cfg: Any, path: str | Path) -> None:
     """Write the resolved config as TOML (atomically)."""
-    import tomli_w
-
-    from .io.atomic import atomic_write_text
-
     atomic_write_text(Path(path), tomli_w.dumps(to_dict(cfg)))

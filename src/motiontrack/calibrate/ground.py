@@ -17,11 +17,13 @@ from pathlib import Path
 
 import cv2
 import numpy as np
+import tomli_w
 
 
 from ..errors import ConfigError, InputError
-from ..io.tomlfile import read_toml
 from ..io.atomic import atomic_write_text
+from ..io.tomlfile import read_toml
+from .chessboard import OpenCVCamera
 from .tsai import _as_pixels, _as_world
 
 log = logging.getLogger(__name__)
@@ -103,8 +105,6 @@ def fit_homography(image_pts: np.ndarray, world_pts: np.ndarray,
 
 def fit_pose(camera, image_pts: np.ndarray, world_pts: np.ndarray):
     """Ground pose for an :class:`OpenCVCamera` with intrinsics from ``N >= 4`` pairs (solvePnP)."""
-    from .chessboard import OpenCVCamera
-
     img = _as_pixels(image_pts)
     wld = _as_world(world_pts)
     if len(img) < 4 or len(img) != len(wld):
@@ -144,8 +144,6 @@ def read_point_pairs(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
 
 
 def write_ground_toml(g: GroundHomography, path: str | Path) -> None:
-    import tomli_w
-
     doc = {"model": "homography", "units": {"world": "m", "image": "px"},
            "H": [[float(v) for v in row] for row in g.H]}
     if g.size is not None:

@@ -29,13 +29,16 @@ import logging
 import math
 from dataclasses import asdict, dataclass, fields
 from pathlib import Path
+from xml.etree.ElementTree import ParseError
 
+import cv2
+import defusedxml.ElementTree as ET
 import numpy as np
-
+import tomli_w
 
 from ..errors import InputError
-from ..io.tomlfile import read_toml
 from ..io.atomic import atomic_write_text
+from ..io.tomlfile import read_toml
 
 log = logging.getLogger(__name__)
 
@@ -279,8 +282,6 @@ class TsaiCamera:
         The remap tables are cached per camera and image size, so calling this per video frame
         costs one ``cv2.remap``.
         """
-        import cv2  # local: the model maths does not need OpenCV
-
         mx, my = _undistort_maps(self, image.shape[0], image.shape[1])
         return cv2.remap(image, mx, my, interpolation=cv2.INTER_LINEAR,
                          borderMode=cv2.BORDER_CONSTANT)
@@ -333,9 +334,6 @@ def _intersect_plane(origins: np.ndarray, dirs: np.ndarray, z: float = 0.0) -> n
 # -- file formats --------------------------------------------------------------------------------
 def read_tsai_xml(path: str | Path) -> TsaiCamera:
     """Read a PETS 2009 / Tsai calibration XML (``<Camera><Geometry/><Intrinsic/><Extrinsic/>``)."""
-    import defusedxml.ElementTree as ET
-    from xml.etree.ElementTree import ParseError
-
     p = Path(path)
     if not p.is_file():
         raise InputError(f"camera file not found: {p}")
@@ -384,8 +382,6 @@ def write_tsai_xml(cam: TsaiCamera, path: str | Path, name: str = "camera") -> N
 
 def write_tsai_toml(cam: TsaiCamera, path: str | Path) -> None:
     """Write our TOML layout: ``model = "tsai"`` and tables geometry / intrinsic / extrinsic."""
-    import tomli_w
-
     doc = {
         "model": "tsai",
         "units": {"length": "mm", "angle": "rad", "unit_per_metre": cam.unit},

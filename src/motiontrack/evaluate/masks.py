@@ -43,6 +43,7 @@ from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Iterable, Mapping
 
+import cv2
 import numpy as np
 
 from ..errors import InputError
@@ -197,8 +198,6 @@ def read_temporal_roi(path: str | Path) -> tuple[int, int]:
 
 def read_mask(path: str | Path) -> np.ndarray:
     """An 8-bit single-channel mask ``(H, W) uint8`` (colour files are converted to grey)."""
-    import cv2
-
     p = Path(path)
     img = cv2.imread(str(p), cv2.IMREAD_GRAYSCALE)
     if img is None:

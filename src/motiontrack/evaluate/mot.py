@@ -50,6 +50,7 @@ from scipy.optimize import linear_sum_assignment
 
 from ..errors import ConfigError, InputError
 from ..types import Annotations
+from .framewise import evaluate_framewise
 
 __all__ = [
     "ALPHAS",
@@ -793,7 +794,5 @@ def evaluate_tracking(
                                     num_timesteps, ignore_zero_marked=ignore_zero_marked)
                   ) if any(m != "framewise" for m in ms) else {}
     if "framewise" in ms:
-        from .framewise import evaluate_framewise  # sibling module, only when asked for
-
         out.update(evaluate_framewise(gt, pred, xi)[0])
     return out

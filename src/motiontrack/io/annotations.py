@@ -23,6 +23,11 @@ from pathlib import Path
 
 from ..errors import ConfigError, InputError
 from ..types import Annotations
+from .cvat import read_cvat, write_cvat
+from .cvml import read_cvml, write_cvml
+from .jsonfmt import read_json, write_json
+from .mot import read_mot, write_mot
+from .viper import read_viper, write_viper
 
 __all__ = [
     "FORMATS",
@@ -140,25 +145,11 @@ def read_annotations(path: str | Path, kind: str = "auto", mot_kind: str = "auto
     fmt = detect_format(p) if kind == "auto" else kind
     log.debug("reading %s as %s", p, fmt)
     if fmt == "mot":
-        from .mot import read_mot
-
         return read_mot(p, kind=mot_kind)
-    if fmt == "viper":
-        from .viper import read_viper  # another module; imported lazily
+    return _READERS[fmt](p)
 
-        return read_viper(p)
-    if fmt == "cvml":
-        from .cvml import read_cvml
 
-        return read_cvml(p)
-    if fmt == "cvat":
-        from .cvat import read_cvat
-
-        return read_cvat(p)
-    from .jsonfmt import read_json
-
-    return read_json(p)
-
+_READERS = {"viper": read_viper, "cvml": read_cvml, "cvat": read_cvat, "json": read_json}
 
 _EXTENSIONS = {".txt": "mot", ".csv": "mot", ".json": "json", ".xgtf": "viper"}
 
@@ -200,23 +191,10 @@ def write_annotations(ann: Annotations, path: str | Path, fmt: str | None = None
         raise ConfigError(f"unknown annotation format {fmt!r}; expected one of "
                           f"{', '.join(_WRITE_FORMATS)}")
     if fmt in ("mot", "mot-gt"):
-        from .mot import write_mot
-
         write_mot(ann, p, kind="gt" if fmt == "mot-gt" else "results")
-    elif fmt == "viper":
-        from .viper import write_viper
-
-        write_viper(ann, p)
-    elif fmt == "cvml":
-        from .cvml import write_cvml
-
-        write_cvml(ann, p)
-    elif fmt == "cvat":
-        from .cvat import write_cvat
-
-        write_cvat(ann, p)
     else:
-        from .jsonfmt import write_json
-
-        write_json(ann, p)
+        _WRITERS[fmt](ann, p)
     return fmt
+
+
+_WRITERS = {"viper": write_viper, "cvml": write_cvml, "cvat": write_cvat, "json": write_json}

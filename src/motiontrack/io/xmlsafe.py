@@ -14,6 +14,9 @@ import xml.sax
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import defusedxml
+import defusedxml.sax
+
 from ..errors import InputError
 from ..types import INT_LIMIT
 
@@ -84,9 +87,6 @@ def parse_xml(data: bytes, name: str = "<bytes>") -> XmlNode:
     InputError
         Not well-formed (message ``name:line:column: ...``) or unsafe XML.
     """
-    import defusedxml
-    import defusedxml.sax
-
     handler = _TreeBuilder()
     try:
         defusedxml.sax.parse(io.BytesIO(data), handler, forbid_dtd=False, forbid_entities=True,

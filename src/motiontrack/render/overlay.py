@@ -15,9 +15,12 @@ from typing import Any, Callable, Sequence
 import cv2
 import numpy as np
 
-from .annotate import draw_label
 from ..errors import ConfigError
+from ..io.atomic import atomic_write_bytes
+from ..io.sources import open_source
+from ..io.video import VideoSink
 from ..types import Annotations
+from .annotate import draw_label
 
 log = logging.getLogger(__name__)
 
@@ -90,10 +93,6 @@ def render_overlay(source: Any, out: str | Path | None, runs: Sequence[tuple[str
     png_frames : 1-based frame numbers also written as ``png_dir/frame_%06d.png``.
     png_dir : folder for the stills (default: next to ``out``).
     """
-    from ..io.atomic import atomic_write_bytes
-    from ..io.sources import open_source
-    from ..io.video import VideoSink
-
     if out is None and not png_frames:
         raise ConfigError("nothing to write: give an output video or --png-frames")
     lo, hi = frames if frames is not None else (1, None)

@@ -14,6 +14,7 @@ from typing import Any, Callable, Iterable
 
 import numpy as np
 
+from ..calibrate import load_camera
 from ..config import PipelineConfig, save_config
 from ..evaluate.score import score_run
 from ..io.sources import Source
@@ -57,8 +58,6 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
     codec = cfg.output.codec
     camera = None
     if cfg.measure.camera:
-        from ..calibrate import load_camera
-
         camera = load_camera(cfg.measure.camera)
 
     def build(src: Source) -> Job:

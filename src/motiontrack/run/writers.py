@@ -13,6 +13,7 @@ from typing import Any, Callable, Iterable
 
 import numpy as np
 
+from ..calibrate import track_measurements, world_positions
 from ..io.atomic import AtomicFile
 from ..io.mot import format_mot_rows, read_mot, write_mot
 from ..io.video import VideoSink, extension_for
@@ -88,8 +89,6 @@ class TracksWriter(Writer):
         if self.max_gap is not None:
             self._complete(summary, self.max_gap)
         if self.camera is not None:
-            from ..calibrate import track_measurements
-
             pred = self.final()
             summary.extra["measurements"] = {
                 str(k): v for k, v in track_measurements(pred.frames, pred.ids, pred.boxes,
@@ -112,8 +111,6 @@ class TracksWriter(Writer):
 
     def _world(self, boxes: np.ndarray) -> np.ndarray:
         """Ground-plane positions ``(x, y, 0)`` in metres of the boxes' foot points."""
-        from ..calibrate import world_positions
-
         return np.column_stack([world_positions(boxes, self.camera), np.zeros(len(boxes))])
 
 

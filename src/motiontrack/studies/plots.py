@@ -23,6 +23,8 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
+from ..io.atomic import atomic_write_bytes
+
 log = logging.getLogger(__name__)
 
 __all__ = ["pr_curves", "pr_heatmaps", "metric_curves", "study_figures", "save_figure"]
@@ -52,8 +54,6 @@ def _fmt(v: Any) -> str:
 
 def save_figure(fig: Any, stem: str | Path) -> list[str]:
     """Write ``stem.png`` (90 dpi) and ``stem.svg`` atomically; close the figure."""
-    from ..io.atomic import atomic_write_bytes
-
     stem = Path(stem)
     out = []
     for ext, kw in ((".png", {"dpi": 90}), (".svg", {})):

@@ -19,6 +19,8 @@ from pathlib import Path
 from typing import Any, Mapping, Sequence
 
 from ..errors import InputError
+from ..io.atomic import atomic_write_text
+from .sweep import STUDY_FILE, SUMMARY_FILE, TABLE_FILE, read_table
 
 __all__ = ["build_report", "write_report"]
 
@@ -113,8 +115,6 @@ def _clips(folder: Path, report_dir: Path) -> str:
 
 def build_report(folder: str | Path, report_path: str | Path | None = None) -> str:
     """The HTML text of the report of the study in ``folder`` (links relative to ``report_path``)."""
-    from .sweep import STUDY_FILE, SUMMARY_FILE, TABLE_FILE, read_table
-
     folder = Path(folder)
     if not (folder / STUDY_FILE).is_file():
         raise InputError(f"no {STUDY_FILE} in {folder}: not a sweep output folder")
@@ -157,7 +157,5 @@ def build_report(folder: str | Path, report_path: str | Path | None = None) -> s
 
 def write_report(folder: str | Path, path: str | Path) -> str:
     """Write the report of ``folder`` to ``path`` (atomically); returns the path."""
-    from ..io.atomic import atomic_write_text
-
     atomic_write_text(path, build_report(folder, path))
     return str(path)

@@ -30,10 +30,12 @@ import itertools
 import json
 import logging
 import math
+import multiprocessing
 import os
 import platform
 import sys
 import tempfile
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from decimal import Decimal, InvalidOperation
 from pathlib import Path
@@ -56,6 +58,7 @@ from ..run.job import Job
 from ..run.processors import TrackProcessor
 from ..run.writers import IntermediateWriter, RegionsWriter, TracksWriter
 from ..synth import parse_synth_spec
+from .plots import study_figures
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -520,9 +523,6 @@ def execute(specs: Sequence[RunSpec], jobs: int = 1, cluster: str | None = None,
         for i, s in enumerate(specs):
             done(i, execute_run(s))
     else:
-        import multiprocessing
-        from concurrent.futures import ProcessPoolExecutor, as_completed
-
         ctx = multiprocessing.get_context("spawn")
         pool = ProcessPoolExecutor(max_workers=min(jobs, len(specs)), mp_context=ctx,
                                    initializer=_worker_init)
@@ -681,8 +681,6 @@ def run_sweep(study: Study, out_dir: str | Path, *, jobs: int = 1, cluster: str 
         except ImportError:
             log.warning("matplotlib is not installed: no figures (pip install 'motiontrack[plot]')")
         else:
-            from .plots import study_figures
-
             outputs["figures"] = study_figures(rows, study, out / "figures")
     return SweepResult(rows=rows, out_dir=out, outputs=outputs)
 

@@ -17,14 +17,18 @@ Search-space syntax (one ``--param`` per parameter)::
 
 from __future__ import annotations
 
+import json
 import logging
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Sequence
 
+from ..config import PipelineConfig, apply_overrides, from_dict, save_config, to_dict
 from ..errors import ConfigError
-from .sweep import RunSpec, SequenceSpec, _parse_literal, execute, format_value
+from ..io.atomic import atomic_write_text
+from .sweep import (RunSpec, SequenceSpec, _parse_literal, execute, format_value,
+                    write_table)
 
 log = logging.getLogger(__name__)
 
@@ -140,8 +144,6 @@ def tune(train: Sequence[SequenceSpec], validation: Sequence[SequenceSpec], spac
     progress : called with 1 after each trial.
     """
     optuna = require_optuna()
-    from ..config import PipelineConfig, apply_overrides, from_dict, to_dict
-
     if not train:
         raise ConfigError("tune needs at least one training sequence")
     if not space:
@@ -198,12 +200,6 @@ def tune(train: Sequence[SequenceSpec], validation: Sequence[SequenceSpec], spac
 def write_tune_outputs(res: TuneResult, out_dir: str | Path) -> dict[str, str]:
     """``best_config.toml`` (usable with ``motiontrack track --config``), ``tune.json``,
     ``trials.csv`` and ``validation.csv`` in ``out_dir``."""
-    import json
-
-    from ..config import save_config
-    from ..io.atomic import atomic_write_text
-    from .sweep import write_table
-
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     paths = {"config": str(out / "best_config.toml"), "summary": str(out / "tune.json"),

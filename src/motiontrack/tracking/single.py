@@ -41,6 +41,7 @@ import numpy as np
 from ..errors import ConfigError
 from ..registry import Registry
 from ..types import Box
+from .association import iou_matrix
 
 log = logging.getLogger(__name__)
 
@@ -439,8 +440,6 @@ def follow_accuracy(gt: Any, pred: Any, gt_id: int | None = None) -> dict[str, f
     ``mean_iou`` (a missing prediction counts as IoU 0), ``iou50`` (fraction of those frames with
     IoU ≥ 0.5) and ``lost`` (frames without a prediction).
     """
-    from .association import iou_matrix
-
     if len(pred) == 0:
         return {"gt_id": -1.0, "frames": 0.0, "mean_iou": 0.0, "iou50": 0.0, "lost": 0.0}
     f0 = int(pred.frames.min())
