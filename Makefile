@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 OUT ?= out
 SCENE ?= synth:crossing
 
-.PHONY: run test bench clean
+.PHONY: run test test-fast bench clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -25,6 +25,10 @@ run: $(VENV)/.installed
 
 test: $(VENV)/.dev-installed
 	$(BIN)/python -m pytest -q
+
+# everything but the tests marked slow (end-to-end runs, real-data scores): under 2 minutes
+test-fast: $(VENV)/.dev-installed
+	$(BIN)/python -m pytest -q -m "not slow"
 
 bench: $(VENV)/.dev-installed
 	$(BIN)/python benchmarks/throughput.py

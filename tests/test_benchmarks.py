@@ -1,4 +1,4 @@
-"""Benchmark scripts still run (their speed targets are printed by the scripts, never asserted
+"""The benchmark scripts run (their speed targets are printed by the scripts, never asserted
 here): each is run on a few frames and its output checked for what it must report."""
 
 from __future__ import annotations
@@ -7,9 +7,12 @@ import re
 import subprocess
 import sys
 
+import pytest
+
 from conftest import REPO, data_root
 
 
+@pytest.mark.slow
 def test_stages_benchmark_reports_every_stage(data):
     data("pets09-s2l1", "video.avi")
     out = subprocess.run([sys.executable, str(REPO / "benchmarks" / "stages.py"), "--data",
@@ -24,6 +27,7 @@ def test_stages_benchmark_reports_every_stage(data):
     assert abs(float(times["all stages"]) - sum(float(times[s]) for s in stages[1:])) < 0.02, out
 
 
+@pytest.mark.slow
 def test_detections_benchmark_reports_every_row(data):
     data("pets09-s2l1", "video.avi")
     out = subprocess.run([sys.executable, str(REPO / "benchmarks" / "detections.py"), "--data",

@@ -53,6 +53,7 @@ def test_perfect_detections_are_tracked_whole(pets):
     assert res["IDSW"] <= 2
 
 
+@pytest.mark.slow
 def test_jittered_detector_boxes_are_not_split(pets):
     """A detector's box is one object: the region tracker's split of merged motion blobs must not
     cut a jittered box that overlaps a neighbour's prediction into synthetic shares (with the

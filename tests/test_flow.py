@@ -187,12 +187,14 @@ def _score(scene_name, n_frames=None, size=(640, 480)):
     ("walker", 0.9, 0),
     ("crossing", 0.9, 0),
 ])
+@pytest.mark.slow
 def test_sparse_flow_on_synthetic_scenes(scene, min_fraction, max_switches):
     fraction, switches, tr = _score(scene, size=(320, 240))
     assert fraction >= min_fraction
     assert switches <= max_switches
 
 
+@pytest.mark.slow
 def test_sparse_flow_trails_and_tracks():
     s = make_scene("walker")
     tr = SparseFlowTracker((s.width, s.height), SparseFlowParams(trail=5))
@@ -212,6 +214,7 @@ def test_sparse_flow_trails_and_tracks():
 
 
 # -------------------------------------------------------------------------------------- CLI
+@pytest.mark.slow
 def test_flow_cli_sparse(tmp_path):
     out = tmp_path / "s"
     assert main(["flow", "synth:walker", "--max-frames", "60", "--codec", "mjpg", "--mask-video",

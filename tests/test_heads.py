@@ -136,6 +136,7 @@ def test_detect_heads_many_on_the_hand_built_people(xs, feet, heights):
 
 
 @pytest.mark.parametrize("scale", [0.4, 0.5, 0.55, 0.6, 0.75, 1.0])
+@pytest.mark.slow
 def test_heads_found_at_any_processing_scale(scale):
     # min_drop (4 px) is a fraction of a mask row at most scales; it is rounded to whole rows, so
     # the walker's head is found whatever the scale (unrounded, the head's 2-row flank would

@@ -80,6 +80,7 @@ def study(tmp_path_factory):
     return out
 
 
+@pytest.mark.slow
 def test_single_parameter_figures(study):
     for stem in ("pr_regions", "pr_tracks", "tracking"):
         assert (study / "figures" / f"{stem}.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
@@ -91,6 +92,7 @@ def test_single_parameter_figures(study):
         assert label in svg, label
 
 
+@pytest.mark.slow
 def test_report_is_self_contained(study, tmp_path):
     from motiontrack.cli import main
 

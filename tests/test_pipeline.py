@@ -37,6 +37,7 @@ WARMUP = 40  # frames: the walker is in view and every model has settled
 
 
 @pytest.mark.parametrize("method", DETECTORS.names())
+@pytest.mark.slow
 def test_each_detector_finds_the_walker(method):
     spec = "synth:walker"
     gt = parse_synth_spec(spec).ground_truth()
@@ -55,6 +56,7 @@ def test_each_detector_finds_the_walker(method):
 
 
 @pytest.mark.parametrize("scene", ["walker", "runner", "column", "crossing"])
+@pytest.mark.slow
 def test_synthetic_types_keep_identities(scene):
     # column: the walker is fully hidden for 20+ frames and must come back with the same id;
     # crossing: the two people's blobs merge for 10+ frames and must come apart with their ids
@@ -66,6 +68,7 @@ def test_synthetic_types_keep_identities(scene):
     assert res["IDF1"] >= 0.95
 
 
+@pytest.mark.slow
 def test_processing_scale_reports_original_pixels():
     spec = "synth:walker?n_frames=120"
     gt = parse_synth_spec(spec).ground_truth()
@@ -75,6 +78,7 @@ def test_processing_scale_reports_original_pixels():
         assert res["MOTP"] >= 0.75, scale      # boxes overlap the truth in full-frame pixels
 
 
+@pytest.mark.slow
 def test_roi_mask_blanks_motion_outside(tmp_path):
     import cv2
 
@@ -87,6 +91,7 @@ def test_roi_mask_blanks_motion_outside(tmp_path):
 
 
 @pytest.mark.data
+@pytest.mark.slow
 def test_pets09_well_above_the_tutorial_baseline(data):
     # the tutorial baseline (benchmarks/throughput.py) reaches recall 0.53 and precision 0.68 on
     # these 300 frames with no identities at all
@@ -111,6 +116,7 @@ def test_pets09_well_above_the_tutorial_baseline(data):
 
 
 @pytest.mark.data
+@pytest.mark.slow
 def test_pets09_cold_starts_lose_the_ghosts_of_people_standing_in_the_first_frame(data):
     # A run started mid-clip learns the people standing in its first frame as background; when
     # they walk off, each leaves a ghost joined to them. The pixel-level ghost test
@@ -137,6 +143,7 @@ def test_pets09_cold_starts_lose_the_ghosts_of_people_standing_in_the_first_fram
 
 
 @pytest.mark.data
+@pytest.mark.slow
 def test_pets09_people_preset_splits_groups_by_heads(data):
     # head-based splitting separates people walking together: measured MOTA 0.758, IDF1 0.838,
     # HOTA 0.591 on these 300 frames. The identity scores hang on one or two swaps, so the floors
@@ -190,6 +197,7 @@ def _walk_then_stop(n_walk=40, n_stop=160):
 
 
 @pytest.mark.parametrize("protect, still_tracked", [(True, True), (False, False)])
+@pytest.mark.slow
 def test_selective_update_keeps_a_person_who_stops(protect, still_tracked):
     # the temporal-median background absorbs a standing person after about half its history
     # (25 samples x 5 frames); with selective update the tracked person is never learnt
@@ -225,6 +233,7 @@ def test_unknown_preset(capsys):
     assert "unknown preset 'nope'; valid presets: fast, people" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_ablate_prints_one_row_per_configuration(capsys, tmp_path):
     from motiontrack.cli import main
 
@@ -255,6 +264,7 @@ def test_frame_gaps_from_timestamps(stamps, gaps):
     assert [pipe._frame_gap(Frame(i, img, t)) for i, t in enumerate(stamps)] == gaps
 
 
+@pytest.mark.slow
 def test_head_splitting_without_shapes_keeps_detection_in_its_worker_thread():
     # Heads need only the mask, so with shapes and HOG off the people stage does not force the
     # pipeline to run detection and tracking in one thread; the output is the same either way.
@@ -277,6 +287,7 @@ def test_head_splitting_without_shapes_keeps_detection_in_its_worker_thread():
     assert Pipeline(with_shapes, (640, 480)).sequential is True
 
 
+@pytest.mark.slow
 def test_track_job_keeps_the_shapes_in_order_with_detection(tmp_path):
     # The shape tracker reads the detector's background image after each frame: the CLI's job
     # must not run detection of the next frame meanwhile (in threaded mode `--preset people`
@@ -328,6 +339,7 @@ def test_bridge_lets_go_of_an_object_at_the_image_border(border_rule, monkeypatc
         assert min(xs) <= 2.0
 
 
+@pytest.mark.slow
 def test_knn_masks_do_not_depend_on_the_threads_random_state():
     # OpenCV's KNN draws from the calling thread's random generator; unseeded, a second run in
     # the same thread (or one after anything else used the generator) would give other masks.
@@ -355,6 +367,7 @@ def test_knn_masks_do_not_depend_on_the_threads_random_state():
     assert any(np.frombuffer(m, np.uint8).any() for m in first)  # the walkers are detected
 
 
+@pytest.mark.slow
 def test_knn_seed_gives_another_draw_that_repeats():
     from motiontrack.io.sources import open_source
 
@@ -373,6 +386,7 @@ def test_knn_seed_gives_another_draw_that_repeats():
     assert 0 < diff < 0.01
 
 
+@pytest.mark.slow
 def test_knn_model_size_reaches_opencv_and_the_fast_preset_keeps_identities():
     from motiontrack.errors import ConfigError
 

@@ -164,6 +164,7 @@ SYNTH_CASES = [
 
 
 @pytest.mark.parametrize("scene, name, n, criterion, minimum", SYNTH_CASES)
+@pytest.mark.slow
 def test_synthetic_person_followed(scene, name, n, criterion, minimum):
     f0, frames, gt = _scene_frames(scene, 61)
     out = list(follow(frames[:n + 1], create_single_tracker(name), Box(*gt.at(f0).boxes[0])))
@@ -235,6 +236,7 @@ def test_follow_cli_missing_video(tmp_path, capsys):
     assert code != 0 and "not found" in err and "Traceback" not in err
 
 
+@pytest.mark.slow
 def test_follow_cli_outputs(tmp_path, capsys):
     out = tmp_path / "o"
     # walker frame index 30 (frame 31) gt box is 613,300,27,91 (first fully visible frame)
@@ -255,6 +257,7 @@ def test_follow_cli_outputs(tmp_path, capsys):
 
 
 @pytest.mark.data
+@pytest.mark.slow
 def test_follow_pets_person(data, tmp_path):
     # PETS 2009 S2L1 view 1, person 9 (gt_mot15.txt, frame 1 box 499,158,31,75), frames 1-60
     # with CSRT. Measured: mean IoU 0.77, IoU >= 0.5 on 92 % of frames 1-100.

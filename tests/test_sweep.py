@@ -124,6 +124,7 @@ def threshold_sweep(tmp_path_factory):
 
 @pytest.mark.parametrize("col", ["det_pixel_recall", "det_object_area_recall",
                                  "det_localized_object_recall"])
+@pytest.mark.slow
 def test_recall_never_rises_with_the_motion_threshold(threshold_sweep, col):
     # The median background does not depend on the threshold, so a higher threshold gives a subset
     # mask; median filter, erosion and dilation are increasing operators and a region of the smaller
@@ -135,6 +136,7 @@ def test_recall_never_rises_with_the_motion_threshold(threshold_sweep, col):
     assert rec[0] > rec[-1] + 0.2, rec      # the sweep really spans the interesting range
 
 
+@pytest.mark.slow
 def test_sweep_outputs(threshold_sweep):
     st, out, res = threshold_sweep
     assert [r["run"] for r in res.rows] == [1, 2, 3, 4, 5]
@@ -160,6 +162,7 @@ def small_sweep(tmp_path_factory):
     return st, out
 
 
+@pytest.mark.slow
 def test_parallel_and_serial_tables_are_identical(small_sweep, tmp_path):
     st, out = small_sweep
     run_sweep(st, tmp_path, jobs=2, figures=False)
@@ -168,6 +171,7 @@ def test_parallel_and_serial_tables_are_identical(small_sweep, tmp_path):
             == (out / "runs/r002/walker/tracks.txt").read_bytes())
 
 
+@pytest.mark.slow
 def test_replay_reproduces_the_study(threshold_sweep):
     st, out, _ = threshold_sweep
     study, meta = load_study(out)
@@ -176,6 +180,7 @@ def test_replay_reproduces_the_study(threshold_sweep):
     # rerunning it gives the identical table: see test_cli_two_parameters_and_intermediate_movies
 
 
+@pytest.mark.slow
 def test_dask_local_cluster_gives_the_same_table(small_sweep, tmp_path):
     distributed = pytest.importorskip("distributed", reason="dask[distributed] not installed")
     st, out = small_sweep
@@ -185,12 +190,14 @@ def test_dask_local_cluster_gives_the_same_table(small_sweep, tmp_path):
     assert (tmp_path / "results.csv").read_bytes() == (out / "results.csv").read_bytes()
 
 
+@pytest.mark.slow
 def test_existing_study_is_not_overwritten(threshold_sweep):
     st, out, _ = threshold_sweep
     with pytest.raises(InputError, match="--force"):
         run_sweep(st, out, figures=False)
 
 
+@pytest.mark.slow
 def test_cli_two_parameters_and_intermediate_movies(tmp_path, capsys):
     from motiontrack.cli import main
 
@@ -315,6 +322,7 @@ def test_interrupted_sweep_keeps_finished_runs(tmp_path, monkeypatch, capsys):
     assert "interrupted" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_sweep_scores_what_track_writes_with_fill_motion(tmp_path):
     """With ``tracker.fill_motion`` a run's tracks gain their tentative frames and filled gaps
     when it ends; a sweep run must score (and save) the same tracks as ``motiontrack track``."""

@@ -373,6 +373,7 @@ def test_a_track_grown_to_the_blob_still_claims_its_share_by_its_reference_size(
 
 
 @pytest.mark.parametrize("seed", [3, 4, 5])
+@pytest.mark.slow
 def test_crossing_where_one_box_grows_into_the_other_keeps_both_identities(seed):
     # type 4 with seeds where the back person's box grows into the front person's before the
     # blobs fuse: each track claims its share of the merged blob by its reference size, so the
@@ -434,6 +435,7 @@ def test_a_lost_track_coasts_at_the_median_pace_of_its_recent_steps():
 
 
 @pytest.mark.parametrize("seed", [5, 8, 11])
+@pytest.mark.slow
 def test_person_behind_the_column_comes_out_under_the_same_id(seed):
     # type 3 with seeds where fragments at the column's edge would tilt the lost track's Kalman
     # velocity, or a tentative track takes the reappearing person first: coasting at the recent

@@ -43,6 +43,7 @@ def tuned():
             for _ in range(2)]
 
 
+@pytest.mark.slow
 def test_tune_is_deterministic_and_scores_validation(tuned):
     a, b = tuned
     assert a.best_params == b.best_params and a.train_score == b.train_score
@@ -53,6 +54,7 @@ def test_tune_is_deterministic_and_scores_validation(tuned):
     assert a.best_config.motion.median.threshold == a.best_params["motion.median.threshold"]
 
 
+@pytest.mark.slow
 def test_best_config_loads_with_track_config(tuned, tmp_path):
     from motiontrack.studies.tune import write_tune_outputs
 
@@ -69,6 +71,7 @@ def test_unknown_metric_is_a_config_error():
         tune(TRAIN, (), SPACE, load_config(None, ["motion.method=median"]), metric="nope", n_trials=1)
 
 
+@pytest.mark.slow
 def test_cli_tune(tmp_path, capsys):
     from motiontrack.cli import main
 
