@@ -11,7 +11,8 @@ from motiontrack.config import load_config
 from motiontrack.errors import ConfigError
 from motiontrack.studies.sweep import run_sweep, study_from_args
 from motiontrack.io.sources import ArraySource
-from motiontrack.render.overlay import GT_COLOR, PALETTE, draw_overlay, render_overlay
+from motiontrack.render.overlay import GT_COLOR, PALETTE, draw_overlay
+from motiontrack.run import overlay_job
 
 from conftest import ann
 
@@ -39,20 +40,22 @@ def test_render_overlay_video_and_pngs(tmp_path):
     frames = [np.full((48, 64, 3), 40 + 10 * i, np.uint8) for i in range(6)]
     gt = ann([(f, 1, 5 + f, 5, 10, 20) for f in range(1, 7)])
     run = ann([(f, 3, 6 + f, 6, 10, 20) for f in range(2, 7)])
-    res = render_overlay(ArraySource(frames, fps=10), tmp_path / "ov.avi", [("run", run)], gt,
-                         frames=(2, 5), png_frames=[3, 9], codec="mjpg")
+    job = overlay_job(ArraySource(frames, fps=10), tmp_path / "ov.avi", [("run", run)], gt,
+                      first=2, last=5, png_frames=[3, 9], codec="mjpg")
+    res = job.run()
     assert res.frames == 4                                  # frames 2..5
     assert (tmp_path / "ov.avi").stat().st_size > 0
-    assert [p.split("/")[-1] for p in res.pngs] == ["frame_000003.png"]
+    assert sorted(p.name for p in tmp_path.glob("*.png")) == ["frame_000003.png"]
+    assert not (tmp_path / "summary.json").exists()
     import cv2
 
-    still = cv2.imread(res.pngs[0])
+    still = cv2.imread(str(tmp_path / "frame_000003.png"))
     assert tuple(still[5, 5 + 3 + 5]) == GT_COLOR           # gt box of frame 3, top edge
 
 
 def test_render_overlay_needs_an_output(tmp_path):
     with pytest.raises(ConfigError):
-        render_overlay(ArraySource([np.zeros((8, 8, 3), np.uint8)]), None, [])
+        overlay_job(ArraySource([np.zeros((8, 8, 3), np.uint8)]), None, [])
 
 
 def test_cli_overlay(tmp_path):

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import sys
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -45,27 +44,12 @@ def _pred(item: str):
 def cmd_overlay(args) -> int:
     from pathlib import Path
 
-    from tqdm import tqdm
-
     from ..errors import ConfigError
-    from ..render.overlay import render_overlay
-    from ._common import frame_range, read_gt
+    from ..run import overlay_job
+    from ._common import frame_loop, frame_range, read_gt
 
-    from ..io.atomic import check_writable
-
-    if args.out:
-        check_writable([Path(args.out)], args.force)
     runs = [_pred(p) for p in args.pred]
-    if args.gt:
-        gt = read_gt(args.gt)
-    elif args.source.startswith("synth:"):
-        from ..synth import parse_synth_spec
-
-        gt = parse_synth_spec(args.source).ground_truth()
-    else:
-        gt = None
-    if gt is None and not runs:
-        raise ConfigError("nothing to draw: give --gt and/or --pred")
+    gt = read_gt(args.gt) if args.gt else None
     try:
         pngs = [int(x) for x in args.png_frames.split(",") if x.strip()]
     except ValueError:
@@ -73,10 +57,11 @@ def cmd_overlay(args) -> int:
     codec = args.codec
     if codec is None and args.out:
         codec = {".mp4": "mp4v", ".avi": "mjpg"}.get(Path(args.out).suffix.lower(), "vp80")
-    frames = frame_range(args.frames) if args.frames else None
-    with tqdm(unit="frame", disable=None, file=sys.stderr, dynamic_ncols=True) as bar:
-        res = render_overlay(args.source, args.out, runs, gt, frames=frames, png_frames=pngs,
-                             png_dir=args.png_dir, codec=codec or "vp80", progress=bar.update)
-    print(f"frames    {res.frames}")
-    print(f"outputs   {', '.join(([res.video] if res.video else []) + res.pngs)}")
+    first, last = frame_range(args.frames) if args.frames else (1, None)
+    job = overlay_job(args.source, args.out, runs, gt, first=first, last=last, png_frames=pngs,
+                      png_dir=args.png_dir, codec=codec or "vp80", force=args.force)
+    with frame_loop(job.expected_frames()) as loop:
+        s = job.run(progress=loop.update, should_stop=loop.stop)
+    print(f"frames    {s.frames}")
+    print(f"outputs   {', '.join(s.outputs.values())}")
     return 0

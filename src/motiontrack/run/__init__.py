@@ -6,7 +6,7 @@ and reports progress through a callback. :mod:`.jobs` builds the job of each com
 """
 
 from .job import Job, JobContext, JobSummary, Processor, RunOutcome, Writer
-from .jobs import dense_flow_job, follow_job, sparse_flow_job, track_job
+from .jobs import dense_flow_job, follow_job, overlay_job, sparse_flow_job, track_job
 
 __all__ = ["Job", "JobContext", "JobSummary", "Processor", "RunOutcome", "Writer", "track_job",
-           "follow_job", "sparse_flow_job", "dense_flow_job"]
+           "follow_job", "sparse_flow_job", "dense_flow_job", "overlay_job"]

@@ -197,11 +197,13 @@ class Job:
     out_dir : the output folder (created when the run starts).
     force : overwrite existing outputs.
     config : written to ``config.toml`` when the run ends (``(writer function, object)``), or None.
+    summary : write ``summary.json`` (the summary is returned by :meth:`run` either way).
     """
 
     def __init__(self, source: Source, processor: Processor, writers: Sequence[Writer],
                  out_dir: str | Path, *, force: bool = False,
-                 config: tuple[Callable[[Any, Path], None], Any] | None = None) -> None:
+                 config: tuple[Callable[[Any, Path], None], Any] | None = None,
+                 summary: bool = True) -> None:
         self.source = source
         self.processor = processor
         self.writers = list(writers)
@@ -210,7 +212,8 @@ class Job:
         self.paths: dict[str, Path] = {}
         for w in self.writers:
             self.paths.update(w.paths)
-        self.paths["summary"] = self.out / "summary.json"
+        if summary:
+            self.paths["summary"] = self.out / "summary.json"
         if config is not None:
             self.paths["config"] = self.out / "config.toml"
         check_writable(list(self.paths.values()), force)
@@ -261,7 +264,9 @@ class Job:
             save(cfg, self.paths["config"])
         summary.outputs = {k: str(v) for k, v in self.paths.items()
                            if v.exists() or k == "summary"}
-        atomic_write_text(self.paths["summary"], json.dumps(summary.as_dict(), indent=2) + "\n")
+        if "summary" in self.paths:
+            atomic_write_text(self.paths["summary"],
+                              json.dumps(summary.as_dict(), indent=2) + "\n")
         outcome.reraise()  # everything is written; an interrupt or a failed source still surfaces
         return summary
 

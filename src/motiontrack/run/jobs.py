@@ -10,12 +10,13 @@ from __future__ import annotations
 import logging
 from dataclasses import replace
 from pathlib import Path
-from typing import Any, Callable, Iterable
+from typing import Any, Callable, Iterable, Sequence
 
 import numpy as np
 
 from ..calibrate import load_camera
-from ..config import PipelineConfig, save_config
+from ..config import PipelineConfig, SourceConfig, save_config
+from ..errors import ConfigError
 from ..evaluate.score import score_run
 from ..io.sources import Source
 from ..imaging import scaled_size
@@ -26,18 +27,20 @@ from ..tracking.flow import SparseFlowParams
 from ..tracking.single import SingleTracker, follow_accuracy
 from ..types import Annotations, Box
 from .job import Job
-from .processors import DenseFlowProcessor, FollowProcessor, SparseFlowProcessor, TrackProcessor
-from .writers import (IntermediateWriter, MaskVideoWriter, ScoreWriter, TracksWriter, VideoWriter,
-                      ViewerWriter)
+from .processors import (DenseFlowProcessor, FollowProcessor, OverlayProcessor,
+                         SparseFlowProcessor, TrackProcessor)
+from .writers import (IntermediateWriter, MaskVideoWriter, ScoreWriter, StillsWriter, TracksWriter,
+                      VideoWriter, ViewerWriter)
 
 log = logging.getLogger(__name__)
 
-__all__ = ["track_job", "follow_job", "sparse_flow_job", "dense_flow_job"]
+__all__ = ["track_job", "follow_job", "sparse_flow_job", "dense_flow_job", "overlay_job"]
 
 
-def _opened(source: Any, cfg: PipelineConfig, build: Callable[[Source], Job]) -> Job:
-    """``build(source)`` with the source opened, closed again when building fails."""
-    src = open_configured_source(source, cfg.source)
+def _opened(source: Any, sc: SourceConfig, build: Callable[[Source], Job]) -> Job:
+    """``build(source)`` with the source opened by the settings ``sc``, closed again when
+    building fails."""
+    src = open_configured_source(source, sc)
     try:
         return build(src)
     except BaseException:
@@ -85,7 +88,7 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
             writers.append(ScoreWriter(out, truth, tracks, score_run))
         return Job(src, proc, writers, out, force=force, config=(save_config, cfg))
 
-    return _opened(source, cfg, build)
+    return _opened(source, cfg.source, build)
 
 
 def follow_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, tracker: SingleTracker,
@@ -110,7 +113,7 @@ def follow_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, tracker: S
             writers.append(ScoreWriter(out, truth, tracks, score, write_gt=False))
         return Job(src, FollowProcessor(tracker, box, name, params), writers, out, force=force)
 
-    return _opened(source, cfg, build)
+    return _opened(source, cfg.source, build)
 
 
 def sparse_flow_job(source: Any, cfg: PipelineConfig, out_dir: str | Path,
@@ -134,7 +137,7 @@ def sparse_flow_job(source: Any, cfg: PipelineConfig, out_dir: str | Path,
         return Job(src, SparseFlowProcessor(cfg, src.info, params), writers, out, force=force,
                    config=(save_config, cfg))
 
-    return _opened(source, cfg, build)
+    return _opened(source, cfg.source, build)
 
 
 def dense_flow_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *,
@@ -151,4 +154,33 @@ def dense_flow_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *,
         return Job(src, DenseFlowProcessor(cfg.motion.farneback, max_magnitude), writers, out,
                    force=force)
 
-    return _opened(source, cfg, build)
+    return _opened(source, cfg.source, build)
+
+
+def overlay_job(source: Any, out: str | Path | None, runs: Sequence[tuple[str, Annotations]],
+                gt: Annotations | None = None, *, first: int = 1, last: int | None = None,
+                png_frames: Iterable[int] = (), png_dir: str | Path | None = None,
+                codec: str = "vp80", force: bool = False) -> Job:
+    """``motiontrack overlay``: ground truth (given, or the source's own) and runs drawn over
+    frames ``first`` to ``last`` (1-based, inclusive) as the video ``out`` and PNG stills of
+    ``png_frames`` in ``png_dir`` (default: beside ``out``); no summary file."""
+    png_frames = list(png_frames)
+    if out is None and not png_frames:
+        raise ConfigError("nothing to write: give an output video or --png-frames")
+    if first < 1 or (last is not None and last < first):
+        raise ConfigError(f"frame range must satisfy 1 <= first <= last, got {first}:{last}")
+    video = Path(out) if out is not None else None
+    stills = Path(png_dir) if png_dir is not None else (video.parent if video else Path("."))
+    sc = SourceConfig(start=first - 1, max_frames=0 if last is None else last - first + 1)
+
+    def build(src: Source) -> Job:
+        truth = gt if gt is not None else src.ground_truth()
+        if truth is None and not runs:
+            raise ConfigError("nothing to draw: give --gt and/or --pred")
+        writers: list = [VideoWriter("video", video, codec)] if video is not None else []
+        if png_frames:
+            writers.append(StillsWriter(stills, png_frames))
+        return Job(src, OverlayProcessor(runs, truth, first, last), writers,
+                   video.parent if video is not None else stills, force=force, summary=False)
+
+    return _opened(source, sc, build)

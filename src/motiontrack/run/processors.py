@@ -3,7 +3,8 @@
 * :class:`TrackProcessor` — the pipeline (motion or external detections → regions → tracks);
 * :class:`FollowProcessor` — one object from a given box with a single-object tracker;
 * :class:`SparseFlowProcessor` — Lucas–Kanade feature points grouped into objects;
-* :class:`DenseFlowProcessor` — Farnebäck flow as a colour picture and a motion mask.
+* :class:`DenseFlowProcessor` — Farnebäck flow as a colour picture and a motion mask;
+* :class:`OverlayProcessor` — ground truth and runs drawn on the frames, one colour each.
 
 Each yields one :class:`~motiontrack.types.FrameResult` per frame and draws its own annotated
 picture of it; the writers do the rest.
@@ -12,7 +13,7 @@ picture of it; the writers do the rest.
 from __future__ import annotations
 
 from dataclasses import asdict
-from typing import Any, Iterator
+from typing import Any, Iterator, Sequence
 
 import cv2
 import numpy as np
@@ -23,12 +24,14 @@ from ..motion.dense_flow import DenseFlow
 from ..pipeline import Pipeline
 from ..render.annotate import annotate_frame, draw_label
 from ..render.flow import flow_to_bgr
+from ..render.overlay import draw_overlay, layers_at, overlay_layers
 from ..render.people import draw_people
 from ..tracking.flow import SparseFlowParams, SparseFlowTracker, draw_feature_trails
 from ..tracking.single import SingleTracker, follow
 from ..types import Annotations, Box, FrameResult, Track, TrackState
 
-__all__ = ["TrackProcessor", "FollowProcessor", "SparseFlowProcessor", "DenseFlowProcessor"]
+__all__ = ["TrackProcessor", "FollowProcessor", "SparseFlowProcessor", "DenseFlowProcessor",
+           "OverlayProcessor"]
 
 #: centre points kept for a followed object's trail
 _FOLLOW_TRAIL = 64
@@ -187,3 +190,33 @@ class DenseFlowProcessor:
                 "max_magnitude": self.max_magnitude,
                 "mean_magnitude": self._total / n if n else 0.0,
                 "peak_magnitude": self._peak, "moving_fraction": self._moving / n if n else 0.0}
+
+
+class OverlayProcessor:
+    """Ground truth and runs (``(legend name, annotations)``) drawn over the frames numbered
+    ``first`` to ``last`` (1-based, inclusive; ``last`` None = to the end)."""
+
+    def __init__(self, runs: Sequence[tuple[str, Annotations]], gt: Annotations | None = None,
+                 first: int = 1, last: int | None = None) -> None:
+        self.layers = overlay_layers(runs, gt)
+        self.first, self.last = first, last
+
+    def results(self, source: Source) -> Iterator[FrameResult]:
+        for frame in source:
+            f = frame.index + 1
+            if f < self.first:   # a ready-made Source ignores start/max_frames
+                continue
+            if self.last is not None and f > self.last:
+                return
+            yield FrameResult(index=frame.index, timestamp=frame.timestamp, frame=frame.image,
+                              mask=None, regions=(), tracks=())
+
+    def annotate(self, result: FrameResult) -> np.ndarray:
+        f = result.index + 1
+        return draw_overlay(result.frame, layers_at(self.layers, f), frame_label=f"frame {f}")
+
+    def background(self) -> np.ndarray | None:
+        return None
+
+    def summary(self) -> dict[str, Any]:
+        return {"layers": [name for name, *_ in self.layers]}

@@ -11,10 +11,11 @@ import logging
 from pathlib import Path
 from typing import Any, Callable, Iterable
 
+import cv2
 import numpy as np
 
 from ..calibrate import track_measurements, world_positions
-from ..io.atomic import AtomicFile
+from ..io.atomic import AtomicFile, atomic_write_bytes
 from ..io.mot import format_mot_rows, read_mot, write_mot
 from ..io.video import VideoSink, extension_for
 from ..render.streams import parse_streams, stream_image
@@ -25,7 +26,7 @@ from .job import JobContext, JobSummary, Writer
 log = logging.getLogger(__name__)
 
 __all__ = ["TracksWriter", "RegionsWriter", "ScoreWriter", "VideoWriter", "MaskVideoWriter",
-           "IntermediateWriter", "ViewerWriter"]
+           "IntermediateWriter", "StillsWriter", "ViewerWriter"]
 
 
 class TracksWriter(Writer):
@@ -225,6 +226,41 @@ class IntermediateWriter(Writer):
         for sink in self._sinks.values():
             sink.close() if keep else sink.discard()
         self._sinks = {}
+
+
+class StillsWriter(Writer):
+    """PNG stills of the annotated picture at chosen 1-based frame numbers, as
+    ``folder/frame_%06d.png`` (each written atomically when its frame comes); frames the run
+    never reaches are named in a warning when it ends."""
+
+    def __init__(self, folder: Path, frames: Iterable[int]) -> None:
+        self.folder = Path(folder)
+        self.wanted = sorted({int(f) for f in frames})
+        self.paths = {f"frame_{f}": self.folder / f"frame_{f:06d}.png" for f in self.wanted}
+        self.written: list[str] = []
+        self._ctx: JobContext | None = None
+
+    def start(self, ctx: JobContext) -> None:
+        self._ctx = ctx
+
+    def write(self, result: FrameResult) -> None:
+        path = self.paths.get(f"frame_{result.index + 1}")
+        if path is not None:
+            ok, buf = cv2.imencode(".png", self._ctx.annotated(result))
+            if ok:
+                atomic_write_bytes(path, buf.tobytes())
+                self.written.append(str(path))
+
+    def close(self, keep: bool) -> None:
+        if not keep:
+            for p in self.written:
+                Path(p).unlink(missing_ok=True)
+
+    def finish(self, summary: JobSummary) -> None:
+        missing = [f for f in self.wanted if str(self.paths[f"frame_{f}"]) not in self.written]
+        if missing:
+            log.warning("--png-frames outside the rendered frames: %s",
+                        ", ".join(map(str, missing)))
 
 
 class ViewerWriter(Writer):
