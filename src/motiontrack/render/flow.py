@@ -1,4 +1,5 @@
-"""Optical flow as pictures: dense flow in colour (hue = direction, value = magnitude).
+"""Optical flow as pictures: dense flow in colour (hue = direction, value = magnitude), and the
+trails of sparse-flow feature points.
 
 Colour convention: direction is the angle of ``(dx, dy)`` in *image* coordinates (x right, y down),
 ``θ = atan2(dy, dx)`` in [0°, 360°), so 0° = moving right, 90° = moving down, 180° = left,
@@ -14,8 +15,9 @@ import cv2
 import numpy as np
 
 from ..errors import ConfigError
+from .annotate import color_for
 
-__all__ = ["flow_to_hsv", "flow_to_bgr", "hue_to_angle"]
+__all__ = ["flow_to_hsv", "flow_to_bgr", "hue_to_angle", "draw_feature_trails"]
 
 
 def flow_to_hsv(flow: np.ndarray, max_magnitude: float | None = None) -> np.ndarray:
@@ -55,3 +57,15 @@ def flow_to_bgr(flow: np.ndarray, max_magnitude: float | None = None) -> np.ndar
 def hue_to_angle(hue: np.ndarray | float) -> np.ndarray:
     """OpenCV hue (0..179) back to the flow direction in degrees [0, 360)."""
     return (np.asarray(hue, np.float64) * 2.0) % 360.0
+
+
+def draw_feature_trails(img: np.ndarray, trails: list[tuple[int, np.ndarray]]) -> None:
+    """Draw each feature point's trail and current position in its object's colour (in place)."""
+    for oid, tr in trails:
+        color = color_for(oid)
+        if len(tr) > 1:
+            cv2.polylines(img, [np.round(tr).astype(np.int32).reshape(-1, 1, 2)], False, color, 1,
+                          cv2.LINE_AA)
+        if len(tr):
+            x, y = tr[-1]
+            cv2.circle(img, (int(round(x)), int(round(y))), 2, color, -1)

@@ -23,10 +23,10 @@ from ..io.sources import Source, SourceInfo
 from ..motion.dense_flow import DenseFlow
 from ..pipeline import Pipeline
 from ..render.annotate import annotate_frame, draw_label
-from ..render.flow import flow_to_bgr
+from ..render.flow import draw_feature_trails, flow_to_bgr
 from ..render.overlay import draw_overlay, layers_at, overlay_layers
 from ..render.people import draw_people
-from ..tracking.flow import SparseFlowParams, SparseFlowTracker, draw_feature_trails
+from ..tracking.flow import SparseFlowParams, SparseFlowTracker
 from ..tracking.single import SingleTracker, follow
 from ..types import Annotations, Box, FrameResult, Track, TrackState
 

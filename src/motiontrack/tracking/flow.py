@@ -29,7 +29,7 @@ recent path of each feature point for drawing (:func:`draw_feature_trails`).
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field, fields, replace
 from typing import Any
 
 import cv2
@@ -38,12 +38,13 @@ import numpy as np
 from ..config import CleanupConfig, MotionConfig, PreprocessConfig, RegionsConfig
 from ..errors import ConfigError
 from ..imaging import to_gray
+from ..motion import clean_mask, create_detector
 from ..preprocess import preprocess
 from ..types import Box, Track, TrackState
 
 log = logging.getLogger(__name__)
 
-__all__ = ["SparseFlowParams", "SparseFlowTracker", "forward_backward_lk", "draw_feature_trails"]
+__all__ = ["SparseFlowParams", "SparseFlowTracker", "forward_backward_lk"]
 
 
 @dataclass(frozen=True)
@@ -204,8 +205,6 @@ class SparseFlowTracker:
                  motion: MotionConfig | None = None, cleanup: CleanupConfig | None = None,
                  regions: RegionsConfig | None = None, preprocess: PreprocessConfig | None = None,
                  detector: Any = None) -> None:
-        from ..motion import create_detector
-
         self.width, self.height = int(image_size[0]), int(image_size[1])
         if self.width <= 0 or self.height <= 0:
             raise ConfigError(f"image size must be positive, got {image_size}")
@@ -216,8 +215,6 @@ class SparseFlowTracker:
         self.regions = regions or RegionsConfig()
         self.pre = preprocess
         if self.pre is not None and getattr(self.detector, "wants_color", False) and self.pre.grayscale:
-            from dataclasses import replace
-
             self.pre = replace(self.pre, grayscale=False)
         area = float(self.width * self.height)
         r = self.regions
@@ -237,8 +234,6 @@ class SparseFlowTracker:
 
     # ------------------------------------------------------------------------------ helpers
     def _motion_mask(self, image: np.ndarray) -> np.ndarray:
-        from ..motion import clean_mask
-
         small = preprocess(image, self.pre) if self.pre is not None else image
         mask = clean_mask(self.detector.apply(small), self.cleanup)
         if mask.shape[:2] != (self.height, self.width):
@@ -545,17 +540,3 @@ class SparseFlowTracker:
         k = self._trail.shape[1]
         return [(int(o), self._trail[i, k - int(n):]) for i, (o, n)
                 in enumerate(zip(self.owner, self._trail_len))]
-
-
-def draw_feature_trails(img: np.ndarray, trails: list[tuple[int, np.ndarray]]) -> None:
-    """Draw each feature point's trail and current position in its object's colour (in place)."""
-    from ..render.annotate import color_for
-
-    for oid, tr in trails:
-        color = color_for(oid)
-        if len(tr) > 1:
-            cv2.polylines(img, [np.round(tr).astype(np.int32).reshape(-1, 1, 2)], False, color, 1,
-                          cv2.LINE_AA)
-        if len(tr):
-            x, y = tr[-1]
-            cv2.circle(img, (int(round(x)), int(round(y))), 2, color, -1)
