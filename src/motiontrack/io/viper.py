@@ -43,7 +43,7 @@ from __future__ import annotations
 import logging
 import re
 from pathlib import Path
-from typing import Iterable
+from typing import Callable, Iterable
 from xml.etree.ElementTree import Element, ParseError, TreeBuilder
 from xml.sax.saxutils import quoteattr
 
@@ -141,6 +141,43 @@ def parse_viper(
     attribute: str | None = None,
 ) -> Annotations:
     """Parse ViPER XML given as bytes/str; see :func:`read_viper`."""
+    root, where = _parse_tree(data, name)
+    if root.tag != _V + "viper":
+        raise InputError(f"{where(root)}: root element must be <viper> in namespace {VIPER_NS}")
+    config = root.find(_V + "config")
+    if config is None:
+        raise InputError(f"{where(root)}: missing <config>")
+    # 1. config: which OBJECT descriptors have which bbox attributes
+    bbox_attrs = _bbox_attributes(config, descriptor, attribute, where)
+    if descriptor is not None and descriptor not in bbox_attrs:
+        raise InputError(
+            f"{name}: no OBJECT descriptor {descriptor!r} with a bbox attribute"
+            + (f" named {attribute!r}" if attribute else "")
+        )
+    rows = _Rows()
+    meta: dict[str, object] = {"format": "viper"}
+    data_el = root.find(_V + "data")
+    sourcefiles = [] if data_el is None else data_el.findall(_V + "sourcefile")
+    if len(sourcefiles) > 1:
+        log.warning("%s: %d sourcefiles; reading all into one table", name, len(sourcefiles))
+    for sf in sourcefiles:
+        meta.setdefault("sourcefile", sf.get("filename", ""))
+        # 2. the Information FILE descriptor: frame count and size
+        for fel in sf.findall(_V + "file"):
+            _read_information(fel, meta, where)
+        # 3. objects
+        for obj in sf.findall(_V + "object"):
+            if obj.get("name") in bbox_attrs:
+                _read_object(obj, bbox_attrs[obj.get("name")], rows, where)
+    if bbox_attrs:
+        meta["descriptor"] = next(iter(bbox_attrs)) if len(bbox_attrs) == 1 else sorted(bbox_attrs)
+        meta["attribute"] = next(iter(bbox_attrs.values()))
+    meta["names"] = rows.names
+    return rows.annotations(meta, name)
+
+
+def _parse_tree(data: bytes | str, name: str) -> tuple[Element, Callable[[Element], str]]:
+    """The root element, and ``where(el)`` naming an element and its source line for errors."""
     builder = _LineTreeBuilder()
     parser = DET.DefusedXMLParser(
         target=builder, forbid_dtd=False, forbid_entities=True, forbid_external=True
@@ -162,13 +199,12 @@ def parse_viper(
         tag = el.tag.split("}")[-1]
         return f"{name}: line {lines.get(id(el), '?')}: <{tag}>"
 
-    if root.tag != _V + "viper":
-        raise InputError(f"{where(root)}: root element must be <viper> in namespace {VIPER_NS}")
-    config = root.find(_V + "config")
-    if config is None:
-        raise InputError(f"{where(root)}: missing <config>")
+    return root, where
 
-    # 1. config: which OBJECT descriptors have which bbox attributes
+
+def _bbox_attributes(config: Element, descriptor: str | None, attribute: str | None,
+                     where: Callable[[Element], str]) -> dict[str, str]:
+    """``{descriptor name: bbox attribute name}`` of the OBJECT descriptors to read, file order."""
     bbox_attrs: dict[str, str] = {}
     for desc in config.findall(_V + "descriptor"):
         if desc.get("type") != "OBJECT":
@@ -184,99 +220,107 @@ def parse_viper(
             ):
                 bbox_attrs[dname] = att.get("name")
                 break
-    if descriptor is not None and descriptor not in bbox_attrs:
-        raise InputError(
-            f"{name}: no OBJECT descriptor {descriptor!r} with a bbox attribute"
-            + (f" named {attribute!r}" if attribute else "")
-        )
+    return bbox_attrs
 
-    frames: list[int] = []
-    ids: list[int] = []
-    boxes: list[tuple[int, int, int, int]] = []
-    names: dict[int, str] = {}
-    meta: dict[str, object] = {"format": "viper"}
-    data_el = root.find(_V + "data")
-    sourcefiles = [] if data_el is None else data_el.findall(_V + "sourcefile")
-    if len(sourcefiles) > 1:
-        log.warning("%s: %d sourcefiles; reading all into one table", name, len(sourcefiles))
-    seen: dict[int, str] = {}
-    for sf in sourcefiles:
-        meta.setdefault("sourcefile", sf.get("filename", ""))
-        # 2. the Information FILE descriptor: frame count and size
-        for fel in sf.findall(_V + "file"):
-            info = {}
-            for att in fel.findall(_V + "attribute"):
-                for val in att:
-                    if val.get("value") is not None:
-                        info[att.get("name")] = val.get("value")
-            try:
-                if "NUMFRAMES" in info:
-                    meta["num_frames"] = int(info["NUMFRAMES"])
-                if "H-FRAME-SIZE" in info and "V-FRAME-SIZE" in info:
-                    meta["frame_size"] = (int(info["H-FRAME-SIZE"]), int(info["V-FRAME-SIZE"]))
-            except ValueError as exc:
-                raise InputError(f"{where(fel)}: bad Information value ({exc})") from None
-        # 3. objects
-        for obj in sf.findall(_V + "object"):
-            dname = obj.get("name")
-            if dname not in bbox_attrs:
-                continue
-            try:
-                oid = int(obj.get("id", ""))
-            except ValueError:
-                raise InputError(f"{where(obj)}: object id must be an integer, "
-                                 f"got {obj.get('id')!r}") from None
-            if oid in seen and seen[oid] != dname:
-                raise InputError(f"{where(obj)}: object id {oid} used by descriptors "
-                                 f"{seen[oid]!r} and {dname!r}; pass descriptor=")
-            if oid in seen:
-                raise InputError(f"{where(obj)}: duplicate object id {oid}")
-            seen[oid] = dname
-            _parse_framespan(obj.get("framespan", ""), where(obj))
-            for att in obj.findall(_V + "attribute"):
-                aname = att.get("name")
-                if aname != bbox_attrs[dname]:
-                    for val in att:
-                        if val.tag == _D + "svalue" and val.get("value") is not None:
-                            names.setdefault(oid, val.get("value"))
-                    continue
-                for val in att:
-                    if val.tag != _D + "bbox":
-                        raise InputError(f"{where(val)}: expected <data:bbox> in attribute "
-                                         f"{aname!r}")
-                    try:
-                        x, y, w, h = (int(val.get(k, "")) for k in ("x", "y", "width", "height"))
-                    except ValueError:
-                        raise InputError(
-                            f"{where(val)}: bbox needs integer x, y, width, height, got "
-                            + ", ".join(f"{k}={val.get(k)!r}" for k in ("x", "y", "width", "height"))
-                        ) from None
-                    if w < 0 or h < 0:
-                        raise InputError(f"{where(val)}: bbox width/height must be >= 0, "
-                                         f"got width={w}, height={h}")
-                    spans = _parse_framespan(val.get("framespan", ""), where(val))
-                    for a, b in spans:
-                        for f in range(a, b + 1):
-                            frames.append(f)
-                            ids.append(oid)
-                            boxes.append((x, y, w, h))
-    if bbox_attrs:
-        meta["descriptor"] = next(iter(bbox_attrs)) if len(bbox_attrs) == 1 else sorted(bbox_attrs)
-        meta["attribute"] = next(iter(bbox_attrs.values()))
-    meta["names"] = names
-    # sort by (frame, id) for a canonical order; detect duplicate (frame, id) pairs
-    f_arr = np.asarray(frames, dtype=np.int64)
-    i_arr = np.asarray(ids, dtype=np.int64)
-    b_arr = np.asarray(boxes, dtype=np.float64).reshape(-1, 4)
-    order = np.lexsort((i_arr, f_arr))
-    f_arr, i_arr, b_arr = f_arr[order], i_arr[order], b_arr[order]
-    if len(f_arr) > 1:
-        dup = (np.diff(f_arr) == 0) & (np.diff(i_arr) == 0)
-        if dup.any():
-            k = int(np.flatnonzero(dup)[0])
-            raise InputError(f"{name}: object {int(i_arr[k])} has two boxes at frame {int(f_arr[k])} "
-                             "(overlapping framespans)")
-    return Annotations.from_columns(f_arr, i_arr, b_arr, meta=meta)
+
+def _read_information(fel: Element, meta: dict[str, object],
+                      where: Callable[[Element], str]) -> None:
+    """``num_frames`` and ``frame_size`` from an Information ``<file>`` element into ``meta``."""
+    info = {}
+    for att in fel.findall(_V + "attribute"):
+        for val in att:
+            if val.get("value") is not None:
+                info[att.get("name")] = val.get("value")
+    try:
+        if "NUMFRAMES" in info:
+            meta["num_frames"] = int(info["NUMFRAMES"])
+        if "H-FRAME-SIZE" in info and "V-FRAME-SIZE" in info:
+            meta["frame_size"] = (int(info["H-FRAME-SIZE"]), int(info["V-FRAME-SIZE"]))
+    except ValueError as exc:
+        raise InputError(f"{where(fel)}: bad Information value ({exc})") from None
+
+
+def _read_object(obj: Element, bbox_attr: str, rows: "_Rows",
+                 where: Callable[[Element], str]) -> None:
+    """One ``<object>``: a row per frame of its bbox attribute, its name from an ``svalue``."""
+    oid = rows.claim_id(obj, where)
+    _parse_framespan(obj.get("framespan", ""), where(obj))
+    for att in obj.findall(_V + "attribute"):
+        aname = att.get("name")
+        if aname != bbox_attr:
+            for val in att:
+                if val.tag == _D + "svalue" and val.get("value") is not None:
+                    rows.names.setdefault(oid, val.get("value"))
+            continue
+        for val in att:
+            x, y, w, h = _bbox(val, aname, where)
+            for a, b in _parse_framespan(val.get("framespan", ""), where(val)):
+                rows.add(range(a, b + 1), oid, (x, y, w, h))
+
+
+def _bbox(val: Element, aname: str, where: Callable[[Element], str]) -> tuple[int, int, int, int]:
+    """``x, y, width, height`` of a ``<data:bbox>`` element (integers, sizes >= 0)."""
+    if val.tag != _D + "bbox":
+        raise InputError(f"{where(val)}: expected <data:bbox> in attribute {aname!r}")
+    try:
+        x, y, w, h = (int(val.get(k, "")) for k in ("x", "y", "width", "height"))
+    except ValueError:
+        raise InputError(
+            f"{where(val)}: bbox needs integer x, y, width, height, got "
+            + ", ".join(f"{k}={val.get(k)!r}" for k in ("x", "y", "width", "height"))
+        ) from None
+    if w < 0 or h < 0:
+        raise InputError(f"{where(val)}: bbox width/height must be >= 0, "
+                         f"got width={w}, height={h}")
+    return x, y, w, h
+
+
+class _Rows:
+    """The rows read so far (one per object and frame), the ids taken and the objects' names."""
+
+    def __init__(self) -> None:
+        self.frames: list[int] = []
+        self.ids: list[int] = []
+        self.boxes: list[tuple[int, int, int, int]] = []
+        self.names: dict[int, str] = {}
+        self.seen: dict[int, str] = {}
+
+    def claim_id(self, obj: Element, where: Callable[[Element], str]) -> int:
+        """The object's integer id, refused when another object already has it."""
+        dname = obj.get("name")
+        try:
+            oid = int(obj.get("id", ""))
+        except ValueError:
+            raise InputError(f"{where(obj)}: object id must be an integer, "
+                             f"got {obj.get('id')!r}") from None
+        if oid in self.seen and self.seen[oid] != dname:
+            raise InputError(f"{where(obj)}: object id {oid} used by descriptors "
+                             f"{self.seen[oid]!r} and {dname!r}; pass descriptor=")
+        if oid in self.seen:
+            raise InputError(f"{where(obj)}: duplicate object id {oid}")
+        self.seen[oid] = dname
+        return oid
+
+    def add(self, frames: Iterable[int], oid: int, box: tuple[int, int, int, int]) -> None:
+        for f in frames:
+            self.frames.append(f)
+            self.ids.append(oid)
+            self.boxes.append(box)
+
+    def annotations(self, meta: dict[str, object], name: str) -> Annotations:
+        """The rows sorted by (frame, id) for a canonical order; duplicate (frame, id) refused."""
+        f_arr = np.asarray(self.frames, dtype=np.int64)
+        i_arr = np.asarray(self.ids, dtype=np.int64)
+        b_arr = np.asarray(self.boxes, dtype=np.float64).reshape(-1, 4)
+        order = np.lexsort((i_arr, f_arr))
+        f_arr, i_arr, b_arr = f_arr[order], i_arr[order], b_arr[order]
+        if len(f_arr) > 1:
+            dup = (np.diff(f_arr) == 0) & (np.diff(i_arr) == 0)
+            if dup.any():
+                k = int(np.flatnonzero(dup)[0])
+                raise InputError(f"{name}: object {int(i_arr[k])} has two boxes at frame "
+                                 f"{int(f_arr[k])} (overlapping framespans)")
+        return Annotations.from_columns(f_arr, i_arr, b_arr, meta=meta)
 
 
 def _runs(frames: np.ndarray, boxes: np.ndarray) -> Iterable[tuple[int, int, tuple[int, ...]]]:
@@ -320,6 +364,16 @@ def format_viper(
                     "pixel", int((boxes != ann.boxes).any(axis=1).sum()))
     if num_frames is None:
         num_frames = int(ann.frames.max()) if len(ann) else 0
+    out = _header_xml(descriptor, attribute, frame_size, num_frames, sourcefile)
+    for oid in np.unique(ann.ids):
+        out += _object_xml(ann, boxes, oid, descriptor, attribute)
+    out += ["        </sourcefile>", "    </data>", "</viper>", ""]
+    return "\n".join(out)
+
+
+def _header_xml(descriptor: str, attribute: str, frame_size: tuple[int, int] | None,
+                num_frames: int, sourcefile: str) -> list[str]:
+    """Lines from the XML declaration to the end of the Information ``<file>`` element."""
     q = quoteattr
     out = [
         '<?xml version="1.0" encoding="UTF-8"?>',
@@ -347,22 +401,27 @@ def format_viper(
             "</attribute>",
         ]
     out.append("            </file>")
-    for oid in np.unique(ann.ids):
-        rows = np.flatnonzero(ann.ids == oid)
-        rows = rows[np.argsort(ann.frames[rows], kind="stable")]
-        fr = ann.frames[rows]
-        if len(fr) > 1 and (np.diff(fr) == 0).any():
-            raise InputError(f"id {int(oid)} has two boxes in one frame; ViPER cannot store that")
-        out.append(f'            <object framespan="{_spans_text(fr)}" id="{int(oid)}" '
-                   f"name={q(descriptor)}>")
-        out.append(f"                <attribute name={q(attribute)}>")
-        for a, b, (x, y, w, h) in _runs(fr, boxes[rows]):
-            out.append(f'                    <data:bbox framespan="{a}:{b}" height="{h}" '
-                       f'width="{w}" x="{x}" y="{y}"/>')
-        out.append("                </attribute>")
-        out.append("            </object>")
-    out += ["        </sourcefile>", "    </data>", "</viper>", ""]
-    return "\n".join(out)
+    return out
+
+
+def _object_xml(ann: Annotations, boxes: np.ndarray, oid: np.int64, descriptor: str,
+                attribute: str) -> list[str]:
+    """Lines of one ``<object>``: its frames as spans, runs of one box as ``<data:bbox>``."""
+    q = quoteattr
+    rows = np.flatnonzero(ann.ids == oid)
+    rows = rows[np.argsort(ann.frames[rows], kind="stable")]
+    fr = ann.frames[rows]
+    if len(fr) > 1 and (np.diff(fr) == 0).any():
+        raise InputError(f"id {int(oid)} has two boxes in one frame; ViPER cannot store that")
+    out = [f'            <object framespan="{_spans_text(fr)}" id="{int(oid)}" '
+           f"name={q(descriptor)}>",
+           f"                <attribute name={q(attribute)}>"]
+    for a, b, (x, y, w, h) in _runs(fr, boxes[rows]):
+        out.append(f'                    <data:bbox framespan="{a}:{b}" height="{h}" '
+                   f'width="{w}" x="{x}" y="{y}"/>')
+    out.append("                </attribute>")
+    out.append("            </object>")
+    return out
 
 
 def write_viper(
