@@ -51,17 +51,12 @@ def split_merged(pred: np.ndarray, established: np.ndarray, det: np.ndarray,
         predictions either way.
     size : (N, 2) float64, optional
         The size (w, h) of each track's synthetic measurement, centred on its prediction
-        (default: the predicted size). A share of a blob says nothing about the size of the
-        object in it, and a measurement that repeats the prediction never corrects the
-        prediction's size velocity: the tracker passes sizes that do not follow it.
+        (default: the predicted size).
     ref : (N, 2) float64, optional
         Each track's reference (unmerged) size. An upright track (reference height at least
         :data:`UPRIGHT` times its width: a person) claims a blob when the smaller of its
-        predicted and reference areas is at most ``max_share`` of the blob's: a person's track
-        that matched a blob holding a neighbour's body for a few frames before the blobs fused
-        has grown to it, and would otherwise no longer claim its share. Other tracks are judged
-        by their predicted area (a car approaching the camera grows faster than its reference
-        follows, and its own blob would be split).
+        predicted and reference areas is at most ``max_share`` of the blob's; other tracks are
+        judged by their predicted area.
 
     Returns
     -------
@@ -78,14 +73,57 @@ def split_merged(pred: np.ndarray, established: np.ndarray, det: np.ndarray,
     m = len(det)
     established = np.asarray(established, bool)
     if m == 0 or np.count_nonzero(established) < 2:  # a split needs two established tracks
-        return det.copy(), np.arange(m), np.full(m, -1, np.int64)
-    cx = pred[:, 0] + pred[:, 2] / 2
-    cy = pred[:, 1] + pred[:, 3] / 2
-    inside = ((cx[:, None] >= det[None, :, 0]) & (cx[:, None] <= det[None, :, 0] + det[None, :, 2])
-              & (cy[:, None] >= det[None, :, 1]) & (cy[:, None] <= det[None, :, 1] + det[None, :, 3]))
-    inside &= established[:, None]
+        return _unsplit(det)
+    inside = _centres_inside(pred, det) & established[:, None]
     if not (inside.sum(axis=0) >= 2).any():  # the common case: nothing to split
-        return det.copy(), np.arange(m), np.full(m, -1, np.int64)
+        return _unsplit(det)
+    return _split(pred, det, _claims(pred, det, inside, max_share, ref), size, own)
+
+
+def _split(pred: np.ndarray, det: np.ndarray, claim: np.ndarray, size: np.ndarray | None,
+           own: np.ndarray | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Blobs claimed by two or more tracks replaced by one share per track, after the others."""
+    split = claim.sum(axis=0) >= 2
+    keep = np.flatnonzero(~split)
+    boxes = [det[keep]]
+    origin = [keep]
+    owner = [np.full(len(keep), -1, np.int64)]
+    for j in np.flatnonzero(split):
+        tracks = np.flatnonzero(claim[:, j])
+        boxes.append(_shares(pred[tracks], det[j], None if size is None else size[tracks],
+                             None if own is None else own[tracks]))
+        origin.append(np.full(len(tracks), j, np.int64))
+        owner.append(tracks.astype(np.int64))
+    return np.concatenate(boxes), np.concatenate(origin), np.concatenate(owner)
+
+
+def _unsplit(det: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``split_merged``'s result when no detection is split."""
+    m = len(det)
+    return det.copy(), np.arange(m), np.full(m, -1, np.int64)
+
+
+def _centre(boxes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    return boxes[:, 0] + boxes[:, 2] / 2, boxes[:, 1] + boxes[:, 3] / 2
+
+
+def _centres_inside(pred: np.ndarray, det: np.ndarray) -> np.ndarray:
+    """(N, M) bool: the centre of prediction ``i`` lies in detection ``j`` (edges included)."""
+    cx, cy = _centre(pred)
+    return ((cx[:, None] >= det[None, :, 0]) & (cx[:, None] <= det[None, :, 0] + det[None, :, 2])
+            & (cy[:, None] >= det[None, :, 1]) & (cy[:, None] <= det[None, :, 1] + det[None, :, 3]))
+
+
+def _claims(pred: np.ndarray, det: np.ndarray, inside: np.ndarray, max_share: float,
+            ref: np.ndarray | None) -> np.ndarray:
+    """(N, M) bool: track ``i`` claims a share of blob ``j`` (see :func:`split_merged`).
+
+    An upright track is judged by the smaller of its predicted and reference areas: a person's
+    track that matched a blob holding a neighbour's body for a few frames before the blobs fused
+    has grown to it, and would otherwise no longer claim its share. Other tracks are judged by
+    their predicted area: a car approaching the camera grows faster than its reference follows,
+    and its own blob would be split.
+    """
     area = pred[:, 2] * pred[:, 3]
     if ref is not None:
         upright = ref[:, 1] >= UPRIGHT * ref[:, 0]
@@ -94,34 +132,35 @@ def split_merged(pred: np.ndarray, established: np.ndarray, det: np.ndarray,
     claim = inside & small
     # a track claims at most one blob: the one whose centre is nearest its prediction
     if claim.any():
-        dcx = det[:, 0] + det[:, 2] / 2
-        dcy = det[:, 1] + det[:, 3] / 2
+        cx, cy = _centre(pred)
+        dcx, dcy = _centre(det)
         dist = np.hypot(cx[:, None] - dcx[None, :], cy[:, None] - dcy[None, :])
         dist[~claim] = np.inf
         best = np.argmin(dist, axis=1)
-        claim = claim & (np.arange(m)[None, :] == best[:, None])
-    split = claim.sum(axis=0) >= 2
-    keep = np.flatnonzero(~split)
-    boxes = [det[keep]]
-    origin = [keep]
-    owner = [np.full(len(keep), -1, np.int64)]
-    for j in np.flatnonzero(split):
-        tracks = np.flatnonzero(claim[:, j])
-        b = pred[tracks].copy()
-        if size is not None:
-            b[:, :2] += (b[:, 2:] - size[tracks]) / 2
-            b[:, 2:] = size[tracks]
-        # move each predicted box inside the blob (sizes kept unless larger than the blob)
-        b[:, 2] = np.minimum(b[:, 2], det[j, 2])
-        b[:, 3] = np.minimum(b[:, 3], det[j, 3])
-        b[:, 0] = np.clip(b[:, 0], det[j, 0], det[j, 0] + det[j, 2] - b[:, 2])
-        b[:, 1] = np.clip(b[:, 1], det[j, 1], det[j, 1] + det[j, 3] - b[:, 3])
-        if own is not None:
-            b = _cut_own(b, own[tracks], det[j])
-        boxes.append(b)
-        origin.append(np.full(len(tracks), j, np.int64))
-        owner.append(tracks.astype(np.int64))
-    return np.concatenate(boxes), np.concatenate(origin), np.concatenate(owner)
+        claim = claim & (np.arange(len(det))[None, :] == best[:, None])
+    return claim
+
+
+def _shares(pred: np.ndarray, blob: np.ndarray, size: np.ndarray | None, own: np.ndarray | None
+            ) -> np.ndarray:
+    """Synthetic measurements of the tracks predicted at ``pred`` that claimed ``blob``.
+
+    ``size`` replaces the predicted size when given: a share of a blob says nothing about the
+    size of the object in it, and a measurement that repeats the prediction never corrects the
+    prediction's size velocity, so the tracker passes sizes that do not follow it.
+    """
+    b = pred.copy()
+    if size is not None:
+        b[:, :2] += (b[:, 2:] - size) / 2
+        b[:, 2:] = size
+    # move each predicted box inside the blob (sizes kept unless larger than the blob)
+    b[:, 2] = np.minimum(b[:, 2], blob[2])
+    b[:, 3] = np.minimum(b[:, 3], blob[3])
+    b[:, 0] = np.clip(b[:, 0], blob[0], blob[0] + blob[2] - b[:, 2])
+    b[:, 1] = np.clip(b[:, 1], blob[1], blob[1] + blob[3] - b[:, 3])
+    if own is not None:
+        b = _cut_own(b, own, blob)
+    return b
 
 
 def _cut_own(moved: np.ndarray, own: np.ndarray, blob: np.ndarray) -> np.ndarray:
@@ -172,25 +211,32 @@ def anchor_partial(pred: np.ndarray, det: np.ndarray, ref_size: np.ndarray, min_
         return out, partial
     small = out[:, 2] * out[:, 3] < min_ratio * ref[:, 0] * ref[:, 1]
     for i in np.flatnonzero(small):
-        d = out[i]
-        anchored = d.copy()
-        cut = False
-        for a in (0, 1):  # x then y
-            size = ref[i, a]
-            centre = pred[i, a] + pred[i, a + 2] / 2
-            p_lo, p_hi = centre - size / 2, centre + size / 2
-            lo_err = abs(d[a] - p_lo)
-            hi_err = abs(d[a] + d[a + 2] - p_hi)
-            tol = edge_tolerance * size
-            if d[a + 2] >= size - tol:      # not cut along this axis
-                continue
-            if lo_err <= tol < hi_err:       # far edge hidden: keep the near one
-                anchored[a], anchored[a + 2] = d[a], size
-                cut = True
-            elif hi_err <= tol < lo_err:     # near edge hidden: keep the far one
-                anchored[a], anchored[a + 2] = d[a] + d[a + 2] - size, size
-                cut = True
-        if cut:
+        anchored = _anchor(out[i], pred[i], ref[i], edge_tolerance)
+        if anchored is not None:
             out[i] = anchored
             partial[i] = True
     return out, partial
+
+
+def _anchor(d: np.ndarray, pred: np.ndarray, ref: np.ndarray, edge_tolerance: float
+            ) -> np.ndarray | None:
+    """Box ``d`` with the reference size placed against its edges that agree with ``pred``, or
+    None when it is cut on one side only along neither axis (see :func:`anchor_partial`)."""
+    anchored = d.copy()
+    cut = False
+    for a in (0, 1):  # x then y
+        size = ref[a]
+        centre = pred[a] + pred[a + 2] / 2
+        p_lo, p_hi = centre - size / 2, centre + size / 2
+        lo_err = abs(d[a] - p_lo)
+        hi_err = abs(d[a] + d[a + 2] - p_hi)
+        tol = edge_tolerance * size
+        if d[a + 2] >= size - tol:      # not cut along this axis
+            continue
+        if lo_err <= tol < hi_err:       # far edge hidden: keep the near one
+            anchored[a], anchored[a + 2] = d[a], size
+            cut = True
+        elif hi_err <= tol < lo_err:     # near edge hidden: keep the far one
+            anchored[a], anchored[a + 2] = d[a] + d[a + 2] - size, size
+            cut = True
+    return anchored if cut else None
