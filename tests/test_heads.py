@@ -168,7 +168,7 @@ def _auto_split(mask: np.ndarray, settings: list[str] = ()) -> list[list[Region]
     pipe = Pipeline(cfg, (mask.shape[1], mask.shape[0]))
     assert pipe.scale == 1.0
     regions = find_regions(mask, cfg.regions, 1.0, (mask.shape[1], mask.shape[0]))
-    return [pipe._split_upright(mask, list(regions), {}) for _ in range(30)]
+    return [pipe._split_upright(mask, list(regions))[0] for _ in range(30)]
 
 
 def _street(people: bool) -> np.ndarray:
