@@ -103,7 +103,6 @@ class PeopleStage:
             apply a hypothesis to that one track without ever starting a new track from it), and
             the fitted outlines' boxes by track id (``shape_split``).
         """
-        c = self.cfg
         H, W = frame_img.shape[:2]
         regions = list(regions)
         found: dict[str, Any] = {}
@@ -111,49 +110,72 @@ class PeopleStage:
         out, found["heads"] = self.split_regions(mask, regions, W)
         # 2. HOG, alone or inside motion regions.
         if self.hog is not None:
-            if self._frame % c.hog_every == 0:
-                self._hog_cache = (self.hog.detect(frame_img) if c.hog == "alone"
-                                   else self.hog.detect_in_regions(frame_img, regions))
-            dets = self._hog_cache
-            found["hog"] = tuple(dets)
-            if c.hog == "alone":
-                out = list(dets)
-            else:
-                out = _replace_with_detections(out, dets)
+            out = self._hog(frame_img, regions, out, found)
         # 3. shapes, and hypotheses for people no region covers.
         if self.shape_tracker is not None:
-            shapes = self.shape_tracker.update(frame_img, background, out, tracks,
-                                               heads=found["heads"], mask=mask, work=work)
-            found["shapes"] = tuple(shapes)
-            if c.shape_split:
-                # outlines fitted this frame, of people already compared with their track (an
-                # outline never measured against its track's box is not trusted to split)
-                found["located_by_track"] = {s.track_id: s.box.as_array() for s in shapes
-                                              if s.coasting == 0 and s.agreement >= 0}
-            if c.refine and shapes:
-                out = _refine(shapes, out, c.hypothesis_iou, c.refine_support)
-            if c.border_extend and shapes:
-                out = _extend_at_border(shapes, out, W, H, c.border_support)
-            if shapes:
-                # Every tracked person no region covers, for a region tracker that can apply a
-                # hypothesis to that one track (never starting a new track from it).
-                found["hypotheses_by_track"] = _by_track(shapes, out, c, W, H)
-            if c.hypotheses and shapes:
-                # Only for people the region tracker has lost (or that were already being
-                # offered): a hypothesis for a reported track would compete with its own region.
-                # And only while the shape still finds edges: a pure prediction is not evidence.
-                eligible = [s for s in shapes if (s.unseen > 0 or s.track_id in self._hyp_active)
-                            and s.coasting <= c.hypothesis_coast
-                            and s.agreement >= c.hypothesis_agreement]
-                hyps, ids = _uncovered(eligible, shapes, out, c.hypothesis_iou,
-                                       c.hypothesis_score, W, H)
-                self._hyp_active = set(ids)
-                found["hypotheses"] = tuple(hyps)
-            else:
-                self._hyp_active = set()
+            out = self._shapes(frame_img, background, mask, work, out, tracks, found)
         self._frame += 1
         found["heads"] = tuple(found["heads"])
         return out, PeopleFrame(**found)
+
+    def _hog(self, frame_img: np.ndarray, regions: list[Region], out: list[Region],
+             found: dict[str, Any]) -> list[Region]:
+        """Step 2: HOG people (detected every ``hog_every`` frames, reused in between) replace
+        all regions (``hog="alone"``) or the motion regions holding their centres."""
+        c = self.cfg
+        if self._frame % c.hog_every == 0:
+            self._hog_cache = (self.hog.detect(frame_img) if c.hog == "alone"
+                               else self.hog.detect_in_regions(frame_img, regions))
+        dets = self._hog_cache
+        found["hog"] = tuple(dets)
+        if c.hog == "alone":
+            return list(dets)
+        return _replace_with_detections(out, dets)
+
+    def _shapes(self, frame_img: np.ndarray, background: np.ndarray | None,
+                mask: np.ndarray | None, work: np.ndarray | None, out: list[Region],
+                tracks: Sequence[Any], found: dict[str, Any]) -> list[Region]:
+        """Step 3: outlines fitted to the tracked people; regions refined or extended by them,
+        and hypotheses for people no region covers."""
+        c = self.cfg
+        H, W = frame_img.shape[:2]
+        shapes = self.shape_tracker.update(frame_img, background, out, tracks,
+                                           heads=found["heads"], mask=mask, work=work)
+        found["shapes"] = tuple(shapes)
+        if c.shape_split:
+            # outlines fitted this frame, of people already compared with their track (an
+            # outline never measured against its track's box is not trusted to split)
+            found["located_by_track"] = {s.track_id: s.box.as_array() for s in shapes
+                                          if s.coasting == 0 and s.agreement >= 0}
+        if c.refine and shapes:
+            out = _refine(shapes, out, c.hypothesis_iou, c.refine_support)
+        if c.border_extend and shapes:
+            out = _extend_at_border(shapes, out, W, H, c.border_support)
+        if shapes:
+            # Every tracked person no region covers, for a region tracker that can apply a
+            # hypothesis to that one track (never starting a new track from it).
+            found["hypotheses_by_track"] = _by_track(shapes, out, c, W, H)
+        if c.hypotheses and shapes:
+            found["hypotheses"] = self._hypotheses(shapes, out, W, H)
+        else:
+            self._hyp_active = set()
+        return out
+
+    def _hypotheses(self, shapes, regions: list[Region], W: int, H: int) -> tuple[Region, ...]:
+        """Boxes of lost people no region covers (for drawing); remembers who is offered one.
+
+        Only for people the region tracker has lost (or that were already being offered): a
+        hypothesis for a reported track would compete with its own region. And only while the
+        shape still finds edges: a pure prediction is not evidence.
+        """
+        c = self.cfg
+        eligible = [s for s in shapes if (s.unseen > 0 or s.track_id in self._hyp_active)
+                    and s.coasting <= c.hypothesis_coast
+                    and s.agreement >= c.hypothesis_agreement]
+        hyps, ids = _uncovered(eligible, shapes, regions, c.hypothesis_iou, c.hypothesis_score,
+                               W, H)
+        self._hyp_active = set(ids)
+        return tuple(hyps)
 
 
 def _replace_with_detections(regions: list[Region], dets: list[Region]) -> list[Region]:
