@@ -120,51 +120,79 @@ def detect_heads(mask: np.ndarray, box: Box | None = None, scale: float = 1.0,
     """
     m = np.asarray(mask)
     H, W = m.shape[:2]
-    if box is None:
-        x1, y1, x2, y2 = 0, 0, W, H
-    else:
-        x1, y1, x2, y2 = pixel_window(box.as_array(), scale, (H, W))
+    x1, y1, x2, y2 = (0, 0, W, H) if box is None else pixel_window(box.as_array(), scale, (H, W))
     if x2 <= x1 or y2 <= y1:
         return []
     crop = m[y1:y2, x1:x2]
     # 1. profile, smoothed across 3 columns (single-column mask noise).
-    top = height_profile(crop)
-    if len(top) >= 3:
-        # median of three neighbours (edges repeated): max(min(a, b), min(max(a, b), c))
-        a = np.concatenate(([top[0]], top[:-1]))
-        c = np.concatenate((top[1:], [top[-1]]))
-        top = np.maximum(np.minimum(a, top), np.minimum(np.maximum(a, top), c))
-    h = crop.shape[0]
-    wmin = max(1.0, min_width * scale)
-    wmax = max(wmin, max_width * scale)
-    tol = tolerance * scale
-    drop = _drop_px(min_drop, scale)
+    top = _median3(height_profile(crop))
+    g = _mask_sizes(scale, min_width, max_width, tolerance, min_drop)
     # 2. peak columns: within tol of the highest top within one (smallest) head width.
-    r = max(1, int(np.ceil(wmin)))
-    near = _running_max_top(top, r)
-    peak = (top <= near + tol) & (top < h)
+    peak = (top <= _running_max_top(top, g.reach) + g.tol) & (top < crop.shape[0])
     # 3. runs of peak columns.
     heads: list[Head] = []
-    d = np.diff(np.concatenate([[0], peak.astype(np.int8), [0]]))
-    starts, stops = np.flatnonzero(d == 1), np.flatnonzero(d == -1)
-    n = len(top)
-    for a, b in zip(starts, stops):  # columns a .. b-1
+    for a, b in zip(*_runs(peak)):  # columns a .. b-1
         width = b - a
-        if width < wmin or width > wmax:
+        if width < g.wmin or width > g.wmax:
             continue
         level = float(top[a:b].min())
         # 4. stand out on both sides (off the region = infinitely low).
-        reach = int(np.ceil(wmin))
-        left = top[max(0, a - reach):a]
-        right = top[b:min(n, b + reach)]
-        if (len(left) and left.min() < level + drop) or (len(right) and right.min() < level + drop):
+        if not _stands_out(top, a, b, level, g):
             continue
         # 5. position: interval centre; y = mean top + half the width (round head).
-        xc = (a + b - 1) / 2.0
-        mean_top = float(top[a:b].mean())
-        heads.append(Head(x=(x1 + xc + 0.5) / scale - 0.5, y=(y1 + mean_top + width / 2.0) / scale,
-                          width=width / scale, top=(y1 + mean_top) / scale))
+        heads.append(_head(x1, y1, a, b, float(top[a:b].mean()), scale))
     return heads
+
+
+@dataclass(frozen=True)
+class _MaskSizes:
+    """The detector's limits in mask pixels (steps 2-4 of the module docstring)."""
+
+    wmin: float   # narrowest head interval
+    wmax: float   # widest head interval
+    tol: float    # "similar height" of a peak column
+    drop: float   # how much lower the neighbours must be, whole rows
+    reach: int    # columns either side searched for the highest top and for the neighbours
+
+
+def _mask_sizes(scale: float, min_width: float, max_width: float, tolerance: float,
+                min_drop: float) -> _MaskSizes:
+    """The widths, tolerance and drop given in original pixels, in mask pixels."""
+    wmin = max(1.0, min_width * scale)
+    return _MaskSizes(wmin=wmin, wmax=max(wmin, max_width * scale), tol=tolerance * scale,
+                      drop=_drop_px(min_drop, scale), reach=max(1, int(np.ceil(wmin))))
+
+
+def _median3(top: np.ndarray) -> np.ndarray:
+    """Running median of three columns, edges repeated: ``max(min(a, b), min(max(a, b), c))``."""
+    if len(top) < 3:
+        return top
+    a = np.concatenate(([top[0]], top[:-1]))
+    c = np.concatenate((top[1:], [top[-1]]))
+    return np.maximum(np.minimum(a, top), np.minimum(np.maximum(a, top), c))
+
+
+def _runs(peak: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Starts and stops (exclusive) of the runs of True in ``peak``."""
+    d = np.diff(np.concatenate(([0], peak.astype(np.int8), [0])))
+    return np.flatnonzero(d == 1), np.flatnonzero(d == -1)
+
+
+def _stands_out(top: np.ndarray, a: int, b: int, level: float, g: _MaskSizes) -> bool:
+    """Step 4: the highest top within ``reach`` columns beyond each edge of columns ``a .. b-1``
+    lies at least ``drop`` rows below ``level`` (no columns beyond an edge: it stands out)."""
+    left = top[max(0, a - g.reach):a]
+    right = top[b:b + g.reach]
+    return not ((len(left) and left.min() < level + g.drop)
+                or (len(right) and right.min() < level + g.drop))
+
+
+def _head(x1: int, y1: int, a: int, b: int, mean_top: float, scale: float) -> Head:
+    """Step 5: the head over columns ``a .. b-1`` of the crop at ``(x1, y1)``, original pixels."""
+    width = b - a
+    xc = (a + b - 1) / 2.0
+    return Head(x=(x1 + xc + 0.5) / scale - 0.5, y=(y1 + mean_top + width / 2.0) / scale,
+                width=width / scale, top=(y1 + mean_top) / scale)
 
 
 def _drop_px(min_drop: float, scale: float) -> float:
@@ -189,43 +217,15 @@ def detect_heads_many(mask: np.ndarray, boxes, scale: float = 1.0, min_width: fl
     m = np.asarray(mask)
     if m.ndim != 2:
         raise ValueError(f"mask must be 2-D, got shape {m.shape}")
-    H, W = m.shape
-    wmin = max(1.0, min_width * scale)
-    wmax = max(wmin, max_width * scale)
-    tol = tolerance * scale
-    drop = _drop_px(min_drop, scale)
-    r = max(1, int(np.ceil(wmin)))
-    gap = np.full(r + 1, np.inf)
-    pieces: list[np.ndarray] = []
-    heights: list[np.ndarray] = []
-    segs: list[tuple[int, int, int, int, int]] = []   # (box index, start, stop, x1, y1)
-    pos = 0
-    for k, box in enumerate(boxes):
-        x1, y1, x2, y2 = pixel_window(box.as_array(), scale, (H, W))
-        if x2 <= x1 or y2 <= y1:
-            continue
-        fg = m[y1:y2, x1:x2] > 0
-        h = y2 - y1
-        top = np.where(fg.any(axis=0), fg.argmax(axis=0), h).astype(np.float64)
-        n = len(top)
-        if n >= 3:  # running median of three columns, edges repeated
-            a = np.concatenate(([top[0]], top[:-1]))
-            c = np.concatenate((top[1:], [top[-1]]))
-            top = np.maximum(np.minimum(a, top), np.minimum(np.maximum(a, top), c))
-        pieces += [top, gap]
-        heights += [np.full(n, float(h)), np.zeros(len(gap))]
-        segs.append((k, pos, pos + n, x1, y1))
-        pos += n + len(gap)
+    g = _mask_sizes(scale, min_width, max_width, tolerance, min_drop)
+    top, heights, segs = _profiles(m, boxes, scale, g.reach)
     out: list[list[Head]] = [[] for _ in boxes]
     if not segs:
         return out
-    top = np.concatenate(pieces)
-    near = minimum_filter1d(top, 2 * r + 1, mode="constant", cval=np.inf)
-    peak = (top <= near + tol) & (top < np.concatenate(heights))
-    d = np.diff(np.concatenate(([0], peak.astype(np.int8), [0])))
-    starts, stops = np.flatnonzero(d == 1), np.flatnonzero(d == -1)
+    peak = (top <= _running_max_top(top, g.reach) + g.tol) & (top < heights)
+    starts, stops = _runs(peak)
     widths = stops - starts
-    ok = (widths >= wmin) & (widths <= wmax)
+    ok = (widths >= g.wmin) & (widths <= g.wmax)
     if not ok.any():
         return out
     starts, stops, widths = starts[ok], stops[ok], widths[ok]
@@ -235,19 +235,39 @@ def detect_heads_many(mask: np.ndarray, boxes, scale: float = 1.0, min_width: fl
     levels = np.minimum.reduceat(top, bounds)[::2]
     means = np.add.reduceat(top, bounds)[::2] / widths
     seg_starts = np.array([s[1] for s in segs])
-    reach = int(np.ceil(wmin))
     for a, b, lv, mt in zip(starts.tolist(), stops.tolist(), levels.tolist(), means.tolist()):
         # stand out on both sides (the inf gap between regions is "infinitely low")
-        left = top[max(0, a - reach):a]
-        right = top[b:b + reach]
-        if (len(left) and left.min() < lv + drop) or (len(right) and right.min() < lv + drop):
+        if not _stands_out(top, a, b, lv, g):
             continue
         k, s0, _, x1, y1 = segs[int(np.searchsorted(seg_starts, a, side="right")) - 1]
-        width = b - a
-        xc = (a - s0 + b - s0 - 1) / 2.0
-        out[k].append(Head(x=(x1 + xc + 0.5) / scale - 0.5, y=(y1 + mt + width / 2.0) / scale,
-                           width=width / scale, top=(y1 + mt) / scale))
+        out[k].append(_head(x1, y1, a - s0, b - s0, mt, scale))
     return out
+
+
+def _profiles(m: np.ndarray, boxes, scale: float, reach: int
+              ) -> tuple[np.ndarray, np.ndarray, list[tuple[int, int, int, int, int]]]:
+    """The smoothed profiles of the non-empty boxes laid end to end, each followed by
+    ``reach + 1`` ``inf`` columns; the height of the region each column belongs to (0 in the
+    gaps); and ``(box index, start, stop, x1, y1)`` per profile."""
+    H, W = m.shape
+    gap = np.full(reach + 1, np.inf)
+    pieces: list[np.ndarray] = []
+    heights: list[np.ndarray] = []
+    segs: list[tuple[int, int, int, int, int]] = []
+    pos = 0
+    for k, box in enumerate(boxes):
+        x1, y1, x2, y2 = pixel_window(box.as_array(), scale, (H, W))
+        if x2 <= x1 or y2 <= y1:
+            continue
+        top = _median3(height_profile(m[y1:y2, x1:x2]))
+        n = len(top)
+        pieces += [top, gap]
+        heights += [np.full(n, float(y2 - y1)), np.zeros(len(gap))]
+        segs.append((k, pos, pos + n, x1, y1))
+        pos += n + len(gap)
+    if not segs:
+        return np.zeros(0), np.zeros(0), segs
+    return np.concatenate(pieces), np.concatenate(heights), segs
 
 
 def detect_heads_in_regions(mask: np.ndarray, regions, scale: float = 1.0, **params) -> list[list[Head]]:
@@ -295,17 +315,22 @@ def split_region_by_heads(region: Region, mask: np.ndarray, heads: list[Head] | 
     parts: list[Region] = []
     for lo, hi in zip(edges[:-1], edges[1:]):
         sub = fg[:, lo:hi]
-        cnt = int(sub.sum())
-        if hi <= lo or cnt < min_fraction * total:
+        if hi <= lo or int(sub.sum()) < min_fraction * total:
             continue
-        ys, xs = np.nonzero(sub)
-        bx1, bx2 = (x1 + lo + xs.min()) / scale, (x1 + lo + xs.max() + 1) / scale
-        by1, by2 = (y1 + ys.min()) / scale, (y1 + ys.max() + 1) / scale
-        cx = (x1 + lo + xs.mean() + 0.5) / scale
-        cy = (y1 + ys.mean() + 0.5) / scale
-        parts.append(Region(box=Box.from_xyxy(bx1, by1, bx2, by2), centroid=(cx, cy),
-                            area=cnt / (scale * scale), score=region.score))
+        parts.append(_part(sub, x1 + lo, y1, scale, region.score))
     return parts if len(parts) >= 2 else [region]
+
+
+def _part(fg: np.ndarray, ox: int, oy: int, scale: float, score: float) -> Region:
+    """The region of the foreground ``fg`` of a mask slice at ``(ox, oy)``, original pixels: its
+    tight box, centroid and area."""
+    ys, xs = np.nonzero(fg)
+    bx1, bx2 = (ox + xs.min()) / scale, (ox + xs.max() + 1) / scale
+    by1, by2 = (oy + ys.min()) / scale, (oy + ys.max() + 1) / scale
+    cx = (ox + xs.mean() + 0.5) / scale
+    cy = (oy + ys.mean() + 0.5) / scale
+    return Region(box=Box.from_xyxy(bx1, by1, bx2, by2), centroid=(cx, cy),
+                  area=int(fg.sum()) / (scale * scale), score=score)
 
 
 def split_regions_by_heads(mask: np.ndarray, regions: Sequence[Region], scale: float = 1.0,
