@@ -118,66 +118,97 @@ def parse_cvat(data: bytes, name: str = "<bytes>") -> Annotations:
     version = root.find("version")
     if version is not None and version.text and version.text != "1.1":
         log.warning("%s: CVAT format version %s, expected 1.1; reading anyway", name, version.text)
+    labels = _declared_labels(root.find("meta"))
+    rows = _Rows()
+    skipped = 0
+    for node in root.children:
+        if node.tag == "track":
+            skipped += _read_track(node, name, labels, rows)
+        elif node.tag == "image":  # "CVAT for images 1.1": anonymous boxes
+            skipped += _read_image(node, name, labels, rows)
+    if skipped:
+        log.debug("%s: ignored %d non-box shapes", name, skipped)
+    return rows.annotations({"format": "cvat", "labels": dict(labels.names)})
+
+
+def _declared_labels(meta_node: XmlNode | None) -> _Labels:
+    """The labels declared in ``<meta>``, in their file order (stable custom class ids)."""
     labels = _Labels()
-    meta_node = root.find("meta")
-    if meta_node is not None:  # declare labels in their file order (stable custom class ids)
+    if meta_node is not None:
         for holder in meta_node.children:
             for lab_list in holder.find_all("labels"):
                 for lab in lab_list.find_all("label"):
                     nm = lab.find("name")
                     if nm is not None and nm.text:
                         labels.class_of(nm.text)
-    frames: list[int] = []
-    ids: list[int] = []
-    boxes: list[tuple[float, float, float, float]] = []
-    classes: list[int] = []
-    vis: list[float] = []
+    return labels
+
+
+def _read_track(node: XmlNode, name: str, labels: _Labels, rows: "_Rows") -> int:
+    """The boxes of one ``<track>`` (``outside`` ones skipped); returns the non-box shapes."""
+    tid = xml_int(node, "id", name)
+    if "label" not in node.attrib:
+        raise InputError(f"{node.where(name)}: track without a 'label' attribute")
+    cls = labels.class_of(node.attrib["label"])
+    seen: set[int] = set()
     skipped = 0
-    for node in root.children:
-        if node.tag == "track":
-            tid = xml_int(node, "id", name)
-            if "label" not in node.attrib:
-                raise InputError(f"{node.where(name)}: track without a 'label' attribute")
-            cls = labels.class_of(node.attrib["label"])
-            seen: set[int] = set()
-            for b in node.children:
-                if b.tag != "box":
-                    skipped += 1
-                    continue
-                frame = xml_int(b, "frame", name, lo=0)
-                if _flag(b, "outside", name):
-                    continue
-                if frame in seen:
-                    raise InputError(f"{b.where(name)}: track id={tid} has two boxes in frame "
-                                     f"{frame}")
-                seen.add(frame)
-                boxes.append(_xyxy(b, name))
-                frames.append(frame + 1)
-                ids.append(tid)
-                classes.append(cls)
-                vis.append(0.0 if _flag(b, "occluded", name) else 1.0)
-        elif node.tag == "image":  # "CVAT for images 1.1": anonymous boxes
-            frame = xml_int(node, "id", name, lo=0)
-            for b in node.children:
-                if b.tag != "box":
-                    skipped += 1
-                    continue
-                if "label" not in b.attrib:
-                    raise InputError(f"{b.where(name)}: box without a 'label' attribute")
-                boxes.append(_xyxy(b, name))
-                frames.append(frame + 1)
-                ids.append(-1)
-                classes.append(labels.class_of(b.attrib["label"]))
-                vis.append(0.0 if _flag(b, "occluded", name) else 1.0)
-    if skipped:
-        log.debug("%s: ignored %d non-box shapes", name, skipped)
-    meta = {"format": "cvat", "labels": dict(labels.names)}
-    if not frames:
-        return Annotations(**{k: getattr(Annotations.empty(), k) for k in (
-            "frames", "ids", "boxes", "scores", "consider", "classes", "visibility", "world")},
-            meta=meta)
-    return Annotations.from_columns(frames, ids, np.asarray(boxes, dtype=np.float64),
-                                    classes=classes, visibility=vis, meta=meta)
+    for b in node.children:
+        if b.tag != "box":
+            skipped += 1
+            continue
+        frame = xml_int(b, "frame", name, lo=0)
+        if _flag(b, "outside", name):
+            continue
+        if frame in seen:
+            raise InputError(f"{b.where(name)}: track id={tid} has two boxes in frame {frame}")
+        seen.add(frame)
+        box = _xyxy(b, name)
+        rows.add(frame + 1, tid, box, cls, 0.0 if _flag(b, "occluded", name) else 1.0)
+    return skipped
+
+
+def _read_image(node: XmlNode, name: str, labels: _Labels, rows: "_Rows") -> int:
+    """The boxes of one ``<image>`` as anonymous rows (id -1); returns the non-box shapes."""
+    frame = xml_int(node, "id", name, lo=0)
+    skipped = 0
+    for b in node.children:
+        if b.tag != "box":
+            skipped += 1
+            continue
+        if "label" not in b.attrib:
+            raise InputError(f"{b.where(name)}: box without a 'label' attribute")
+        box = _xyxy(b, name)
+        cls = labels.class_of(b.attrib["label"])
+        rows.add(frame + 1, -1, box, cls, 0.0 if _flag(b, "occluded", name) else 1.0)
+    return skipped
+
+
+class _Rows:
+    """Columns of the boxes read so far."""
+
+    def __init__(self) -> None:
+        self.frames: list[int] = []
+        self.ids: list[int] = []
+        self.boxes: list[tuple[float, float, float, float]] = []
+        self.classes: list[int] = []
+        self.vis: list[float] = []
+
+    def add(self, frame: int, tid: int, box: tuple[float, float, float, float], cls: int,
+            vis: float) -> None:
+        self.frames.append(frame)
+        self.ids.append(tid)
+        self.boxes.append(box)
+        self.classes.append(cls)
+        self.vis.append(vis)
+
+    def annotations(self, meta: dict) -> Annotations:
+        if not self.frames:
+            return Annotations(**{k: getattr(Annotations.empty(), k) for k in (
+                "frames", "ids", "boxes", "scores", "consider", "classes", "visibility", "world")},
+                meta=meta)
+        return Annotations.from_columns(self.frames, self.ids,
+                                        np.asarray(self.boxes, dtype=np.float64),
+                                        classes=self.classes, visibility=self.vis, meta=meta)
 
 
 def _num(v: float) -> str:
@@ -206,6 +237,15 @@ def format_cvat(ann: Annotations) -> str:
                          f"{int(ann.frames.min())}")
     names = _label_names(ann)
     last = int(ann.frames.max()) - 1 if len(ann) else 0
+    out = _meta_xml(ann, names, last)
+    for tid, rows in _tracks(ann):
+        out += _track_xml(ann, tid, rows, names[int(ann.classes[rows[0]])], last)
+    out.append("</annotations>\n")
+    return "".join(out)
+
+
+def _meta_xml(ann: Annotations, names: dict[int, str], last: int) -> list[str]:
+    """From the XML declaration to the end of ``<meta>``: the task's frames and labels."""
     out = ['<?xml version="1.0" encoding="utf-8"?>\n<annotations>\n  <version>1.1</version>\n',
            "  <meta>\n    <task>\n", f"      <size>{last + 1 if len(ann) else 0}</size>\n",
            "      <mode>interpolation</mode>\n      <overlap>0</overlap>\n",
@@ -215,35 +255,44 @@ def format_cvat(ann: Annotations) -> str:
         out.append(f"        <label>\n          <name>{escape(names[c])}</name>\n"
                    f"          <attributes>\n          </attributes>\n        </label>\n")
     out.append("      </labels>\n    </task>\n  </meta>\n")
-    if len(ann):
-        order = np.lexsort((ann.frames, ann.ids))
-        ids, frames = ann.ids[order], ann.frames[order]
-        cuts = np.flatnonzero(np.diff(ids)) + 1
-        next_id = int(max(ids.max(), -1)) + 1
-        tracks: list[tuple[int, np.ndarray]] = []
-        for seg in np.split(np.arange(len(order)), cuts):
-            tid = int(ids[seg[0]])
-            if tid < 0:
-                for r in seg:
-                    tracks.append((next_id, order[[r]]))
-                    next_id += 1
-                continue
-            if np.any(np.diff(frames[seg]) == 0):
-                dup = int(frames[seg][np.flatnonzero(np.diff(frames[seg]) == 0)[0]])
-                raise InputError(f"cannot write CVAT: id {tid} has two boxes in frame {dup}")
-            tracks.append((tid, order[seg]))
-        for tid, rows in tracks:
-            label = names[int(ann.classes[rows[0]])]
-            out.append(f'  <track id="{tid}" label={quoteattr(label)} source="manual">\n')
-            for k, r in enumerate(rows):
-                out.append(_box_xml(ann, r, int(ann.frames[r]) - 1, outside=False))
-                f0 = int(ann.frames[r]) - 1
-                nxt = int(ann.frames[rows[k + 1]]) - 1 if k + 1 < len(rows) else None
-                if (nxt is not None and nxt > f0 + 1) or (nxt is None and f0 < last):
-                    out.append(_box_xml(ann, r, f0 + 1, outside=True))
-            out.append("  </track>\n")
-    out.append("</annotations>\n")
-    return "".join(out)
+    return out
+
+
+def _tracks(ann: Annotations) -> list[tuple[int, np.ndarray]]:
+    """``(track id, rows by frame)`` per id, ascending; each row with id < 0 is a track of its
+    own with a fresh id above the others."""
+    if not len(ann):
+        return []
+    order = np.lexsort((ann.frames, ann.ids))
+    ids, frames = ann.ids[order], ann.frames[order]
+    cuts = np.flatnonzero(np.diff(ids)) + 1
+    next_id = int(max(ids.max(), -1)) + 1
+    tracks: list[tuple[int, np.ndarray]] = []
+    for seg in np.split(np.arange(len(order)), cuts):
+        tid = int(ids[seg[0]])
+        if tid < 0:
+            for r in seg:
+                tracks.append((next_id, order[[r]]))
+                next_id += 1
+            continue
+        if np.any(np.diff(frames[seg]) == 0):
+            dup = int(frames[seg][np.flatnonzero(np.diff(frames[seg]) == 0)[0]])
+            raise InputError(f"cannot write CVAT: id {tid} has two boxes in frame {dup}")
+        tracks.append((tid, order[seg]))
+    return tracks
+
+
+def _track_xml(ann: Annotations, tid: int, rows: np.ndarray, label: str, last: int) -> list[str]:
+    """One ``<track>``: a keyframe per row, an ``outside`` box after a gap or an early end."""
+    out = [f'  <track id="{tid}" label={quoteattr(label)} source="manual">\n']
+    for k, r in enumerate(rows):
+        out.append(_box_xml(ann, r, int(ann.frames[r]) - 1, outside=False))
+        f0 = int(ann.frames[r]) - 1
+        nxt = int(ann.frames[rows[k + 1]]) - 1 if k + 1 < len(rows) else None
+        if (nxt is not None and nxt > f0 + 1) or (nxt is None and f0 < last):
+            out.append(_box_xml(ann, r, f0 + 1, outside=True))
+    out.append("  </track>\n")
+    return out
 
 
 def _box_xml(ann: Annotations, r: int, frame: int, outside: bool) -> str:
