@@ -110,17 +110,7 @@ def _keys(obj: Any, allowed: set[str], required: tuple[str, ...], where: str) ->
 def parse_json(data: bytes | str, name: str = "<json>") -> Annotations:
     """Parse motiontrack JSON into :class:`Annotations`; errors name the JSON path
     (``tracks[3].boxes[7].box``) or the line and column of a syntax error."""
-    try:
-        doc = json.loads(data, parse_constant=_reject_constant)
-    except json.JSONDecodeError as exc:
-        raise InputError(f"{name}:{exc.lineno}:{exc.colno}: malformed JSON: {exc.msg}") from None
-    except UnicodeDecodeError as exc:
-        raise InputError(f"{name}: not UTF-8 JSON (undecodable byte at offset {exc.start})") \
-            from None
-    except RecursionError:
-        raise InputError(f"{name}: JSON nested too deeply") from None
-    except ValueError as exc:  # _reject_constant, huge integer literals
-        raise InputError(f"{name}: malformed JSON: {exc}") from None
+    doc = _load(data, name)
     doc = _keys(doc, _TOP_KEYS, ("format", "version", "tracks"), f"{name}: top level")
     if doc["format"] != FORMAT_NAME:
         raise InputError(f"{name}: \"format\" must be {FORMAT_NAME!r}, got "
@@ -134,14 +124,7 @@ def parse_json(data: bytes | str, name: str = "<json>") -> Annotations:
     tracks = doc["tracks"]
     if not isinstance(tracks, list):
         raise InputError(f"{name}: tracks: expected a list")
-    frames: list[int] = []
-    ids: list[int] = []
-    boxes: list[list[float]] = []
-    scores: list[float] = []
-    consider: list[bool] = []
-    classes: list[int] = []
-    vis: list[float] = []
-    world: list[list[float]] = []
+    rows = _Rows()
     for ti, tr in enumerate(tracks):
         where_t = f"{name}: tracks[{ti}]"
         tr = _keys(tr, _TRACK_KEYS, ("id", "boxes"), where_t)
@@ -149,33 +132,70 @@ def parse_json(data: bytes | str, name: str = "<json>") -> Annotations:
         if not isinstance(tr["boxes"], list):
             raise InputError(f"{where_t}.boxes: expected a list")
         for bi, b in enumerate(tr["boxes"]):
-            w = f"{where_t}.boxes[{bi}]"
-            b = _keys(b, _BOX_KEYS, ("frame", "box"), w)
-            frames.append(_int(b["frame"], f"{w}.frame", lo=1))
-            box = _vec(b["box"], 4, f"{w}.box")
-            if box[2] <= 0 or box[3] <= 0:
-                raise InputError(f"{w}.box: width and height must be > 0, got w={box[2]}, "
-                                 f"h={box[3]}")
-            boxes.append(box)
-            ids.append(tid)
-            scores.append(_float(b.get("score", 1.0), f"{w}.score"))
-            c = b.get("consider", True)
-            if not isinstance(c, bool):
-                raise InputError(f"{w}.consider: expected true or false, got {json.dumps(c)[:40]}")
-            consider.append(c)
-            classes.append(_int(b.get("class", -1), f"{w}.class"))
-            vis.append(_float(b.get("visibility", -1.0), f"{w}.visibility"))
-            world.append(_vec(b.get("world", [-1.0, -1.0, -1.0]), 3, f"{w}.world"))
+            rows.add_box(b, tid, f"{where_t}.boxes[{bi}]")
     meta = {"format": "json"}
     if meta_in:
         meta["json_meta"] = meta_in
-    if not frames:
-        return Annotations(**{k: getattr(Annotations.empty(), k) for k in (
-            "frames", "ids", "boxes", "scores", "consider", "classes", "visibility", "world")},
-            meta=meta)
-    return Annotations.from_columns(frames, ids, np.asarray(boxes, dtype=np.float64), scores=scores,
-                                    consider=consider, classes=classes, visibility=vis,
-                                    world=np.asarray(world, dtype=np.float64), meta=meta)
+    return rows.annotations(meta)
+
+
+def _load(data: bytes | str, name: str) -> Any:
+    """The JSON document; syntax errors give the line and column."""
+    try:
+        return json.loads(data, parse_constant=_reject_constant)
+    except json.JSONDecodeError as exc:
+        raise InputError(f"{name}:{exc.lineno}:{exc.colno}: malformed JSON: {exc.msg}") from None
+    except UnicodeDecodeError as exc:
+        raise InputError(f"{name}: not UTF-8 JSON (undecodable byte at offset {exc.start})") \
+            from None
+    except RecursionError:
+        raise InputError(f"{name}: JSON nested too deeply") from None
+    except ValueError as exc:  # _reject_constant, huge integer literals
+        raise InputError(f"{name}: malformed JSON: {exc}") from None
+
+
+class _Rows:
+    """Columns of the boxes read so far."""
+
+    def __init__(self) -> None:
+        self.frames: list[int] = []
+        self.ids: list[int] = []
+        self.boxes: list[list[float]] = []
+        self.scores: list[float] = []
+        self.consider: list[bool] = []
+        self.classes: list[int] = []
+        self.vis: list[float] = []
+        self.world: list[list[float]] = []
+
+    def add_box(self, b: Any, tid: int, w: str) -> None:
+        """One observation of track ``tid``, checked field by field; ``w`` is its JSON path."""
+        b = _keys(b, _BOX_KEYS, ("frame", "box"), w)
+        self.frames.append(_int(b["frame"], f"{w}.frame", lo=1))
+        box = _vec(b["box"], 4, f"{w}.box")
+        if box[2] <= 0 or box[3] <= 0:
+            raise InputError(f"{w}.box: width and height must be > 0, got w={box[2]}, "
+                             f"h={box[3]}")
+        self.boxes.append(box)
+        self.ids.append(tid)
+        self.scores.append(_float(b.get("score", 1.0), f"{w}.score"))
+        c = b.get("consider", True)
+        if not isinstance(c, bool):
+            raise InputError(f"{w}.consider: expected true or false, got {json.dumps(c)[:40]}")
+        self.consider.append(c)
+        self.classes.append(_int(b.get("class", -1), f"{w}.class"))
+        self.vis.append(_float(b.get("visibility", -1.0), f"{w}.visibility"))
+        self.world.append(_vec(b.get("world", [-1.0, -1.0, -1.0]), 3, f"{w}.world"))
+
+    def annotations(self, meta: dict) -> Annotations:
+        if not self.frames:
+            return Annotations(**{k: getattr(Annotations.empty(), k) for k in (
+                "frames", "ids", "boxes", "scores", "consider", "classes", "visibility", "world")},
+                meta=meta)
+        return Annotations.from_columns(self.frames, self.ids,
+                                        np.asarray(self.boxes, dtype=np.float64),
+                                        scores=self.scores, consider=self.consider,
+                                        classes=self.classes, visibility=self.vis,
+                                        world=np.asarray(self.world, dtype=np.float64), meta=meta)
 
 
 def format_json(ann: Annotations, meta: dict | None = None) -> str:
