@@ -156,3 +156,18 @@ def test_detection_run_reports_tracks_from_their_first_frame(pets_run):
     assert len(gt1) == 3 and len(first) == 3
     iou = iou_matrix(gt1.boxes, first.boxes)
     assert (iou.max(axis=1) > 0.9).all(), iou.max(axis=1)
+
+
+def test_a_reidentified_track_is_backfilled_only_after_its_predecessor(data, tmp_path):
+    # With tracker.fill_motion a confirmed motion track is also written at its tentative
+    # frames. A track that takes over a lost track's id (re-identification) must not add rows
+    # in frames where that id was already reported: on PETS the first takeover happens within
+    # the first frames and wrote id 1 twice in frame 4.
+    from motiontrack.cli import main
+
+    out = tmp_path / "o"
+    assert main(["track", str(data("pets09-s2l1", "video.avi")), "--max-frames", "60",
+                 "--no-video", "--set", "tracker.fill_motion=true", "-o", str(out)]) == 0
+    tracks = read_mot(out / "tracks.txt")
+    pairs = list(zip(tracks.frames.tolist(), tracks.ids.tolist()))
+    assert len(pairs) == len(set(pairs))

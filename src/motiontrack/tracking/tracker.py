@@ -76,7 +76,7 @@ class TrackView:
 
 class _TrackState:
     __slots__ = ("tid", "state", "hits", "age", "tsu", "history", "score", "partials", "ref",
-                 "origin", "moved", "bridged", "hist", "tentative")
+                 "origin", "moved", "bridged", "hist", "tentative", "reported")
 
     def __init__(self, history: int, size: np.ndarray) -> None:
         self.ref = np.asarray(size, np.float64).copy()  # reference (unoccluded) w, h
@@ -93,6 +93,7 @@ class _TrackState:
         self.bridged = False                      # last matched to a bridge measurement
         self.hist: np.ndarray | None = None       # appearance (colour histogram), running average
         self.tentative: list[tuple] = []  # (frame, Track fields) of each frame while tentative
+        self.reported: int | None = None          # the last frame it was reported in
 
 
 @TRACKERS.register("kalman")
@@ -398,6 +399,10 @@ class MultiObjectTracker:
                     # the lost track's trajectory, then the new one's (the newest kept)
                     m.history = deque([*o.history, *m.history], maxlen=m.history.maxlen)
                     m.hist, m.moved, m.origin = o.hist, o.moved or m.moved, o.origin
+                    if o.reported is not None:
+                        # the id is already in the frames the lost track was reported in: its
+                        # successor's tentative frames are reported only after them
+                        m.tentative = [e for e in m.tentative if e[0] > o.reported]
                     drop.append(best)
         for i in new:
             if self.meta[i].tid == 0:
@@ -459,6 +464,7 @@ class MultiObjectTracker:
                               age=a, history=hist, score=sc))
                     for f, b, v, n, a, hist, sc in m.tentative)
                 m.tentative = []
+            m.reported = frame
             out.append(Track(
                 id=m.tid, box=Box(x, y, w, h), state=m.state, velocity=(vx, vy), hits=m.hits,
                 age=m.age, time_since_update=m.tsu, history=tuple(m.history), score=m.score,
