@@ -212,6 +212,7 @@ def test_selective_update_keeps_a_person_who_stops(protect, still_tracked):
         assert last.tracks[0].box.x == pytest.approx(10 + 4 * 40, abs=6)
 
 
+@pytest.mark.slow
 def test_people_preset_runs_heads_and_shapes_and_draws_them(tmp_path):
     from motiontrack.cli import main
 
