@@ -204,72 +204,114 @@ def render_person(p: Person, i: int) -> Sprite:
     Sprite
         Labels (see ``LABEL_*``) with no non-zero pixel on the sprite border.
     """
-    g = _GAITS[p.gait]
-    fx, fy, h = person_position(p, i)
-    d = 1.0 if p.vx >= 0 else -1.0  # facing direction
-    # Phase advances 2π per gait cycle (two steps) of length cycle·h.
-    phase = p.phase0 + 2.0 * math.pi * p.speed * (i - p.t0) / (g["cycle"] * p.height)
-    bob = -g["bob"] * h * abs(math.sin(phase))  # up at mid-stance of either leg
+    fig = _Figure.at(p, i)
+    # Far side first (painter's order within the figure).
+    fig.arm(fig.phase + math.pi, LABEL_SLEEVE_BACK)
+    fig.leg(fig.phase + math.pi, LABEL_TROUSERS)
+    fig.torso()
+    fig.leg(fig.phase, LABEL_TROUSERS)
+    fig.arm(fig.phase, LABEL_SHIRT)
+    fig.head()
+    return Sprite(fig.ox, fig.oy, fig.lab)
 
-    margin = 3
-    ox = int(math.floor(fx - 0.62 * h)) - margin
-    oy = int(math.floor(fy - 1.10 * h)) - margin
-    pw = int(math.ceil(1.24 * h)) + 2 * margin + 1
-    ph = int(math.ceil(1.22 * h)) + 2 * margin + 1
-    lab = np.zeros((ph, pw), dtype=np.uint8)
-    line = cv2.LINE_8
 
-    t_leg = max(2, int(round(0.085 * h)))
-    t_arm = max(2, int(round(0.058 * h)))
-    lean = g["lean"] * d
-    hip = (fx + 0.0, fy - 0.50 * h + bob)
-    shoulder_y = fy - 0.80 * h + bob
-    shoulder = (fx + math.sin(lean) * 0.30 * h, shoulder_y)
-    leg_len = 0.50 * h - t_leg / 2.0
-    thigh, shin = 0.5 * leg_len, 0.5 * leg_len
+@dataclass(frozen=True, eq=False)
+class _Figure:
+    """A person's pose at one frame and the label sprite it is drawn into (see
+    :func:`render_person`); ``ox, oy`` is the sprite's top-left pixel in the image."""
 
-    def leg(ph_k: float, label: int) -> None:
+    lab: np.ndarray
+    ox: int
+    oy: int
+    g: dict
+    run: bool
+    fx: float
+    fy: float
+    h: float
+    d: float        # facing direction, +1 right, -1 left
+    phase: float
+    bob: float
+    lean: float
+    hip: tuple[float, float]
+    shoulder: tuple[float, float]
+    thigh: float
+    shin: float
+    t_leg: int
+    t_arm: int
+
+    @classmethod
+    def at(cls, p: Person, i: int) -> "_Figure":
+        g = _GAITS[p.gait]
+        fx, fy, h = person_position(p, i)
+        d = 1.0 if p.vx >= 0 else -1.0  # facing direction
+        # Phase advances 2π per gait cycle (two steps) of length cycle·h.
+        phase = p.phase0 + 2.0 * math.pi * p.speed * (i - p.t0) / (g["cycle"] * p.height)
+        bob = -g["bob"] * h * abs(math.sin(phase))  # up at mid-stance of either leg
+        margin = 3
+        ox = int(math.floor(fx - 0.62 * h)) - margin
+        oy = int(math.floor(fy - 1.10 * h)) - margin
+        pw = int(math.ceil(1.24 * h)) + 2 * margin + 1
+        ph = int(math.ceil(1.22 * h)) + 2 * margin + 1
+        t_leg = max(2, int(round(0.085 * h)))
+        lean = g["lean"] * d
+        leg_len = 0.50 * h - t_leg / 2.0
+        return cls(lab=np.zeros((ph, pw), dtype=np.uint8), ox=ox, oy=oy, g=g,
+                   run=p.gait == "run", fx=fx, fy=fy, h=h, d=d, phase=phase, bob=bob, lean=lean,
+                   hip=(fx + 0.0, fy - 0.50 * h + bob),
+                   shoulder=(fx + math.sin(lean) * 0.30 * h, fy - 0.80 * h + bob),
+                   thigh=0.5 * leg_len, shin=0.5 * leg_len, t_leg=t_leg,
+                   t_arm=max(2, int(round(0.058 * h))))
+
+    def _pt(self, x: float, y: float) -> tuple[int, int]:
+        return _pt(x, y, self.ox, self.oy)
+
+    def leg(self, ph_k: float, label: int) -> None:
+        g, d, h, hip = self.g, self.d, self.h, self.hip
         theta = g["leg"] * math.sin(ph_k) * d  # + = forward
         bend = g["knee"] * 0.5 * (1.0 - math.cos(ph_k))  # knee folds backwards
-        knee = (hip[0] + thigh * math.sin(theta), hip[1] + thigh * math.cos(theta))
+        knee = (hip[0] + self.thigh * math.sin(theta), hip[1] + self.thigh * math.cos(theta))
         a = theta - bend * d
-        ankle = (knee[0] + shin * math.sin(a), knee[1] + shin * math.cos(a))
-        cv2.line(lab, _pt(*hip, ox, oy), _pt(*knee, ox, oy), label, t_leg, line, SHIFT)
-        cv2.line(lab, _pt(*knee, ox, oy), _pt(*ankle, ox, oy), label, t_leg, line, SHIFT)
+        ankle = (knee[0] + self.shin * math.sin(a), knee[1] + self.shin * math.cos(a))
+        cv2.line(self.lab, self._pt(*hip), self._pt(*knee), label, self.t_leg, cv2.LINE_8, SHIFT)
+        cv2.line(self.lab, self._pt(*knee), self._pt(*ankle), label, self.t_leg, cv2.LINE_8,
+                 SHIFT)
         toe = (ankle[0] + d * 0.055 * h, ankle[1])
-        cv2.line(lab, _pt(*ankle, ox, oy), _pt(*toe, ox, oy), LABEL_SHOES,
-                 max(2, int(round(0.05 * h))), line, SHIFT)
+        cv2.line(self.lab, self._pt(*ankle), self._pt(*toe), LABEL_SHOES,
+                 max(2, int(round(0.05 * h))), cv2.LINE_8, SHIFT)
 
-    def arm(ph_k: float, label: int) -> None:
-        alpha = -g["arm"] * math.sin(ph_k) * d
+    def arm(self, ph_k: float, label: int) -> None:
+        d, h, shoulder = self.d, self.h, self.shoulder
+        alpha = -self.g["arm"] * math.sin(ph_k) * d
         arm_len = 0.33 * h
-        elbow_bend = 0.9 * d if p.gait == "run" else 0.15 * d
+        elbow_bend = 0.9 * d if self.run else 0.15 * d
         elbow = (shoulder[0] + 0.5 * arm_len * math.sin(alpha),
                  shoulder[1] + 0.5 * arm_len * math.cos(alpha))
         b = alpha + elbow_bend
         hand = (elbow[0] + 0.5 * arm_len * math.sin(b), elbow[1] + 0.5 * arm_len * math.cos(b))
-        cv2.line(lab, _pt(*shoulder, ox, oy), _pt(*elbow, ox, oy), label, t_arm, line, SHIFT)
-        cv2.line(lab, _pt(*elbow, ox, oy), _pt(*hand, ox, oy), label, t_arm, line, SHIFT)
-        cv2.circle(lab, _pt(*hand, ox, oy), int(round(0.028 * h * _ONE)), LABEL_SKIN, -1, line,
-                   SHIFT)
+        cv2.line(self.lab, self._pt(*shoulder), self._pt(*elbow), label, self.t_arm, cv2.LINE_8,
+                 SHIFT)
+        cv2.line(self.lab, self._pt(*elbow), self._pt(*hand), label, self.t_arm, cv2.LINE_8,
+                 SHIFT)
+        cv2.circle(self.lab, self._pt(*hand), int(round(0.028 * h * _ONE)), LABEL_SKIN, -1,
+                   cv2.LINE_8, SHIFT)
 
-    # Far side first (painter's order within the figure).
-    arm(phase + math.pi, LABEL_SLEEVE_BACK)
-    leg(phase + math.pi, LABEL_TROUSERS)
-    # Torso: ellipse from the hips to the shoulders, tilted by the lean.
-    tc = (fx + math.sin(lean) * 0.16 * h, fy - 0.665 * h + bob)
-    cv2.ellipse(lab, _pt(*tc, ox, oy), (int(0.125 * h * _ONE), int(0.19 * h * _ONE)),
-                math.degrees(-lean), 0, 360, LABEL_SHIRT, -1, line, SHIFT)
-    leg(phase, LABEL_TROUSERS)
-    arm(phase, LABEL_SHIRT)
-    # Head and hair.
-    hc = (fx + math.sin(lean) * 0.42 * h + 0.01 * h * d, fy - 0.915 * h + bob)
-    r = int(round(0.075 * h * _ONE))
-    cv2.circle(lab, _pt(*hc, ox, oy), r, LABEL_SKIN, -1, line, SHIFT)
-    cv2.ellipse(lab, _pt(hc[0] - 0.012 * h * d, hc[1] - 0.012 * h, ox, oy),
-                (int(0.072 * h * _ONE), int(0.058 * h * _ONE)), 0, 180, 360, LABEL_HAIR, -1,
-                line, SHIFT)
-    return Sprite(ox, oy, lab)
+    def torso(self) -> None:
+        """An ellipse from the hips to the shoulders, tilted by the lean."""
+        h, lean = self.h, self.lean
+        tc = (self.fx + math.sin(lean) * 0.16 * h, self.fy - 0.665 * h + self.bob)
+        cv2.ellipse(self.lab, self._pt(*tc), (int(0.125 * h * _ONE), int(0.19 * h * _ONE)),
+                    math.degrees(-lean), 0, 360, LABEL_SHIRT, -1, cv2.LINE_8, SHIFT)
+
+    def head(self) -> None:
+        """Head and hair."""
+        h, d = self.h, self.d
+        hc = (self.fx + math.sin(self.lean) * 0.42 * h + 0.01 * h * d,
+              self.fy - 0.915 * h + self.bob)
+        r = int(round(0.075 * h * _ONE))
+        cv2.circle(self.lab, self._pt(*hc), r, LABEL_SKIN, -1, cv2.LINE_8, SHIFT)
+        cv2.ellipse(self.lab, self._pt(hc[0] - 0.012 * h * d, hc[1] - 0.012 * h),
+                    (int(0.072 * h * _ONE), int(0.058 * h * _ONE)), 0, 180, 360, LABEL_HAIR, -1,
+                    cv2.LINE_8, SHIFT)
 
 
 def render_shadow(p: Person, i: int, side: float = 1.0) -> Sprite:
