@@ -463,46 +463,65 @@ class SyntheticScene:
     def describe(self) -> dict:
         """What the scene contains and what happens when (frame numbers 1-based, as in the gt)."""
         gt = self.ground_truth()
+        events = self._background_events(gt)
         people = []
-        events: list[dict] = []
-        first_any = int(gt.frames.min()) if len(gt) else None
-        if first_any is None:
-            events.append({"frames": [1, self.n_frames], "what": "empty background only"})
-        elif first_any > 1:
-            events.append({"frames": [1, first_any - 1], "what": "empty background"})
         for p in self.people:
-            sel = gt.ids == p.id
-            f = gt.frames[sel]
-            v = gt.visibility[sel]
-            entry: dict[str, Any] = {
-                "id": p.id,
-                "gait": p.gait,
-                "height_px": round(p.height, 1),
-                "speed_px_per_frame": round(p.speed, 2),
-                "direction": "left to right" if p.vx >= 0 else "right to left",
-                "shirt_bgr": list(p.shirt),
-                "first_frame": int(f.min()) if f.size else None,
-                "last_frame": int(f.max()) if f.size else None,
-            }
+            entry, person_events = self._person(p, gt)
             people.append(entry)
-            if f.size:
-                side = "left" if p.vx >= 0 else "right"
-                events.append({"frames": [int(f.min()), int(f.min())],
-                               "what": f"person {p.id} ({p.gait}) enters from the {side}"})
-                for a, b in _runs(f[v == 0]):
-                    events.append({"frames": [a, b], "what": f"person {p.id} fully hidden"})
-                if f.max() < self.n_frames:
-                    events.append({"frames": [int(f.max()), int(f.max())],
-                                   "what": f"person {p.id} leaves the image"})
+            events += person_events
         for a_id, b_id, a, b in self._overlaps(gt):
             events.append({"frames": [a, b], "what": f"boxes of persons {a_id} and {b_id} overlap"})
-        if self.lighting is not None:
-            L = self.lighting
-            events.append({"frames": [L.ramp_start + 1, L.ramp_end + 1],
-                           "what": f"gradual illumination change: gain 1.00 -> {L.ramp_gain:.2f}"})
-            events.append({"frames": [L.jump_at + 1, L.jump_at + 1],
-                           "what": f"sudden illumination change: gain x{L.jump_factor:.2f}"})
+        events += self._lighting_events()
         events.sort(key=lambda e: (e["frames"][0], e["frames"][1]))
+        return {**self._settings(), "people": people, "events": events}
+
+    def _background_events(self, gt: Annotations) -> list[dict]:
+        """The frames before anyone appears."""
+        first_any = int(gt.frames.min()) if len(gt) else None
+        if first_any is None:
+            return [{"frames": [1, self.n_frames], "what": "empty background only"}]
+        if first_any > 1:
+            return [{"frames": [1, first_any - 1], "what": "empty background"}]
+        return []
+
+    def _person(self, p: Person, gt: Annotations) -> tuple[dict[str, Any], list[dict]]:
+        """A person's description, and when they enter, are fully hidden and leave."""
+        sel = gt.ids == p.id
+        f = gt.frames[sel]
+        v = gt.visibility[sel]
+        entry: dict[str, Any] = {
+            "id": p.id,
+            "gait": p.gait,
+            "height_px": round(p.height, 1),
+            "speed_px_per_frame": round(p.speed, 2),
+            "direction": "left to right" if p.vx >= 0 else "right to left",
+            "shirt_bgr": list(p.shirt),
+            "first_frame": int(f.min()) if f.size else None,
+            "last_frame": int(f.max()) if f.size else None,
+        }
+        events: list[dict] = []
+        if f.size:
+            side = "left" if p.vx >= 0 else "right"
+            events.append({"frames": [int(f.min()), int(f.min())],
+                           "what": f"person {p.id} ({p.gait}) enters from the {side}"})
+            for a, b in _runs(f[v == 0]):
+                events.append({"frames": [a, b], "what": f"person {p.id} fully hidden"})
+            if f.max() < self.n_frames:
+                events.append({"frames": [int(f.max()), int(f.max())],
+                               "what": f"person {p.id} leaves the image"})
+        return entry, events
+
+    def _lighting_events(self) -> list[dict]:
+        if self.lighting is None:
+            return []
+        L = self.lighting
+        return [{"frames": [L.ramp_start + 1, L.ramp_end + 1],
+                 "what": f"gradual illumination change: gain 1.00 -> {L.ramp_gain:.2f}"},
+                {"frames": [L.jump_at + 1, L.jump_at + 1],
+                 "what": f"sudden illumination change: gain x{L.jump_factor:.2f}"}]
+
+    def _settings(self) -> dict[str, Any]:
+        """The scene's parameters, as :meth:`describe` lists them before people and events."""
         c = self.column
         return {
             "name": self.name,
@@ -523,8 +542,6 @@ class SyntheticScene:
                 "sudden": {"frame": self.lighting.jump_at + 1,
                            "factor": self.lighting.jump_factor},
             },
-            "people": people,
-            "events": events,
         }
 
     @staticmethod
@@ -862,6 +879,13 @@ def parse_synth_spec(spec: str) -> SyntheticScene:
                           + ", ".join(SCENES))
     if name not in _SCENE_TYPES:
         raise ConfigError(f"unknown synthetic scene {name!r}; valid names: {', '.join(SCENES)}")
+    params = _spec_params(spec, query)
+    seed = params.pop("seed", 0)
+    return make_scene(name, seed, **params)
+
+
+def _spec_params(spec: str, query: str) -> dict[str, Any]:
+    """``{key: value}`` from the ``key=value&...`` part of ``spec``."""
     params: dict[str, Any] = {}
     for item in query.split("&") if query else []:
         if not item:
@@ -872,31 +896,32 @@ def parse_synth_spec(spec: str) -> SyntheticScene:
             raise ConfigError(f"synthetic scene spec {spec!r}: expected key=value, got {item!r}")
         if key in params:
             raise ConfigError(f"synthetic scene spec {spec!r}: parameter {key} given twice")
-        if key == "seed":
-            try:
-                params[key] = int(raw)
-            except ValueError:
-                raise ConfigError(f"synthetic scene seed must be a non-negative integer, "
-                                  f"got {raw!r}") from None
-            continue
-        if key not in _OVERRIDES:
-            raise ConfigError(f"unknown synthetic scene parameter {key!r}; valid: seed, "
-                              + ", ".join(_OVERRIDES))
-        kind, _, what = _OVERRIDES[key]
+        params[key] = _spec_value(key, raw)
+    return params
+
+
+def _spec_value(key: str, raw: str) -> Any:
+    """A spec value: ``seed`` an int, booleans from words, other overrides numbers (their
+    ranges are checked by :func:`make_scene`)."""
+    if key == "seed":
+        try:
+            return int(raw)
+        except ValueError:
+            raise ConfigError(f"synthetic scene seed must be a non-negative integer, "
+                              f"got {raw!r}") from None
+    if key not in _OVERRIDES:
+        raise ConfigError(f"unknown synthetic scene parameter {key!r}; valid: seed, "
+                          + ", ".join(_OVERRIDES))
+    kind, _, what = _OVERRIDES[key]
+    if kind == "bool":
         low = raw.lower()
-        if kind == "bool":
-            if low in _TRUE:
-                params[key] = True
-            elif low in _FALSE:
-                params[key] = False
-            else:
-                raise ConfigError(f"synthetic scene parameter {key} must be {what}, got {raw!r}")
-        else:
-            try:
-                num = float(raw)
-            except ValueError:
-                raise ConfigError(f"synthetic scene parameter {key} must be {what}, "
-                                  f"got {raw!r}") from None
-            params[key] = num
-    seed = params.pop("seed", 0)
-    return make_scene(name, seed, **params)
+        if low in _TRUE:
+            return True
+        if low in _FALSE:
+            return False
+        raise ConfigError(f"synthetic scene parameter {key} must be {what}, got {raw!r}")
+    try:
+        return float(raw)
+    except ValueError:
+        raise ConfigError(f"synthetic scene parameter {key} must be {what}, "
+                          f"got {raw!r}") from None
