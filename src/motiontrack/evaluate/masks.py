@@ -41,7 +41,7 @@ import math
 import re
 from dataclasses import dataclass, fields
 from pathlib import Path
-from typing import Iterable, Mapping
+from typing import Iterable, Iterator, Mapping
 
 import cv2
 import numpy as np
@@ -325,10 +325,27 @@ def evaluate_mask_folders(gt_dir: str | Path, pred_dir: str | Path,
     if not gt_files:
         raise InputError(f"{gt_dir}: no ground-truth masks found")
     pred_files = find_frames(pred_dir, pred_prefix)
+    roi_arr = _spatial_roi(roi, video)
+    lo, hi = _frame_range(gt_dir, gt_files, temporal_roi, frames)
+    wanted = _complete_frames(gt_dir, pred_dir, gt_files, pred_files, lo, hi)
+    log.debug("evaluating %d frames %d..%d", len(wanted), lo, hi)
+    return evaluate_masks(_mask_pairs(wanted, gt_files, pred_files, roi_arr), roi_arr)
+
+
+def _spatial_roi(roi: str | Path | np.ndarray | None, video: Path) -> np.ndarray | None:
+    """The ROI as a bool mask: a file, an array, the video folder's ``ROI.bmp``, or None."""
     if roi is None and (video / "ROI.bmp").is_file():
         roi = video / "ROI.bmp"
-    roi_arr = read_roi(roi) if isinstance(roi, (str, Path)) else (
+    return read_roi(roi) if isinstance(roi, (str, Path)) else (
         None if roi is None else np.asarray(roi) != 0)
+
+
+def _frame_range(gt_dir: Path, gt_files: dict[int, Path],
+                 temporal_roi: str | Path | tuple[int, int] | None,
+                 frames: tuple[int, int] | None) -> tuple[int, int]:
+    """First and last frame to evaluate: the temporal ROI (the video folder's file by default,
+    else all ground-truth frames) intersected with ``frames``."""
+    video = gt_dir.parent
     if temporal_roi is None and (video / "temporalROI.txt").is_file():
         temporal_roi = video / "temporalROI.txt"
     if isinstance(temporal_roi, (str, Path)):
@@ -340,6 +357,12 @@ def evaluate_mask_folders(gt_dir: str | Path, pred_dir: str | Path,
         raise InputError(f"{gt_dir}: no frames to evaluate (temporal ROI "
                          f"{temporal_roi if temporal_roi is not None else 'all'}, frames "
                          f"{frames if frames is not None else 'all'})")
+    return lo, hi
+
+
+def _complete_frames(gt_dir: Path, pred_dir: str | Path, gt_files: dict[int, Path],
+                     pred_files: dict[int, Path], lo: int, hi: int) -> list[int]:
+    """Frames ``lo..hi``, refused unless each has a ground truth and a prediction."""
     wanted = [f for f in range(lo, hi + 1) if f in gt_files]
     absent_gt = [f for f in range(lo, hi + 1) if f not in gt_files]
     if absent_gt:
@@ -349,18 +372,20 @@ def evaluate_mask_folders(gt_dir: str | Path, pred_dir: str | Path,
     if missing:
         raise InputError(f"{pred_dir}: no predicted mask for {len(missing)} frame(s) in "
                          f"{lo}..{hi}, e.g. {missing[:5]}")
-    log.debug("evaluating %d frames %d..%d", len(wanted), lo, hi)
+    return wanted
 
-    def pairs():
-        for f in wanted:
-            gt = read_mask(gt_files[f])
-            pred = read_mask(pred_files[f])
-            if gt.shape != pred.shape:
-                raise InputError(f"{pred_files[f]}: size {pred.shape[::-1]} differs from the "
-                                 f"ground truth {gt.shape[::-1]} ({gt_files[f].name})")
-            if roi_arr is not None and roi_arr.shape != gt.shape:
-                raise InputError(f"ROI size {roi_arr.shape[::-1]} differs from the ground truth "
-                                 f"{gt.shape[::-1]} ({gt_files[f].name})")
-            yield f, gt, pred
 
-    return evaluate_masks(pairs(), roi_arr)
+def _mask_pairs(wanted: list[int], gt_files: dict[int, Path], pred_files: dict[int, Path],
+                roi_arr: np.ndarray | None) -> Iterator[tuple[int, np.ndarray, np.ndarray]]:
+    """``(frame, gt, pred)`` read one frame at a time, sizes checked against each other and the
+    ROI."""
+    for f in wanted:
+        gt = read_mask(gt_files[f])
+        pred = read_mask(pred_files[f])
+        if gt.shape != pred.shape:
+            raise InputError(f"{pred_files[f]}: size {pred.shape[::-1]} differs from the "
+                             f"ground truth {gt.shape[::-1]} ({gt_files[f].name})")
+        if roi_arr is not None and roi_arr.shape != gt.shape:
+            raise InputError(f"ROI size {roi_arr.shape[::-1]} differs from the ground truth "
+                             f"{gt.shape[::-1]} ({gt_files[f].name})")
+        yield f, gt, pred
