@@ -210,21 +210,9 @@ def refine_line_points(gray: np.ndarray, points: np.ndarray, half_width: float =
     if g.ndim == 3:
         g = cv2.cvtColor(g, cv2.COLOR_BGR2GRAY)
     g = cv2.GaussianBlur(g, (0, 0), 1.0)
-    # resample the polyline evenly; normals from the local segment direction
-    seg = np.linalg.norm(np.diff(pts, axis=0), axis=1)
-    s = np.concatenate([[0], np.cumsum(seg)])
-    t = np.linspace(0, s[-1], samples)
-    p = np.stack([np.interp(t, s, pts[:, 0]), np.interp(t, s, pts[:, 1])], 1)
-    tangent = np.gradient(p, axis=0)
-    tangent /= np.linalg.norm(tangent, axis=1, keepdims=True)
-    normal = np.stack([-tangent[:, 1], tangent[:, 0]], 1)
+    p, normal = _resample(pts, samples)
     offs = np.arange(-half_width, half_width + step / 2, step)
-    grid = p[:, None, :] + offs[None, :, None] * normal[:, None, :]  # (K, S, 2)
-    prof = _bilinear(g, grid).astype(np.float64)
-    if mode == "edge":
-        prof = np.abs(np.gradient(prof, step, axis=1))
-    elif polarity == "dark":
-        prof = -prof
+    prof = _normal_profiles(g, p, normal, offs, step, mode, polarity)
     # a clean profile has one extremum well above both ends; where another line crosses, the
     # profile runs along that line and is flat, so such points are dropped
     peak = prof.max(axis=1)
@@ -235,21 +223,53 @@ def refine_line_points(gray: np.ndarray, points: np.ndarray, half_width: float =
         j = int(np.argmax(prof[k]))
         if j == 0 or j == len(offs) - 1 or not good[k]:
             continue
-        # sub-pixel position: centroid of the profile above its baseline over the contiguous peak
-        # (unbiased for a symmetric line/edge response, unlike a parabola through interpolated
-        # samples, which is pulled towards pixel centres)
-        w = prof[k] - max(prof[k, 0], prof[k, -1])
-        lo = j
-        while lo > 0 and w[lo - 1] > 0:
-            lo -= 1
-        hi = j
-        while hi < len(w) - 1 and w[hi + 1] > 0:
-            hi += 1
-        ww = np.clip(w[lo:hi + 1], 0, None)
-        if ww.sum() <= 0:
-            continue
-        out.append(p[k] + float(ww @ offs[lo:hi + 1] / ww.sum()) * normal[k])
+        shift = _peak_offset(prof[k], j, offs)
+        if shift is not None:
+            out.append(p[k] + shift * normal[k])
     return _drop_outliers(np.asarray(out).reshape(-1, 2))
+
+
+def _resample(pts: np.ndarray, samples: int) -> tuple[np.ndarray, np.ndarray]:
+    """``samples`` points spread evenly along the polyline ``pts``, and the unit normal at each
+    (from the local segment direction)."""
+    seg = np.linalg.norm(np.diff(pts, axis=0), axis=1)
+    s = np.concatenate([[0], np.cumsum(seg)])
+    t = np.linspace(0, s[-1], samples)
+    p = np.stack([np.interp(t, s, pts[:, 0]), np.interp(t, s, pts[:, 1])], 1)
+    tangent = np.gradient(p, axis=0)
+    tangent /= np.linalg.norm(tangent, axis=1, keepdims=True)
+    return p, np.stack([-tangent[:, 1], tangent[:, 0]], 1)
+
+
+def _normal_profiles(g: np.ndarray, p: np.ndarray, normal: np.ndarray, offs: np.ndarray,
+                     step: float, mode: str, polarity: str) -> np.ndarray:
+    """(K, S) response sampled at ``offs`` along each point's normal, largest on the line: the
+    intensity (negated for a dark line) or, for an edge, the derivative's magnitude."""
+    grid = p[:, None, :] + offs[None, :, None] * normal[:, None, :]  # (K, S, 2)
+    prof = _bilinear(g, grid).astype(np.float64)
+    if mode == "edge":
+        prof = np.abs(np.gradient(prof, step, axis=1))
+    elif polarity == "dark":
+        prof = -prof
+    return prof
+
+
+def _peak_offset(prof: np.ndarray, j: int, offs: np.ndarray) -> float | None:
+    """Sub-pixel position along the normal of the peak at sample ``j``: the centroid of the
+    profile above its baseline over the contiguous peak (unbiased for a symmetric line/edge
+    response, unlike a parabola through interpolated samples, which is pulled towards pixel
+    centres). None when nothing stands above the baseline."""
+    w = prof - max(prof[0], prof[-1])
+    lo = j
+    while lo > 0 and w[lo - 1] > 0:
+        lo -= 1
+    hi = j
+    while hi < len(w) - 1 and w[hi + 1] > 0:
+        hi += 1
+    ww = np.clip(w[lo:hi + 1], 0, None)
+    if ww.sum() <= 0:
+        return None
+    return float(ww @ offs[lo:hi + 1] / ww.sum())
 
 
 def _drop_outliers(pts: np.ndarray, rounds: int = 4, floor: float = 0.75) -> np.ndarray:
