@@ -34,7 +34,7 @@ import numpy as np
 from ..errors import SourceError
 from ..io.atomic import atomic_write_text, check_writable
 from ..io.sources import Source, SourceInfo
-from ..types import Annotations, FrameResult
+from ..types import FrameResult
 
 log = logging.getLogger(__name__)
 
@@ -300,12 +300,3 @@ class Job:
                 errors.append(exc)
         if errors:
             raise errors[0]
-
-
-def rows_to_annotations(frames: Sequence[int], ids: Sequence[int], boxes: Sequence[np.ndarray],
-                        scores: Sequence[float]) -> Annotations:
-    """MOTChallenge-style rows gathered frame by frame as an :class:`Annotations` table."""
-    if not len(frames):
-        return Annotations.empty()
-    return Annotations.from_columns(frames, ids, np.asarray(boxes, np.float64).reshape(-1, 4),
-                                    scores=np.asarray(scores, np.float64))
