@@ -22,7 +22,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--xi", type=float, default=0.75, help="localization threshold (default 0.75)")
     p.add_argument("--rows", help="comma-separated row numbers to run (default all)")
     p.add_argument("-j", "--jobs", type=int, default=1, help="parallel processes")
-    p.add_argument("--json", help="also write the table as JSON")
+    p.add_argument("--json", help="also write the table as JSON (- for standard output; the "
+                                  "printed table then goes to standard error)")
     p.add_argument("--force", action="store_true", help="overwrite an existing --json file")
     p.set_defaults(func=cmd_ablate)
 
@@ -31,7 +32,7 @@ def cmd_ablate(args) -> int:
     from pathlib import Path
 
     from ..config import load_config
-    from ..io.atomic import atomic_write_text, check_writable
+    from ..io.atomic import atomic_write_text, check_writable, is_stdout
     from ..studies.ablate import format_table, run_ablation, select_rows
 
     if args.json:
@@ -39,7 +40,7 @@ def cmd_ablate(args) -> int:
     rows = select_rows(args.rows)
     table = run_ablation(args.source, args.gt, load_config(args.config, args.overrides), rows,
                          xi=args.xi, jobs=args.jobs)
-    sys.stdout.write(format_table(table))
+    (sys.stderr if is_stdout(args.json) else sys.stdout).write(format_table(table))
     if args.json:
         atomic_write_text(args.json, json.dumps(table, indent=2) + "\n")
     return 0

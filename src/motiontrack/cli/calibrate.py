@@ -7,7 +7,9 @@ import csv
 import io
 import logging
 import math
+import sys
 from pathlib import Path
+from typing import TextIO
 
 import numpy as np
 
@@ -28,14 +30,16 @@ def register(subparsers) -> None:
     c.add_argument("--square", type=float, default=0.025, help="square side in metres (0.025)")
     c.add_argument("--free-aspect", action="store_true",
                    help="estimate fx and fy independently (default: fixed aspect ratio)")
-    c.add_argument("-o", "--output", type=Path, required=True, help="camera YAML to write")
+    c.add_argument("-o", "--output", type=Path, required=True,
+                   help="camera YAML to write (- for standard output)")
     c.add_argument("--force", action="store_true", help="overwrite an existing output")
     c.set_defaults(func=cmd_chessboard)
 
     s = sub.add_parser("show", help="undistorted image with the projected ground grid")
     s.add_argument("camera", type=Path, help="camera file (.xml Tsai, .yml OpenCV, .toml)")
     s.add_argument("image", type=Path, help="image, or a video (its first frame is used)")
-    s.add_argument("-o", "--output", type=Path, required=True, help="PNG/JPEG to write")
+    s.add_argument("-o", "--output", type=Path, required=True,
+                   help="PNG/JPEG to write (- for a PNG on standard output)")
     s.add_argument("--step", type=float, default=None, help="grid spacing in metres (auto)")
     s.add_argument("--extent", default=None, help="grid extent xmin,xmax,ymin,ymax in metres (auto)")
     s.add_argument("--force", action="store_true", help="overwrite an existing output")
@@ -54,7 +58,8 @@ def register(subparsers) -> None:
     ln.add_argument("--polarity", choices=("dark", "bright"), default="dark")
     ln.add_argument("--half-width", type=float, default=6.0, help="normal search distance (px)")
     ln.add_argument("--fit-center", action="store_true", help="also estimate Cx, Cy")
-    ln.add_argument("-o", "--output", type=Path, required=True, help="camera .toml or .xml to write")
+    ln.add_argument("-o", "--output", type=Path, required=True,
+                    help="camera .toml or .xml to write (- for TOML on standard output)")
     ln.add_argument("--force", action="store_true", help="overwrite an existing output")
     ln.set_defaults(func=cmd_lines)
 
@@ -64,7 +69,8 @@ def register(subparsers) -> None:
                    help="OpenCV camera YAML: fit a full pose (solvePnP) instead of a homography")
     g.add_argument("--size", default=None, help="image size WxH (informative)")
     g.add_argument("-o", "--output", type=Path, required=True,
-                   help="ground.toml (homography) or camera .yml (with --intrinsics)")
+                   help="ground.toml (homography) or camera .yml (with --intrinsics); - for "
+                        "standard output")
     g.add_argument("--force", action="store_true", help="overwrite an existing output")
     g.set_defaults(func=cmd_ground)
 
@@ -73,6 +79,22 @@ def _check_out(path: Path, force: bool) -> None:
     from ..io.atomic import check_writable
 
     check_writable([path], force)
+
+
+def _messages(args: argparse.Namespace) -> TextIO:
+    """Where a command's report goes: standard error when its result goes to standard output
+    (``-o -``)."""
+    from ..io.atomic import is_stdout
+
+    return sys.stderr if is_stdout(args.output) else sys.stdout
+
+
+def _suffix(path: Path, default: str) -> str:
+    """The output's suffix in lower case, which chooses its format; ``default`` for standard
+    output (``-``)."""
+    from ..io.atomic import is_stdout
+
+    return default if is_stdout(path) else path.suffix.lower()
 
 
 def _read_image(path: Path, gray: bool = False) -> np.ndarray:
@@ -109,14 +131,14 @@ def cmd_chessboard(args: argparse.Namespace) -> int:
     write_opencv_yaml(args.output, res.camera, res)
     K = res.camera.K
     print(f"views used: {len(res.used)} of {len(args.images)}; RMS reprojection error "
-          f"{res.rms:.4f} px")
+          f"{res.rms:.4f} px", file=_messages(args))
     print(f"fx={K[0, 0]:.3f} fy={K[1, 1]:.3f} cx={K[0, 2]:.3f} cy={K[1, 2]:.3f} "
-          f"dist={np.array2string(res.camera.dist, precision=5)}")
+          f"dist={np.array2string(res.camera.dist, precision=5)}", file=_messages(args))
     for name, e in zip(res.used, res.per_view):
-        print(f"  {name}: {e:.4f} px")
+        print(f"  {name}: {e:.4f} px", file=_messages(args))
     for name in res.skipped:
-        print(f"  {name}: board not found (skipped)")
-    print(f"wrote {args.output}")
+        print(f"  {name}: board not found (skipped)", file=_messages(args))
+    print(f"wrote {args.output}", file=_messages(args))
     return 0
 
 
@@ -196,12 +218,12 @@ def cmd_show(args: argparse.Namespace) -> int:
             raise ConfigError(f"--extent must be xmin,xmax,ymin,ymax, got {args.extent!r}")
     _check_out(args.output, args.force)
     out = grid_overlay(camera, image, args.step, extent)
-    ext = args.output.suffix.lower() or ".png"
+    ext = _suffix(args.output, ".png") or ".png"
     ok, buf = cv2.imencode(ext, out)
     if not ok:
         raise ConfigError(f"cannot encode an image as {ext!r}; use .png or .jpg")
     atomic_write_bytes(args.output, buf.tobytes())
-    print(f"wrote {args.output}")
+    print(f"wrote {args.output}", file=_messages(args))
     return 0
 
 
@@ -239,7 +261,7 @@ def cmd_lines(args: argparse.Namespace) -> int:
                                    intersect_grid, refine_line_points)
     from ..calibrate.tsai import TsaiCamera, write_tsai_toml, write_tsai_xml
 
-    if args.output.suffix.lower() not in (".toml", ".xml"):
+    if _suffix(args.output, ".toml") not in (".toml", ".xml"):
         raise ConfigError(f"output must be .toml or .xml, got {args.output}")
     _check_out(args.output, args.force)
     gray = _read_image(args.image, gray=True)
@@ -264,7 +286,8 @@ def cmd_lines(args: argparse.Namespace) -> int:
             raise InputError(f"line {name!r}: no {args.polarity} {args.mode} found near its points")
         refined.append((name, axis, value, r))
     kappa, cost = estimate_kappa1([r for *_, r in refined], geom)
-    print(f"kappa1 = {kappa:.6g} 1/mm^2 (straightness RMS {cost:.4f} px over {len(refined)} lines)")
+    print(f"kappa1 = {kappa:.6g} 1/mm^2 (straightness RMS {cost:.4f} px over {len(refined)} "
+          "lines)", file=_messages(args))
     xl = [(v, r) for _, a, v, r in refined if a == "x"]
     yl = [(v, r) for _, a, v, r in refined if a == "y"]
     if len(xl) < 2 or len(yl) < 2 or len(xl) * len(yl) < 6:
@@ -276,12 +299,13 @@ def cmd_lines(args: argparse.Namespace) -> int:
     fit = fit_coplanar_tsai(corners[ok], world[ok], geom, kappa1=kappa, fit_center=args.fit_center)
     c = fit.camera
     print(f"coplanar Tsai fit: RMS {fit.rms:.4f} px over {int(ok.sum())} intersections; "
-          f"f={c.focal:.5g} mm kappa1={c.kappa1:.6g} Cx={c.cx:.2f} Cy={c.cy:.2f}")
-    if args.output.suffix.lower() == ".xml":
+          f"f={c.focal:.5g} mm kappa1={c.kappa1:.6g} Cx={c.cx:.2f} Cy={c.cy:.2f}",
+          file=_messages(args))
+    if _suffix(args.output, ".toml") == ".xml":
         write_tsai_xml(c, args.output, name=args.image.stem)
     else:
         write_tsai_toml(c, args.output)
-    print(f"wrote {args.output}")
+    print(f"wrote {args.output}", file=_messages(args))
     return 0
 
 
@@ -301,18 +325,19 @@ def cmd_ground(args: argparse.Namespace) -> int:
     if args.intrinsics is not None:
         from ..calibrate.chessboard import read_opencv_yaml, write_opencv_yaml
 
-        if args.output.suffix.lower() not in (".yml", ".yaml"):
+        if _suffix(args.output, ".yml") not in (".yml", ".yaml"):
             raise ConfigError("with --intrinsics the output is an OpenCV camera .yml")
         cam = fit_pose(read_opencv_yaml(args.intrinsics), img, np.hstack([world, np.zeros((len(world), 1))]))
         px = cam.world_to_image(world)
         rms = float(np.sqrt(np.mean(np.sum((px - img) ** 2, axis=1))))
         write_opencv_yaml(args.output, cam)
-        print(f"ground pose from {len(img)} pairs: RMS reprojection {rms:.3f} px")
+        print(f"ground pose from {len(img)} pairs: RMS reprojection {rms:.3f} px",
+              file=_messages(args))
     else:
-        if args.output.suffix.lower() != ".toml":
+        if _suffix(args.output, ".toml") != ".toml":
             raise ConfigError("the ground homography is written as .toml")
         g = fit_homography(img, world, size=size)
         write_ground_toml(g, args.output)
-        print(f"ground homography from {len(img)} pairs: RMS {g.rms:.4f} m")
-    print(f"wrote {args.output}")
+        print(f"ground homography from {len(img)} pairs: RMS {g.rms:.4f} m", file=_messages(args))
+    print(f"wrote {args.output}", file=_messages(args))
     return 0

@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ConfigError, InputError
-from ..io.atomic import atomic_write_text, check_writable
+from ..io.atomic import atomic_write_text, check_writable, is_stdout
 from ..types import Annotations
 from ._common import frame_range
 
@@ -62,9 +62,11 @@ def register(subparsers) -> None:
                         "gt rows)")
     p.add_argument("--json", type=Path, metavar="OUT.json",
                    help="write the metrics as JSON (one flat object; a folder --pred gives "
-                        "{tracker: object})")
+                        "{tracker: object}); - writes them to standard output and the table to "
+                        "standard error")
     p.add_argument("--per-frame", type=Path, metavar="OUT.csv",
-                   help="write per-frame counts (and framewise metrics) as CSV")
+                   help="write per-frame counts (and framewise metrics) as CSV (- for standard "
+                        "output)")
     p.add_argument("--force", action="store_true", help="overwrite existing --json/--per-frame files")
     p.set_defaults(func=run)
 
@@ -183,7 +185,10 @@ def _jsonable(v):
 
 def run(args: argparse.Namespace) -> int:
     metrics = _parse_metrics(args.metrics)
-    check_writable([p for p in (args.json, args.per_frame) if p is not None], args.force)
+    outputs = [p for p in (args.json, args.per_frame) if p is not None]
+    if sum(map(is_stdout, outputs)) > 1:
+        raise ConfigError("--json and --per-frame cannot both be - (standard output)")
+    check_writable(outputs, args.force)
     if not 0.0 <= args.xi <= 1.0:
         raise ConfigError(f"--xi must be in [0, 1], got {args.xi}")
     gt = _read(Path(args.gt), "ground-truth")
@@ -202,7 +207,8 @@ def run(args: argparse.Namespace) -> int:
             raise InputError(f"{path}: {exc}") from None
         results[name] = flat
         per_rows += [{"tracker": name, **r} for r in rows]
-    sys.stdout.write(format_table(results))
+    # the table goes to standard error when standard output carries a file
+    (sys.stderr if any(map(is_stdout, outputs)) else sys.stdout).write(format_table(results))
     if args.json:
         obj = ({k: _jsonable(v) for k, v in next(iter(results.values())).items()}
                if len(results) == 1 and not Path(args.pred).is_dir()

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import sys
 from pathlib import Path
 
 from ..errors import ConfigError
@@ -30,7 +31,9 @@ def register(subparsers) -> None:
                    help="only frames A..B (inclusive), intersected with the temporal ROI")
     p.add_argument("--pred-prefix", default=None,
                    help="only prediction files whose name starts with this (e.g. bin)")
-    p.add_argument("--json", type=Path, default=None, help="write counts and metrics as JSON")
+    p.add_argument("--json", type=Path, default=None,
+                   help="write counts and metrics as JSON (- for standard output; the table then "
+                        "goes to standard error)")
     p.add_argument("--force", action="store_true", help="overwrite an existing --json file")
     p.set_defaults(func=run)
 
@@ -65,14 +68,14 @@ def format_table(result) -> str:
 
 def run(args: argparse.Namespace) -> int:
     from ..evaluate.masks import evaluate_mask_folders
-    from ..io.atomic import atomic_write_text, check_writable
+    from ..io.atomic import atomic_write_text, check_writable, is_stdout
 
     if args.json is not None:
         check_writable([args.json], args.force)
     result = evaluate_mask_folders(args.gt, args.pred, roi=args.roi,
                                    temporal_roi=args.temporal_roi, frames=_frames(args.frames),
                                    pred_prefix=args.pred_prefix)
-    print(format_table(result))
+    print(format_table(result), file=sys.stderr if is_stdout(args.json) else sys.stdout)
     if args.json is not None:
         flat = {k: (None if isinstance(v, float) and math.isnan(v) else v)
                 for k, v in result.as_dict().items()}

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -15,14 +16,16 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("gt", nargs="+", help="ground-truth file(s), any supported format (pooled)")
     p.add_argument("--image-size", required=True, metavar="WxH", help="frame size, e.g. 768x576")
     p.add_argument("--sample-std", action="store_true", help="use the sample std (N-1) instead of N")
-    p.add_argument("--json", metavar="PATH", help="also write the numbers as JSON")
+    p.add_argument("--json", metavar="PATH",
+                   help="also write the numbers as JSON (- for standard output; the table then "
+                        "goes to standard error)")
     p.add_argument("--force", action="store_true", help="overwrite an existing --json file")
     p.set_defaults(func=cmd_gt_stats)
 
 
 def cmd_gt_stats(args) -> int:
     from ..evaluate.gtstats import gt_statistics, parse_image_size
-    from ..io.atomic import atomic_write_text, check_writable
+    from ..io.atomic import atomic_write_text, check_writable, is_stdout
 
     if args.json:
         from pathlib import Path
@@ -38,7 +41,7 @@ def cmd_gt_stats(args) -> int:
             v = " ".join(f"--set {s}" for s in v)
         elif isinstance(v, float):
             v = f"{v:.6g}"
-        print(f"{k:<{width}}  {v}")
+        print(f"{k:<{width}}  {v}", file=sys.stderr if is_stdout(args.json) else sys.stdout)
     if args.json:
         atomic_write_text(args.json, json.dumps(stats, indent=2) + "\n")
     return 0

@@ -10,7 +10,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         "report", help="one self-contained HTML page of a sweep study (readable offline)",
         description="Meta data, tables, figures (embedded) and links to the clips of the study in DIR.")
     p.add_argument("study", metavar="DIR", help="a `motiontrack sweep` output folder")
-    p.add_argument("-o", "--out", help="HTML file (default: DIR/report.html)")
+    p.add_argument("-o", "--out", help="HTML file (default: DIR/report.html; - for standard "
+                                       "output, links relative to the current folder)")
     p.add_argument("--force", action="store_true", help="overwrite an existing report")
     p.set_defaults(func=cmd_report)
 
@@ -20,9 +21,11 @@ def cmd_report(args) -> int:
 
     from ..studies.report import write_report
 
-    from ..io.atomic import check_writable
+    from ..io.atomic import check_writable, is_stdout
 
     out = args.out or str(Path(args.study) / "report.html")
     check_writable([Path(out)], args.force)
-    print(f"outputs   {write_report(args.study, out)}")
+    written = write_report(args.study, out)
+    if not is_stdout(out):
+        print(f"outputs   {written}")
     return 0

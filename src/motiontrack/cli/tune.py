@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import functools
 import logging
 import sys
 
@@ -54,6 +55,26 @@ def _sequences(items, what):
     return out
 
 
+#: the files of a tuning folder (``--force`` removes them all before the search starts)
+TUNE_OUTPUTS = ("best_config.toml", "tune.json", "trials.csv", "trials.parquet", "validation.csv",
+                "validation.parquet")
+
+
+def _owning_out(cmd):
+    """``cmd(args)`` run as the only owner of the folder ``args.out``: a second tuning into it
+    is refused at once."""
+
+    @functools.wraps(cmd)
+    def owned(args) -> int:
+        from ..io.atomic import OutputLock
+
+        with OutputLock(args.out):
+            return cmd(args)
+
+    return owned
+
+
+@_owning_out
 def cmd_tune(args) -> int:
     from tqdm import tqdm
 
@@ -63,7 +84,7 @@ def cmd_tune(args) -> int:
 
     from pathlib import Path
 
-    from ..io.atomic import check_writable
+    from ..io.atomic import check_writable, remove_leftover_temps, remove_outputs
 
     check_writable([Path(args.out) / "best_config.toml", Path(args.out) / "tune.json"], args.force)
     optuna = require_optuna()
@@ -76,6 +97,10 @@ def cmd_tune(args) -> int:
     overlap = {s.source for s in train} & {s.source for s in val}
     if overlap:
         log.warning("validation sequence(s) also used for training: %s", ", ".join(sorted(overlap)))
+    outputs = [Path(args.out) / n for n in TUNE_OUTPUTS]
+    if args.force:  # the old tuning goes before the new one appears: never a mixture of both
+        remove_outputs(outputs)
+    remove_leftover_temps(outputs)
     with tqdm(total=args.trials, unit="trial", disable=None, file=sys.stderr, dynamic_ncols=True) as bar:
         res = tune(train, val, space, cfg, metric=args.metric,
                    direction="minimize" if args.minimize else "maximize", n_trials=args.trials,

@@ -20,7 +20,8 @@ def register(subparsers) -> None:
                     "(column 10 = 0). Foot points above the horizon get -1,-1,-1.")
     p.add_argument("tracks", type=Path, help="MOTChallenge CSV (results or gt)")
     p.add_argument("--camera", type=Path, required=True, help="camera file (.xml, .yml, .toml)")
-    p.add_argument("-o", "--output", type=Path, required=True, help="output CSV")
+    p.add_argument("-o", "--output", type=Path, required=True,
+                   help="output CSV (- for standard output)")
     p.add_argument("--force", action="store_true", help="overwrite an existing output")
     p.set_defaults(func=cmd_world)
 
@@ -28,7 +29,7 @@ def register(subparsers) -> None:
 def cmd_world(args: argparse.Namespace) -> int:
     from ..calibrate.camera import load_camera
     from ..calibrate.measure import world_positions
-    from ..io.atomic import check_writable
+    from ..io.atomic import check_writable, is_stdout
     from ..io.mot import read_mot, write_mot
 
     camera = load_camera(args.camera)
@@ -44,5 +45,6 @@ def cmd_world(args: argparse.Namespace) -> int:
                     len(ann))
     out = replace(ann, world=world)
     write_mot(out, args.output, kind=str(ann.meta.get("kind", "results")))
-    print(f"wrote {args.output} ({len(ann)} boxes)")
+    if not is_stdout(args.output):
+        print(f"wrote {args.output} ({len(ann)} boxes)")
     return 0

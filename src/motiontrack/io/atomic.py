@@ -1,17 +1,82 @@
-"""Atomic output files: write to a temporary name in the same folder, then rename.
+"""Output files: written under a temporary name in the same folder, then renamed; the folder
+of a run owned by one run at a time.
 
-A crash or interrupt never leaves a half-written file under the final name.
+* A crash or interrupt never leaves a half-written file under the final name; the temporary
+  files a killed process leaves are removed by the next run into the folder
+  (:func:`remove_leftover_temps`).
+* Only regular files are replaced (:func:`check_writable`): never a device, a pipe, a folder or
+  a symbolic link. ``-`` (:data:`STDOUT`) is standard output wherever a file name is expected.
+* A full device raises :class:`DiskFullError` naming the file; the temporary file is removed,
+  and the unwritten data of an :class:`AtomicFile` is kept, so that it can still be committed
+  once other outputs have made room.
+* :class:`OutputLock` makes a run the only owner of its output folder.
 """
 
 from __future__ import annotations
 
 import contextlib
+import errno
+import glob
 import os
+import re
+import shutil
+import stat
+import sys
 import tempfile
 from pathlib import Path
-from typing import IO, Iterator
+from typing import IO, Iterable, Iterator
 
-from ..errors import InputError
+from ..errors import InputError, MotionTrackError
+
+try:
+    import fcntl
+except ImportError:  # pragma: no cover - Windows: folders are not locked
+    fcntl = None
+
+#: the name that means standard output wherever an output file is named
+STDOUT = "-"
+
+#: bytes an :class:`AtomicFile` collects before writing them out
+BUFFER_SIZE = 1 << 16
+
+#: errno values of a device without room: no space left, quota exceeded
+_FULL = {errno.ENOSPC, getattr(errno, "EDQUOT", errno.ENOSPC)}
+
+
+class DiskFullError(MotionTrackError):
+    """The device of an output ran out of space (or quota) while ``path`` was written (exit
+    code 2, as for any file the machine cannot write)."""
+
+    def __init__(self, path: str | Path, reason: str) -> None:
+        self.path = Path(path)
+        self.reason = reason
+        super().__init__(f"disk full writing {path}: {reason}")
+
+
+def is_disk_full(exc: BaseException) -> bool:
+    """Whether ``exc`` says that the device is full (ENOSPC, EDQUOT)."""
+    return isinstance(exc, OSError) and exc.errno in _FULL
+
+
+def output_error(path: str | Path, exc: OSError) -> OSError | DiskFullError:
+    """The error to raise for ``exc`` met while writing ``path``: a :class:`DiskFullError` when
+    the device is full, else ``exc`` itself."""
+    return DiskFullError(path, exc.strerror or str(exc)) if is_disk_full(exc) else exc
+
+
+def free_bytes(folder: str | Path) -> int:
+    """Bytes this process may still write on the device of ``folder`` (the blocks reserved for
+    root count only for root)."""
+    if not hasattr(os, "statvfs"):  # pragma: no cover - Windows
+        return shutil.disk_usage(folder).free
+    st = os.statvfs(folder)
+    root = hasattr(os, "geteuid") and os.geteuid() == 0
+    return (st.f_bfree if root else st.f_bavail) * st.f_frsize
+
+
+def is_stdout(path: str | Path | None) -> bool:
+    """Whether an output name means standard output (``-``)."""
+    return path is not None and str(path) == STDOUT
 
 
 def _current_umask() -> int:
@@ -25,62 +90,109 @@ def _current_umask() -> int:
 FILE_MODE = 0o666 & ~_current_umask()
 
 
-def _mkstemp(path: Path, prefix: str, suffix: str) -> Path:
-    fd, tmp = tempfile.mkstemp(prefix=prefix, suffix=suffix, dir=path.parent)
+def _mkstemp(path: Path, prefix: str, suffix: str) -> tuple[int, Path]:
+    """An open descriptor and the name of a new temporary file beside ``path`` (in the system's
+    temporary folder for standard output)."""
+    folder = None if is_stdout(path) else path.parent
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=prefix, suffix=suffix, dir=folder)
+    except OSError as exc:
+        raise output_error(path, exc) from None
     try:
         os.fchmod(fd, FILE_MODE)
     except (AttributeError, OSError):  # pragma: no cover - no fchmod (Windows)
         pass
-    finally:
-        os.close(fd)
-    return Path(tmp)
+    return fd, Path(tmp)
 
 
-def _tmp_path(path: Path) -> Path:
-    return _mkstemp(path, f".{path.name}.", ".part")
+#: the temporary names of :class:`AtomicFile` and :func:`temp_path_for`: ``.NAME.XXXXXXXX.part``
+#: and ``.STEM.XXXXXXXX.part.SUFFIX`` (eight characters of :func:`tempfile.mkstemp`)
+_TEMP_NAME = re.compile(r"\.(?P<name>.+)\.[a-z0-9_]{8}\.part(?P<suffix>\.[^.]*)?")
 
 
 class AtomicFile:
     """A file written under a temporary name beside ``path`` and renamed onto it by
-    :meth:`commit`, or removed by :meth:`discard`: for outputs written across many calls."""
+    :meth:`commit`, or removed by :meth:`discard`: for outputs written across many calls.
+
+    Data is collected in memory and written in blocks of :data:`BUFFER_SIZE` bytes. When the
+    device is full, :meth:`write` raises :class:`DiskFullError` and keeps what it could not
+    write, so a later :meth:`commit` (after other files made room) still gives the whole file.
+    ``mode`` is ``"w"`` (text, written with ``encoding``, newlines as given) or ``"wb"``.
+    """
 
     def __init__(self, path: str | Path, mode: str = "w", encoding: str | None = "utf-8") -> None:
+        if mode not in ("w", "wb"):
+            raise ValueError(f"an AtomicFile is written from the start ('w' or 'wb'), got {mode!r}")
         self.path = Path(path)
+        self.encoding = None if mode == "wb" else (encoding or "utf-8")
         self.path.parent.mkdir(parents=True, exist_ok=True)
-        self.tmp = _tmp_path(self.path)
-        try:
-            self.fh: IO = open(self.tmp, mode, encoding=None if "b" in mode else encoding)
-        except BaseException:
-            self.tmp.unlink(missing_ok=True)
-            raise
+        self._fd: int | None
+        self._fd, self.tmp = _mkstemp(self.path, f".{self.path.name}.", ".part")
+        self._pending = bytearray()
 
     def write(self, data) -> None:
-        self.fh.write(data)
+        self._pending += data.encode(self.encoding) if self.encoding else data
+        if len(self._pending) >= BUFFER_SIZE:
+            self._flush()
+
+    def _flush(self) -> None:
+        """Write the collected bytes; on an error the ones not written stay collected."""
+        view = memoryview(self._pending)
+        done = 0
+        try:
+            while done < len(view):
+                done += os.write(self._fd, view[done:])
+        except OSError as exc:
+            raise output_error(self.path, exc) from None
+        finally:
+            view.release()
+            del self._pending[:done]
 
     def commit(self) -> None:
-        """Flush to disk and move the file to its final name."""
+        """Write what is left, flush to disk and move the file to its final name."""
         try:
-            self.fh.flush()
-            os.fsync(self.fh.fileno())
-            self.fh.close()
-            os.replace(self.tmp, self.path)
+            self._flush()
+            try:
+                os.fsync(self._fd)
+                os.close(self._fd)
+                self._fd = None
+                os.replace(self.tmp, self.path)
+            except OSError as exc:
+                raise output_error(self.path, exc) from None
         except BaseException:
             self.discard()
             raise
 
     def discard(self) -> None:
-        """Close and remove the temporary file; the final name is left as it was."""
-        self.fh.close()
-        with contextlib.suppress(FileNotFoundError):
+        """Close and remove the temporary file; the final name is left as it was. Never fails:
+        it is called while another error is on its way."""
+        fd, self._fd = self._fd, None
+        self._pending = bytearray()
+        if fd is not None:
+            with contextlib.suppress(OSError):
+                os.close(fd)
+        with contextlib.suppress(OSError):
             self.tmp.unlink()
 
 
 @contextlib.contextmanager
+def _stdout(binary: bool) -> Iterator[IO]:
+    stream = sys.stdout.buffer if binary else sys.stdout
+    yield stream
+    stream.flush()
+
+
+@contextlib.contextmanager
 def atomic_open(path: str | Path, mode: str = "w", encoding: str | None = "utf-8") -> Iterator[IO]:
-    """Open a temporary file next to ``path``; rename onto ``path`` when the block succeeds."""
+    """A file to ``write`` to under a temporary name next to ``path``, renamed onto ``path``
+    when the block succeeds (removed when it fails); ``-`` writes to standard output."""
+    if is_stdout(path):
+        with _stdout("b" in mode) as stream:
+            yield stream
+        return
     f = AtomicFile(path, mode, encoding)
     try:
-        yield f.fh
+        yield f  # type: ignore[misc]  (it has the ``write`` of a file)
     except BaseException:
         f.discard()
         raise
@@ -99,20 +211,195 @@ def atomic_write_bytes(path: str | Path, data: bytes) -> None:
 
 def temp_path_for(path: str | Path) -> Path:
     """A fresh temporary path beside ``path`` with the same suffix (for writers such as
-    ``cv2.VideoWriter`` that need a real file name); rename it with :func:`commit_temp`."""
+    ``cv2.VideoWriter`` that need a real file name); rename it with :func:`commit_temp`. For
+    standard output (``-``) the temporary file is in the system's temporary folder."""
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    return _mkstemp(path, f".{path.stem}.", f".part{path.suffix}")
+    if not is_stdout(path):
+        path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = _mkstemp(path, f".{path.stem}.", f".part{path.suffix}")
+    os.close(fd)
+    return tmp
 
 
 def commit_temp(tmp: str | Path, path: str | Path) -> None:
-    os.replace(tmp, path)
+    """Move a finished temporary file to its final name (or copy it to standard output and
+    remove it)."""
+    if not is_stdout(path):
+        os.replace(tmp, path)
+        return
+    try:
+        with open(tmp, "rb") as fh, _stdout(binary=True) as out:
+            shutil.copyfileobj(fh, out)
+    finally:
+        Path(tmp).unlink(missing_ok=True)
 
 
-def check_writable(paths: list[Path], force: bool) -> None:
-    """Refuse to overwrite existing outputs unless ``force``."""
-    existing = [str(p) for p in paths if p.exists()]
+def _kind(path: Path) -> str | None:
+    """What is at ``path`` (without following a symbolic link), or None when nothing is."""
+    try:
+        mode = os.lstat(path).st_mode
+    except (FileNotFoundError, NotADirectoryError):
+        return None
+    for test, kind in ((stat.S_ISREG, "a regular file"), (stat.S_ISDIR, "a folder"),
+                       (stat.S_ISLNK, "a symbolic link"), (stat.S_ISCHR, "a character device"),
+                       (stat.S_ISBLK, "a block device"), (stat.S_ISFIFO, "a named pipe"),
+                       (stat.S_ISSOCK, "a socket")):
+        if test(mode):
+            return kind
+    return "a special file"  # pragma: no cover
+
+
+def check_writable(paths: Iterable[str | Path], force: bool) -> None:
+    """Refuse to overwrite existing outputs unless ``force``, and refuse always to replace
+    anything but a regular file (a device, a named pipe, a folder, a symbolic link: replacing
+    one would turn ``/dev/full`` into a file). ``-`` (standard output) is always writable."""
+    existing = []
+    for p in paths:
+        if is_stdout(p):
+            continue
+        kind = _kind(Path(p))
+        if kind is None:
+            continue
+        if kind != "a regular file":
+            hint = "" if kind == "a folder" else "; use - for standard output"
+            raise InputError(f"output {p} is {kind}, not a regular file: only regular files are "
+                             f"replaced{hint}")
+        existing.append(str(p))
     if existing and not force:
         raise InputError(
             f"output exists: {', '.join(existing)} (use --force to overwrite)"
         )
+
+
+def remove_outputs(paths: Iterable[str | Path], folders: Iterable[str | Path] = ()) -> None:
+    """Remove old outputs before a forced run writes new ones, so that old and new never mix:
+    the regular files among ``paths`` and the whole of each of ``folders`` (a symbolic link is
+    removed, not followed). Anything else at one of ``paths`` is refused as in
+    :func:`check_writable`."""
+    paths = [Path(p) for p in paths if not is_stdout(p)]
+    check_writable(paths, force=True)
+    for p in paths:
+        with contextlib.suppress(FileNotFoundError):
+            p.unlink()
+    for d in map(Path, folders):
+        kind = _kind(d)
+        if kind == "a folder":
+            shutil.rmtree(d)
+        elif kind is not None:
+            d.unlink()
+
+
+def remove_leftover_temps(paths: Iterable[str | Path]) -> list[Path]:
+    """Remove the temporary files of the outputs ``paths`` that a killed run left behind (a
+    process killed by SIGKILL cannot remove them); returns them.
+
+    Only the names this module gives the temporary files of these outputs are touched
+    (``.NAME.XXXXXXXX.part`` and ``.STEM.XXXXXXXX.part.SUFFIX``). Call it while holding the
+    folder's :class:`OutputLock`: no other run is writing them then.
+    """
+    removed = []
+    for p in map(Path, paths):
+        if is_stdout(p) or not p.parent.is_dir():
+            continue
+        for prefix in {p.name, p.stem}:
+            for q in p.parent.glob(glob.escape(f".{prefix}.") + "*.part*"):
+                m = _TEMP_NAME.fullmatch(q.name)
+                if (m and (m["name"], m["suffix"] or "") in ((p.name, ""), (p.stem, p.suffix))
+                        and _kind(q) == "a regular file"):
+                    q.unlink(missing_ok=True)
+                    removed.append(q)
+    return removed
+
+
+class OutputLock:
+    """One run at a time in an output folder: an exclusive ``fcntl.flock`` on
+    ``FOLDER/.motiontrack.lock``, taken at once or refused with :class:`InputError` naming the
+    folder (and the process that holds it). The folder is created when missing.
+
+    :meth:`release` (also on leaving a ``with`` block, or when the lock is garbage-collected)
+    removes the file, frees the lock and removes the folder again when the lock created it and
+    nothing was written; the system frees the lock of a process that dies, so a killed run never
+    blocks the next one.
+    """
+
+    NAME = ".motiontrack.lock"
+
+    def __init__(self, folder: str | Path) -> None:
+        self.folder = Path(folder)
+        self.path = self.folder / self.NAME
+        self._fd: int | None = None
+        self._created = not self.folder.exists()
+        try:
+            self.folder.mkdir(parents=True, exist_ok=True)
+        except (FileExistsError, NotADirectoryError):
+            raise InputError(f"output folder {self.folder} is not a folder") from None
+        except OSError as exc:
+            raise InputError(f"cannot create output folder {self.folder}: "
+                             f"{exc.strerror or exc}") from None
+        if fcntl is not None:
+            self._acquire()
+
+    def _acquire(self) -> None:
+        for _ in range(100):  # the holder may remove the file between our open and our lock
+            try:
+                fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
+            except FileNotFoundError:  # another run's lock removed the empty folder it made
+                self.folder.mkdir(parents=True, exist_ok=True)
+                continue
+            except OSError as exc:
+                raise InputError(f"cannot write to output folder {self.folder}: "
+                                 f"{exc.strerror or exc}") from None
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except BlockingIOError:
+                holder = _read_pid(fd)
+                os.close(fd)
+                raise InputError(
+                    f"output folder {self.folder} is in use by another motiontrack run"
+                    f"{f' (process {holder})' if holder else ''}; wait for it to end or choose "
+                    "another folder") from None
+            except OSError:  # pragma: no cover - a file system without locks: run unlocked
+                os.close(fd)
+                return
+            try:
+                same = os.path.samestat(os.fstat(fd), os.stat(self.path))
+            except FileNotFoundError:
+                same = False
+            if same:
+                self._fd = fd
+                with contextlib.suppress(OSError):  # the pid is informative only (a full disk)
+                    os.ftruncate(fd, 0)
+                    os.write(fd, f"{os.getpid()}\n".encode())
+                return
+            os.close(fd)
+        raise InputError(f"cannot lock output folder {self.folder}")  # pragma: no cover
+
+    def release(self) -> None:
+        """Remove the lock file and free the lock (harmless when already released)."""
+        fd, self._fd = self._fd, None
+        if fd is None:
+            return
+        with contextlib.suppress(OSError):  # removed while held: the next run locks a new file
+            os.unlink(self.path)
+        os.close(fd)
+        if self._created:
+            with contextlib.suppress(OSError):  # only when empty
+                self.folder.rmdir()
+
+    def __enter__(self) -> "OutputLock":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.release()
+
+    def __del__(self) -> None:
+        with contextlib.suppress(Exception):
+            self.release()
+
+
+def _read_pid(fd: int) -> str:
+    with contextlib.suppress(OSError, ValueError):
+        text = os.pread(fd, 32, 0).decode("ascii").strip()
+        if text.isdigit():
+            return text
+    return ""

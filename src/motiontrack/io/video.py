@@ -1,7 +1,10 @@
 """Video sinks: browser-playable WebM (VP8/VP9) by default, other codecs on request.
 
 Files are written under a temporary name and renamed on :meth:`VideoSink.close`, so an interrupted
-run leaves either a complete, playable video of everything processed so far or nothing.
+run leaves either a complete, playable video of everything processed so far or nothing. A video
+never fills its device: it stops with :class:`~motiontrack.io.atomic.DiskFullError` when less
+than :data:`DISK_RESERVE` is left (``cv2.VideoWriter`` would go on silently writing a broken
+file), so the small outputs of the run still fit.
 
 WebM is encoded with PyAV (the ``video`` extra, ``pip install motiontrack[video]``) when it is
 installed: it lets libvpx run in its real-time mode (``deadline=realtime``, ``cpu-used=8``,
@@ -21,7 +24,8 @@ import cv2
 import numpy as np
 
 from ..errors import InputError
-from .atomic import commit_temp, temp_path_for
+from .atomic import (DiskFullError, commit_temp, free_bytes, is_disk_full, output_error,
+                     temp_path_for)
 
 log = logging.getLogger(__name__)
 
@@ -41,6 +45,9 @@ PYAV_ENCODERS = {"vp80": "libvpx", "vp90": "libvpx-vp9"}
 #: libvpx settings: real-time speed, constant quality (crf, lower = better; the bit rate is a cap)
 PYAV_OPTIONS = {"deadline": "realtime", "cpu-used": "8", "crf": "10"}
 PYAV_MAX_BITRATE = 20_000_000
+
+#: bytes a video leaves free on its device for the other outputs of the run (tracks, summary)
+DISK_RESERVE = 1 << 20
 
 
 def extension_for(codec: str) -> str:
@@ -126,8 +133,20 @@ class VideoSink:
             image = cv2.cvtColor(image, cv2.COLOR_GRAY2BGR)
         if self._writer is None:
             self._writer = self._open(image.shape[1], image.shape[0])
-        self._writer.write(image)
+        self._check_space()
+        try:
+            self._writer.write(image)
+        except OSError as exc:  # PyAV reports a full device; cv2.VideoWriter reports nothing
+            raise output_error(self.path, exc) from None
         self.frames += 1
+
+    def _check_space(self) -> None:
+        """Stop before the device is full: less than :data:`DISK_RESERVE` is left."""
+        free = free_bytes(self._tmp.parent)
+        if free < DISK_RESERVE:
+            raise DiskFullError(self.path, f"{free // 1024} KiB left on the device, less than the "
+                                           f"{DISK_RESERVE // 1024} KiB a video leaves for the other "
+                                           "outputs")
 
     def _open(self, w: int, h: int) -> "cv2.VideoWriter | _PyAVWriter":
         self._tmp = temp_path_for(self.path)
@@ -136,6 +155,8 @@ class VideoSink:
                 return _PyAVWriter(self._tmp, self.codec, self.fps, (w, h))
             except Exception as exc:
                 self._tmp.unlink(missing_ok=True)
+                if is_disk_full(exc):
+                    raise output_error(self.path, exc) from None
                 raise InputError(f"cannot encode {self.codec} video to {self.path} with PyAV: "
                                  f"{exc}") from None
         fourcc = cv2.VideoWriter_fourcc(*CODECS[self.codec][0])
@@ -147,20 +168,31 @@ class VideoSink:
         return writer
 
     def close(self) -> None:
-        """Finish the file and move it to its final name (nothing is written for 0 frames)."""
+        """Finish the file and move it to its final name (nothing is written for 0 frames);
+        when that fails, the temporary file is removed."""
         if self._writer is not None:
-            self._writer.release()
-            self._writer = None
-            if self._tmp is not None:
-                commit_temp(self._tmp, self.path)
-                self._tmp = None
+            writer, self._writer = self._writer, None
+            try:
+                writer.release()
+                if self._tmp is not None:
+                    commit_temp(self._tmp, self.path)
+                    self._tmp = None
+            except OSError as exc:
+                self.discard()
+                raise output_error(self.path, exc) from None
+            except BaseException:
+                self.discard()
+                raise
 
     def discard(self) -> None:
-        """Stop writing and remove the temporary file (nothing appears under :attr:`path`)."""
+        """Stop writing and remove the temporary file (nothing appears under :attr:`path`).
+        Never fails: it is called while another error is on its way."""
         writer, self._writer = self._writer, None
         try:
             if writer is not None:
                 writer.release()
+        except Exception as exc:  # e.g. the encoder cannot flush onto a full device
+            log.debug("discarding %s: %s", self.path, exc)
         finally:
             if self._tmp is not None:
                 self._tmp.unlink(missing_ok=True)

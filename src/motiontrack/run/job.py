@@ -14,10 +14,19 @@ writer, and finalises the outputs whatever ends the run:
   a source that fails for good (:class:`~motiontrack.errors.SourceError`): the outputs hold every
   frame processed so far, ``summary.json`` records the status, then the interruption or the error
   is raised again (:class:`RunOutcome`);
+* the device fills (:class:`~motiontrack.io.atomic.DiskFullError`): the large outputs (videos,
+  stills; :attr:`Writer.large`) are removed, the small ones (tracks, summary) hold every frame
+  processed so far when they fit, and the error is raised; when they do not fit, nothing is kept;
 * any other error (a bug, an encoder that cannot write): every output of this run is removed,
   temporary files included, so that nothing half-made blocks the retry, and the error is raised.
 
 ``config.toml`` and ``summary.json`` are written last, after every other output.
+
+A job that writes ``summary.json`` owns its output folder while it exists: a lock
+(:class:`~motiontrack.io.atomic.OutputLock`) refuses a second run into the folder at once, the
+temporary files a killed run left there are removed, and with ``force`` the old outputs (the
+files this job writes and those the old ``summary.json`` lists) are removed before the run
+starts, so that the folder never holds a mixture of two runs.
 """
 
 from __future__ import annotations
@@ -32,7 +41,8 @@ from typing import Any, Callable, Iterator, Protocol, Sequence
 import numpy as np
 
 from ..errors import SourceError
-from ..io.atomic import atomic_write_text, check_writable
+from ..io.atomic import (DiskFullError, OutputLock, atomic_write_text, check_writable,
+                         remove_leftover_temps, remove_outputs)
 from ..io.sources import Source, SourceInfo
 from ..types import FrameResult
 
@@ -44,9 +54,10 @@ __all__ = ["Job", "JobContext", "JobSummary", "Processor", "RunOutcome", "Writer
 class RunOutcome:
     """How a processing loop ended, so its outputs can be finalised before the error surfaces.
 
-    ``with RunOutcome() as outcome:`` around the loop: an interruption (``KeyboardInterrupt``) or a
-    source that failed for good (:class:`SourceError`) ends the block instead of escaping it, and
-    is recorded in :attr:`status`, :attr:`interrupted` and :attr:`error`. After the outputs are
+    ``with RunOutcome() as outcome:`` around the loop: an interruption (``KeyboardInterrupt``), a
+    source that failed for good (:class:`SourceError`) or a full device (:class:`DiskFullError`,
+    :attr:`disk_full`) ends the block instead of escaping it, and is recorded in :attr:`status`,
+    :attr:`interrupted` and :attr:`error`. After the outputs are
     written, :meth:`reraise` lets it escape, so the command still exits with the right code.
     Other exceptions pass through untouched.
     """
@@ -54,7 +65,7 @@ class RunOutcome:
     def __init__(self) -> None:
         self.status = "complete"
         self.interrupted = False
-        self.error: SourceError | None = None
+        self.error: SourceError | DiskFullError | None = None
 
     def __enter__(self) -> "RunOutcome":
         return self
@@ -68,7 +79,14 @@ class RunOutcome:
         if issubclass(typ, SourceError):
             self.error, self.status = exc, f"source failed: {exc}"
             return True
+        if issubclass(typ, DiskFullError):
+            self.error, self.status = exc, str(exc)
+            return True
         return False
+
+    @property
+    def disk_full(self) -> bool:
+        return isinstance(self.error, DiskFullError)
 
     @property
     def failed(self) -> bool:
@@ -171,15 +189,20 @@ class Writer:
     implement the hooks they need; every hook has a default that does nothing."""
 
     paths: dict[str, Path]
+    #: a large output (a video, stills): the first to go when the device fills, to make room
+    #: for the small ones
+    large: bool = False
 
     def start(self, ctx: JobContext) -> None:
         """Called once before the first frame."""
 
     def write(self, result: FrameResult) -> None:
-        """Called for every frame."""
+        """Called for every frame. :class:`DiskFullError` says the device is full; a small
+        writer then keeps what it could not write, to write it when it is closed with ``keep``."""
 
     def close(self, keep: bool) -> None:
-        """Finish the files: commit them (``keep``) or remove them and their temporary files."""
+        """Finish the files: commit them (``keep``) or remove them and their temporary files
+        (without ``keep`` it must not fail: another error is on its way)."""
 
     def finish(self, summary: JobSummary) -> None:
         """Called after every writer is closed with ``keep``, in writer order: post-processing
@@ -194,16 +217,18 @@ class Job:
     source : an open :class:`Source` (the job closes it).
     processor : the per-frame work.
     writers : the outputs, in the order they receive frames and finish.
-    out_dir : the output folder (created when the run starts).
-    force : overwrite existing outputs.
+    out_dir : the output folder (created when the run starts, or at once when the job owns it).
+    force : replace existing outputs (they are removed when the run starts).
     config : written to ``config.toml`` when the run ends (``(writer function, object)``), or None.
     summary : write ``summary.json`` (the summary is returned by :meth:`run` either way).
+    own_folder : hold the folder's lock from now until the run ends (default: with ``summary``;
+        a job without it, such as ``overlay``, writes files into a folder it shares).
     """
 
     def __init__(self, source: Source, processor: Processor, writers: Sequence[Writer],
                  out_dir: str | Path, *, force: bool = False,
                  config: tuple[Callable[[Any, Path], None], Any] | None = None,
-                 summary: bool = True) -> None:
+                 summary: bool = True, own_folder: bool | None = None) -> None:
         self.source = source
         self.processor = processor
         self.writers = list(writers)
@@ -216,7 +241,14 @@ class Job:
             self.paths["summary"] = self.out / "summary.json"
         if config is not None:
             self.paths["config"] = self.out / "config.toml"
-        check_writable(list(self.paths.values()), force)
+        self.force = force
+        own = summary if own_folder is None else own_folder
+        self._lock = OutputLock(self.out) if own else None
+        try:
+            check_writable(list(self.paths.values()), force)
+        except BaseException:
+            self._release()
+            raise
 
     @property
     def info(self) -> SourceInfo:
@@ -239,20 +271,39 @@ class Job:
                              source_fps=info.fps)
         t0 = time.perf_counter()
         try:
+            self._clear_folder()
             for w in self.writers:
                 w.start(ctx)
             with RunOutcome() as outcome:
                 self._loop(ctx, summary, progress, should_stop)
         except BaseException:
-            self._close(keep=False)
+            self._fail()
             raise
         finally:
             summary.seconds = time.perf_counter() - t0
             self.source.close()
+        try:
+            self._write_results(summary, outcome)
+        except BaseException:
+            self._fail()
+            raise
+        outcome.reraise()  # everything is written; an interrupt or a failed source still surfaces
+        return summary
+
+    def _write_results(self, summary: JobSummary, outcome: RunOutcome) -> None:
+        """Commit the outputs, post-process them, write ``config.toml`` and ``summary.json``."""
+        if not outcome.disk_full:
+            try:
+                self._close(keep=True, large_only=True)
+            except DiskFullError as exc:  # a video could not be finished
+                outcome.error, outcome.status = exc, str(exc)
+        if outcome.disk_full:  # the large outputs go first, to make room for the small ones
+            self._remove_large(summary.frames)
         self._close(keep=True)
         if outcome.status != "complete":
-            log.warning("%s after %d frames; writing what was processed", outcome.status,
-                        summary.frames)
+            if not outcome.disk_full:
+                log.warning("%s after %d frames; writing what was processed", outcome.status,
+                            summary.frames)
             summary.status = outcome.status
         summary.interrupted = outcome.interrupted
         summary.truncated = summary.truncated or self.source.truncated or outcome.failed
@@ -267,8 +318,7 @@ class Job:
         if "summary" in self.paths:
             atomic_write_text(self.paths["summary"],
                               json.dumps(summary.as_dict(), indent=2) + "\n")
-        outcome.reraise()  # everything is written; an interrupt or a failed source still surfaces
-        return summary
+        self._release()
 
     def _loop(self, ctx: JobContext, summary: JobSummary,
               progress: Callable[[int], None] | None,
@@ -276,11 +326,12 @@ class Job:
         results = self.processor.results(self.source)
         try:
             for res in results:
-                for w in self.writers:
-                    w.write(res)
+                full = self._write(res)
                 summary.frames += 1
                 if progress is not None:
                     progress(1)
+                if full is not None:
+                    raise full   # the frame is in every output that is kept
                 if ctx.stop_status is not None:
                     summary.status = ctx.stop_status
                     return
@@ -291,12 +342,76 @@ class Job:
             if close is not None:
                 close()
 
-    def _close(self, keep: bool) -> None:
+    def _write(self, result: FrameResult) -> DiskFullError | None:
+        """Give one frame to every writer. When the device is full, the frame still goes to
+        every small writer (the large ones are removed when the run ends) and the error is
+        returned."""
+        full = None
+        for w in self.writers:
+            if full is not None and w.large:
+                continue
+            try:
+                w.write(result)
+            except DiskFullError as exc:
+                full = full or exc
+        return full
+
+    def _close(self, keep: bool, large_only: bool = False) -> None:
         errors = []
         for w in self.writers:
+            if large_only and not w.large:
+                continue
             try:
                 w.close(keep)
             except Exception as exc:   # close the others all the same
                 errors.append(exc)
-        if errors:
+        if errors and keep:
             raise errors[0]
+        for exc in errors:           # removing: the error on its way matters, not this one
+            log.debug("removing an output: %s", exc)
+
+    def _remove_large(self, frames: int) -> None:
+        """Remove the large outputs (temporary or committed) to make room for the small ones."""
+        self._close(keep=False, large_only=True)
+        removed = []
+        for w in self.writers:
+            for p in (w.paths.values() if w.large else ()):
+                if p.is_file() and not p.is_symlink():
+                    p.unlink(missing_ok=True)
+                removed.append(p.name)
+        log.warning("the device is full after %d frames: no %s; writing the other outputs",
+                    frames, ", ".join(removed) or "large outputs")
+
+    def _clear_folder(self) -> None:
+        """Before the first output appears: remove the temporary files a killed run left and,
+        with ``force``, the old outputs (of this job, and those the old summary lists)."""
+        old = self._old_outputs() if self.force else []
+        if self._lock is not None:  # no other run writes into the folder now
+            remove_leftover_temps([*self.paths.values(), *old])
+        if self.force:
+            remove_outputs([*self.paths.values(), *old])
+
+    def _old_outputs(self) -> list[Path]:
+        """The outputs the ``summary.json`` in the folder lists, by name in this folder (a run
+        with other settings may have written files this one does not)."""
+        path = self.paths.get("summary")
+        try:
+            listed = json.loads(path.read_text(encoding="utf-8"))["outputs"].values()
+        except (AttributeError, OSError, ValueError, KeyError, TypeError):
+            return []
+        names = {Path(str(v)).name for v in listed}
+        paths = [self.out / n for n in sorted(names) if n and not n.startswith(".")]
+        return [p for p in paths if p.is_file() and not p.is_symlink()]
+
+    def _fail(self) -> None:
+        """The run failed: remove every output of this run (none of them existed before it, or
+        ``force`` removed the old ones), temporary files included, and free the folder."""
+        self._close(keep=False)
+        for p in self.paths.values():
+            if p.is_file() and not p.is_symlink():
+                p.unlink(missing_ok=True)
+        self._release()
+
+    def _release(self) -> None:
+        if self._lock is not None:
+            self._lock.release()

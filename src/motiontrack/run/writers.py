@@ -171,6 +171,8 @@ class VideoWriter(Writer):
     (:meth:`~motiontrack.run.job.Processor.annotate`), or ``picture(result)`` (frames where it
     gives None are skipped)."""
 
+    large = True
+
     def __init__(self, key: str, path: Path, codec: str,
                  picture: Callable[[FrameResult], np.ndarray | None] | None = None) -> None:
         self.paths = {key: Path(path)}
@@ -205,6 +207,8 @@ class IntermediateWriter(Writer):
     """Intermediate movies (``--save background,difference,motion,annotated``): one video per
     stream of :mod:`motiontrack.render.streams`, named after it."""
 
+    large = True
+
     def __init__(self, out: Path, streams: Iterable[str] | str, codec: str) -> None:
         self.streams = parse_streams(streams)
         self.paths = {s: Path(out) / f"{s}{extension_for(codec)}" for s in self.streams}
@@ -223,15 +227,22 @@ class IntermediateWriter(Writer):
                 sink.write(img)
 
     def close(self, keep: bool) -> None:
-        for sink in self._sinks.values():
-            sink.close() if keep else sink.discard()
-        self._sinks = {}
+        sinks, self._sinks = list(self._sinks.values()), {}
+        try:
+            for i, sink in enumerate(sinks):
+                sink.close() if keep else sink.discard()
+        except BaseException:  # one cannot be finished: the others go too
+            for sink in sinks[i:]:
+                sink.discard()
+            raise
 
 
 class StillsWriter(Writer):
     """PNG stills of the annotated picture at chosen 1-based frame numbers, as
     ``folder/frame_%06d.png`` (each written atomically when its frame comes); frames the run
     never reaches are named in a warning when it ends."""
+
+    large = True
 
     def __init__(self, folder: Path, frames: Iterable[int]) -> None:
         self.folder = Path(folder)

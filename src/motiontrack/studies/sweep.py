@@ -25,6 +25,7 @@ versions); :func:`load_study` + :func:`run_sweep` reproduce it (``motiontrack sw
 from __future__ import annotations
 
 import csv
+import functools
 import io
 import itertools
 import json
@@ -50,7 +51,8 @@ from ..errors import ConfigError, InputError
 from ..evaluate.framewise import evaluate_framewise
 from ..evaluate.mot import evaluate_tracking
 from ..io.annotations import read_annotations
-from ..io.atomic import atomic_write_bytes, atomic_write_text, check_writable
+from ..io.atomic import (OutputLock, atomic_write_bytes, atomic_write_text, check_writable,
+                         remove_leftover_temps, remove_outputs)
 from ..io.mot import read_mot
 from ..io.tomlfile import read_toml
 from ..pipeline import completes_tracks, fill_gap_frames, open_configured_source
@@ -629,6 +631,25 @@ class SweepResult:
     outputs: dict[str, list[str]]
 
 
+#: the files of a study folder besides runs/ and figures/ (``--force`` removes them first)
+STUDY_OUTPUTS = (STUDY_FILE, "config.toml", TABLE_FILE, Path(TABLE_FILE).stem + ".parquet",
+                 SUMMARY_FILE, Path(SUMMARY_FILE).stem + ".parquet", "summary.json")
+
+
+def _owning_folder(sweep: Callable[..., SweepResult]) -> Callable[..., SweepResult]:
+    """``sweep(study, out_dir, ...)`` run as the only owner of ``out_dir``
+    (:class:`~motiontrack.io.atomic.OutputLock`): a second sweep into the folder is refused at
+    once instead of mixing its runs with this one's."""
+
+    @functools.wraps(sweep)
+    def owned(study: Study, out_dir: str | Path, *args: Any, **kwargs: Any) -> SweepResult:
+        with OutputLock(out_dir):
+            return sweep(study, out_dir, *args, **kwargs)
+
+    return owned
+
+
+@_owning_folder
 def run_sweep(study: Study, out_dir: str | Path, *, jobs: int = 1, cluster: str | None = None,
               progress: Callable[[int], None] | None = None, figures: bool = True,
               force: bool = False) -> SweepResult:
@@ -637,9 +658,16 @@ def run_sweep(study: Study, out_dir: str | Path, *, jobs: int = 1, cluster: str 
     ``summary.json`` (``"interrupted"``, runs done; on an interrupt the table holds the finished
     runs),
     ``runs/rNNN/<sequence>/{tracks,regions}.txt`` and, with ``figures``, ``figures/*.png|svg``.
+
+    One sweep at a time owns the folder (a second one is refused at once). With ``force`` an
+    old study in it (:data:`STUDY_OUTPUTS`, ``runs/``, ``figures/``) is removed before anything
+    is written, so that old and new runs never mix.
     """
     out = Path(out_dir)
     check_writable([out / STUDY_FILE, out / TABLE_FILE], force)
+    if force:  # the old study goes before the new one appears: old and new runs never mix
+        remove_outputs([out / n for n in STUDY_OUTPUTS], folders=[out / "runs", out / "figures"])
+    remove_leftover_temps([out / n for n in STUDY_OUTPUTS])  # of a killed sweep
     out.mkdir(parents=True, exist_ok=True)
     meta = study.as_dict()
     meta["versions"] = versions()
