@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import itertools
+import threading
+import time
 
 import cv2
 import numpy as np
@@ -44,6 +46,16 @@ def test_video_file_info_start_and_max_frames(tmp_path):
     assert [f.index for f in frames] == [3, 4, 5, 6]
     assert frames[0].timestamp == pytest.approx(0.3)
     assert src.expected_frames() == 4 and not src.truncated
+
+
+@pytest.mark.parametrize("name", ["video[1080p].avi", "what?.avi", "all*.avi", "[v].avi"])
+def test_an_existing_file_is_the_file_whatever_its_name_holds(tmp_path, name):
+    p = tmp_path / name
+    _write_video(p)
+    for spec in (str(p), f"file://{p}"):
+        src = open_source(spec)
+        assert isinstance(src, VideoFileSource)
+        assert len(list(src)) == 12
 
 
 @pytest.mark.data
@@ -110,22 +122,97 @@ class FakeCapture:
         self.log.append("release")
 
 
-def test_live_source_reconnects_with_bounded_backoff():
-    log, sleeps = [], []
-    # first connection works (3 frames), then two failed reopen attempts, then success (3 frames),
-    # then every attempt fails
-    opens = iter([True, False, False, True] + [False] * 10)
-    src = LiveSource(0, reconnect_attempts=3, backoff=0.5, backoff_max=1.0,
-                     opener=lambda t: FakeCapture(log, opens, 3), sleep=sleeps.append,
+@pytest.mark.parametrize("opens, per_connection, attempts, reset_frames, max_frames, "
+                         "frames, reconnects, sleeps, fails", [
+    # 3 frames, two failed reopens, a reopen that works (attempt 3 of 3), 3 frames, drop: the
+    # budget is spent, since 3 frames are fewer than the 250 that would restore it
+    ([True, False, False, True] + [True] * 10, 3, 3, 250, 0,
+     3 + 3, 1, [0.5, 1.0, 1.0], True),
+    # a stream that comes back for 2 frames after every reconnection: 4 reconnections in all,
+    # each succeeding, then it fails (a reconnect that works does not restore the budget)
+    ([True] * 20, 2, 4, 250, 100,
+     2 + 4 * 2, 4, [0.5, 1.0, 1.0, 1.0], True),
+    # 6 frames per connection and a budget restored after 5 in a row: one attempt is enough
+    # every time, and the back-off starts afresh (0.5 s each time); 30 frames = 5 connections
+    ([True] * 20, 6, 1, 5, 30,
+     30, 4, [0.5] * 4, False),
+])
+def test_live_source_failure_budget(opens, per_connection, attempts, reset_frames, max_frames,
+                                    frames, reconnects, sleeps, fails):
+    log, waited = [], []
+    it = iter(opens)
+    src = LiveSource(0, max_frames=max_frames, reconnect_attempts=attempts, backoff=0.5,
+                     backoff_max=1.0, reset_frames=reset_frames,
+                     opener=lambda t: FakeCapture(log, it, per_connection), sleep=waited.append,
                      clock=itertools.count().__next__)
     got = []
-    with pytest.raises(SourceError, match="failed after 6 frames and 3 reconnection attempts"):
-        for f in src:
-            got.append(f)
-    assert len(got) == 6
-    assert src.reconnects == 1
-    assert sleeps == [0.5, 1.0, 1.0, 0.5, 1.0, 1.0]          # doubling, capped, reset on success
+    if fails:
+        with pytest.raises(SourceError, match=f"failed after {frames} frames and {attempts} "
+                                              "reconnection attempts"):
+            for f in src:
+                got.append(f)
+    else:
+        got = list(src)
+    assert len(got) == frames
+    assert src.reconnects == reconnects
+    assert waited == sleeps                       # doubling, capped at backoff_max
     assert [f.timestamp for f in got] == sorted(f.timestamp for f in got)   # wall-clock stamps
+    assert src.info.live and src.info.frame_count is None
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    ({"read_timeout": 0.0}, "read_timeout must be a finite number > 0"),
+    ({"backoff": float("nan")}, "backoff must be a finite number >= 0"),
+    ({"backoff_max": float("inf")}, "backoff_max must be a finite number >= 0"),
+    ({"reset_frames": 0}, "reset_frames must be a finite number >= 1"),
+    ({"reconnect_attempts": -1}, "reconnect_attempts must be a finite number >= 0"),
+])
+def test_live_source_rejects_bad_options(kwargs, message):
+    with pytest.raises(SourceError, match=message):
+        LiveSource(0, opener=lambda t: FakeCapture([], iter([True]), 3), **kwargs)
+
+
+class KnownLengthCapture(FakeCapture):
+    """A capture of a file of ``length`` frames (OpenCV reports its frame count), which ends
+    after ``frames``."""
+
+    def __init__(self, log, opens_ok, frames, length):
+        super().__init__(log, opens_ok, frames)
+        self.length = length
+
+    def get(self, prop):
+        return {cv2.CAP_PROP_FRAME_COUNT: float(self.length), cv2.CAP_PROP_FPS: 10.0}.get(prop, 0.0)
+
+
+@pytest.mark.parametrize("frames, truncated", [(40, False), (25, True)])
+def test_a_stream_of_known_length_ends_instead_of_reconnecting(frames, truncated):
+    log, waited = [], []
+    opens = iter([True] * 5)
+    src = LiveSource("http://127.0.0.1:9/clip.avi", reconnect_attempts=3,
+                     opener=lambda t: KnownLengthCapture(log, opens, frames, 40),
+                     sleep=waited.append)
+    got = list(src)
+    assert len(got) == frames and waited == [] and src.reconnects == 0
+    assert src.truncated is truncated
+    assert (src.info.frame_count, src.info.live, src.expected_frames()) == (40, False, 40)
+    assert [f.timestamp for f in got[:3]] == [0.0, 0.1, 0.2]      # index / fps, like a file
+
+
+def test_a_stop_request_ends_a_live_source_during_its_back_off():
+    # every reopen fails and the back-off is 30 s: only the stop request ends the iteration
+    opens = iter([True] + [False] * 10)
+    src = LiveSource(0, reconnect_attempts=5, backoff=30.0, backoff_max=30.0,
+                     opener=lambda t: FakeCapture([], opens, 3))
+    asked = []
+    src.stop_requested = lambda: bool(asked)
+    got = []
+    t0 = time.monotonic()
+    for f in src:
+        got.append(f)
+        if len(got) == 3:
+            threading.Timer(0.3, asked.append, [True]).start()
+    assert len(got) == 3 and not src.truncated
+    assert 0.3 <= time.monotonic() - t0 < 1.5
 
 
 def test_live_source_that_never_opens():

@@ -89,9 +89,22 @@ class _Section:
 class SourceConfig(_Section):
     start: int = param(0, lo=0, doc="first frame index to process (0-based)")
     max_frames: int = param(0, lo=0, doc="stop after this many frames (0 = all)")
-    reconnect_attempts: int = param(5, lo=0, hi=1000, doc="live sources: reconnect tries after a drop")
+    reconnect_attempts: int = param(
+        5, lo=0, hi=1000,
+        doc="live sources: reconnect tries before the run fails, counted until a reconnected "
+            "stream is stable again (reconnect_reset_frames)")
     reconnect_backoff: float = param(0.5, lo=0.0, hi=60.0, doc="live sources: first back-off (s), doubling")
     reconnect_backoff_max: float = param(8.0, lo=0.0, hi=600.0, doc="live sources: longest back-off (s)")
+    reconnect_reset_frames: int = param(
+        250, lo=1, hi=1_000_000,
+        doc="live sources: frames in a row a reconnected stream must deliver before its reconnect "
+            "attempts and back-off start afresh; until then a stream that keeps dropping fails "
+            "after reconnect_attempts reconnections in all")
+    read_timeout_s: float = param(
+        5.0, lo=0.1, hi=600.0,
+        doc="streams: longest wait (s) for a connection to open or for the next frame; a stream "
+            "silent this long counts as dropped (one reconnect attempt). Cameras keep their "
+            "backend's own limit")
 
 
 #: smallest explicit processing scale

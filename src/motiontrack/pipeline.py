@@ -397,4 +397,5 @@ def open_configured_source(source: Any, sc: SourceConfig) -> Source:
     if isinstance(source, Source):
         return source
     return open_source(source, sc.start, sc.max_frames, reconnect_attempts=sc.reconnect_attempts,
-                       backoff=sc.reconnect_backoff, backoff_max=sc.reconnect_backoff_max)
+                       backoff=sc.reconnect_backoff, backoff_max=sc.reconnect_backoff_max,
+                       reset_frames=sc.reconnect_reset_frames, read_timeout=sc.read_timeout_s)

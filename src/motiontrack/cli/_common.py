@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import atexit
+import logging
+import os
 import signal
 import sys
 from contextlib import contextmanager
@@ -27,10 +30,12 @@ def frame_range(text: str) -> tuple[int, int | None]:
 
 
 class GracefulStop:
-    """SIGINT/SIGTERM handlers that ask the running job to stop after the current frame.
+    """SIGINT/SIGTERM handlers that ask the running job to stop after the current frame, or at
+    once while its source waits for one (a live stream backing off, reconnecting or stalled).
 
-    ``stop()`` tells whether a stop was requested. A second signal raises ``KeyboardInterrupt``
-    at once, for a user who really wants out.
+    ``stop()`` tells whether a stop was requested; the job polls it after each frame and hands
+    it to the source (:attr:`~motiontrack.io.sources.Source.stop_requested`). A second signal
+    raises ``KeyboardInterrupt`` at once, for a user who really wants out.
     """
 
     def __init__(self) -> None:
@@ -77,12 +82,41 @@ class FrameLoop:
 @contextmanager
 def frame_loop(total: int | None) -> Iterator[FrameLoop]:
     """:class:`GracefulStop` signal handlers and a frame progress bar on stderr (hidden when
-    stderr is not a terminal) for the duration of a command's frame loop."""
+    stderr is not a terminal) for the duration of a command's frame loop.
+
+    A stopped loop (``KeyboardInterrupt``, which the command turns into exit code 130) whose live
+    source was left inside an OpenCV call exits without waiting for that call
+    (:func:`_exit_now_if_still_reading`)."""
     from tqdm import tqdm
 
     with GracefulStop() as stop, tqdm(total=total, unit="frame", disable=None, file=sys.stderr,
                                       dynamic_ncols=True) as bar:
-        yield FrameLoop(bar.update, stop.stop)
+        try:
+            yield FrameLoop(bar.update, stop.stop)
+        except KeyboardInterrupt:
+            from ..io.sources import blocked_live_sources
+
+            blocked = blocked_live_sources()
+            if blocked:
+                atexit.register(_exit_now_if_still_reading, blocked, 130)
+            raise
+
+
+def _exit_now_if_still_reading(sources: list, code: int) -> None:
+    """Exit hook of a stopped command whose outputs are final: when one of ``sources`` is still
+    inside an OpenCV call (a read of a silent stream lasts up to its read timeout, and cannot be
+    interrupted), end the process now with ``code``. Waiting is the only other safe course: the
+    interpreter must not finalise while the call is pending (it aborts when the call returns).
+    Registered after the live sources' own exit hook, so it runs before it."""
+    if not any(src.in_opencv_call for src in sources):
+        return
+    logging.shutdown()
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.flush()
+        except (OSError, ValueError):   # closed or broken: nothing more to say
+            pass
+    os._exit(code)
 
 
 def accuracy_line(a: Mapping[str, float],

@@ -3,14 +3,17 @@
 Every source is an iterable of :class:`~motiontrack.types.Frame` with known (or ``None``) size, fps
 and frame count. Opening problems raise :class:`~motiontrack.errors.SourceError` with one clear
 message; a file that stops decoding early (truncated) ends with a warning and keeps what decoded.
-Live sources (cameras, streams) reconnect with bounded exponential back-off and stamp frames with
-wall-clock time.
+Live sources (cameras, streams) reconnect with bounded exponential back-off, stamp frames with
+wall-clock time, and end at once when :attr:`Source.stop_requested` says so, whatever they are
+waiting for.
 """
 
 from __future__ import annotations
 
+import atexit
 import glob
 import logging
+import math
 import os
 import queue
 import re
@@ -30,7 +33,7 @@ from ..types import Annotations, Frame
 log = logging.getLogger(__name__)
 
 __all__ = ["SourceInfo", "Source", "VideoFileSource", "LiveSource", "ImageSequenceSource",
-           "ArraySource", "SCHEMES", "open_source", "IMAGE_EXTENSIONS"]
+           "ArraySource", "SCHEMES", "open_source", "IMAGE_EXTENSIONS", "blocked_live_sources"]
 
 IMAGE_EXTENSIONS = (".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff", ".webp", ".ppm", ".pgm")
 _URL = re.compile(r"^[a-zA-Z][a-zA-Z0-9+.-]*://")
@@ -58,10 +61,18 @@ class SourceInfo:
         return f"{self.name}: {self.width}x{self.height}, {fps}, {n}"
 
 
+def _never() -> bool:
+    return False
+
+
 class Source:
     """Base class: ``info`` plus iteration over frames from ``start`` for ``max_frames`` frames."""
 
     info: SourceInfo
+    #: polled while a source waits (a live stream backing off, reconnecting or waiting for a
+    #: frame): when it returns True the iteration ends at once, without an error.
+    #: :meth:`motiontrack.run.Job.run` sets it to its ``should_stop``.
+    stop_requested: Callable[[], bool] = staticmethod(_never)
 
     def __init__(self, start: int = 0, max_frames: int = 0) -> None:
         if start < 0:
@@ -229,92 +240,340 @@ class VideoFileSource(_DecodedAhead):
             cap.release()
 
 
+#: how often a live source's waits look at its stop request (s)
+_POLL = 0.05
+#: how long a camera's read can block (s): OpenCV's V4L backend gives up after 10 s
+_CAMERA_CALL_BOUND = 10.0
+#: live sources whose reader thread has started and not yet ended
+_READERS: "set[LiveSource]" = set()
+#: set at interpreter exit: every live source stops reading
+_EXITING = threading.Event()
+_exit_hook_lock = threading.Lock()
+_exit_hook_registered = False
+
+
+def _register_exit_hook() -> None:
+    """Register :func:`_join_readers_at_exit` once, when the first reader starts: exit hooks run
+    last-registered first, so it runs before the hooks of the layers above (the pipeline's, which
+    wait for the threads that consume these sources)."""
+    global _exit_hook_registered
+    with _exit_hook_lock:
+        if not _exit_hook_registered:
+            atexit.register(_join_readers_at_exit)
+            _exit_hook_registered = True
+
+
+def _join_readers_at_exit() -> None:
+    """Stop every live source and wait for its reader thread before the interpreter finalises:
+    a thread still inside an OpenCV call then aborts the process when the call returns (C++
+    terminate). The wait ends with the call, at the latest after the source's read timeout."""
+    _EXITING.set()
+    for src in blocked_live_sources():
+        log.warning("waiting up to %.0f s for %s to return from reading", src.call_bound,
+                    src.info.name)
+    for src in list(_READERS):
+        while True:
+            try:
+                src._join_reader()
+                break
+            except KeyboardInterrupt:   # finalising now could abort: wait all the same
+                continue
+
+
+def blocked_live_sources() -> "list[LiveSource]":
+    """Live sources whose reader thread is inside an OpenCV call (opening or reading) that
+    cannot be interrupted: it ends within the source's :attr:`~LiveSource.call_bound`, and the
+    interpreter must not finalise before it has."""
+    return [src for src in list(_READERS) if src.in_opencv_call]
+
+
+def _check_live_options(reconnect_attempts: int, backoff: float, backoff_max: float,
+                        read_timeout: float, reset_frames: int) -> None:
+    for name, value, lo, strict in (("reconnect_attempts", reconnect_attempts, 0, False),
+                                    ("backoff", backoff, 0, False),
+                                    ("backoff_max", backoff_max, 0, False),
+                                    ("read_timeout", read_timeout, 0, True),
+                                    ("reset_frames", reset_frames, 1, False)):
+        ok = (isinstance(value, (int, float)) and not isinstance(value, bool)
+              and math.isfinite(value) and (value > lo if strict else value >= lo))
+        if not ok:
+            rel = ">" if strict else ">="
+            raise SourceError(f"live source {name} must be a finite number {rel} {lo}, "
+                              f"got {value!r}")
+
+
 class LiveSource(Source):
     """A camera (integer index) or network stream (rtsp/http URL).
 
-    When reading fails the source reconnects up to ``reconnect_attempts`` times, waiting
-    ``backoff``, ``2*backoff``, ... (at most ``backoff_max``) seconds between tries. Frames carry
-    wall-clock timestamps so a tracker can see the gap.
+    Failure budget: when reading fails (the stream ends, drops, or sends nothing for
+    ``read_timeout`` seconds) the source reconnects, waiting ``backoff``, ``2*backoff``, ... (at
+    most ``backoff_max``) seconds before each try. At most ``reconnect_attempts`` tries are made
+    until the stream has delivered ``reset_frames`` frames in a row after a reconnection; only then
+    do the count and the back-off start afresh. A stream that keeps failing, even one that comes
+    back for a few frames each time, therefore fails (:class:`SourceError`) after
+    ``reconnect_attempts`` reconnections.
+
+    A stream whose length OpenCV knows (frame count > 0: a video file served over HTTP) is a file,
+    not live: the end of the stream is the end of the source (before the announced length it is
+    *truncated*), nothing reconnects, and frames carry ``index / fps`` timestamps. Live frames carry
+    wall-clock timestamps so a tracker can see the gap of a reconnection.
+
+    Stopping: reading, reconnecting and the back-off waits run in a reader thread that reads one
+    frame each time the consumer asks for one, while the consumer waits in slices of ``_POLL``
+    seconds, so that iteration ends within one slice of :attr:`stop_requested` turning True,
+    whatever the reader is doing. A reader left inside an OpenCV call releases its capture when
+    the call returns (at most ``read_timeout`` seconds for streams), and interpreter exit waits
+    for it.
+
+    Parameters
+    ----------
+    target : camera index or stream URL.
+    read_timeout : streams: longest wait (s) for a connection to open or for the next frame
+        (OpenCV's FFmpeg open and read timeouts); cameras keep their backend's own limit.
+    reset_frames : frames in a row after a reconnection that restore the failure budget.
+    opener : ``opener(target)`` → a capture, instead of OpenCV's (tests).
+    sleep : called with each back-off delay instead of waiting (tests).
+    clock : wall-clock time, for the timestamps of live frames.
     """
 
     def __init__(self, target: int | str, start: int = 0, max_frames: int = 0,
                  reconnect_attempts: int = 5, backoff: float = 0.5, backoff_max: float = 8.0,
-                 opener: Callable[[Any], Any] | None = None, sleep: Callable[[float], None] = time.sleep,
+                 read_timeout: float = 5.0, reset_frames: int = 250,
+                 opener: Callable[[Any], Any] | None = None,
+                 sleep: Callable[[float], None] | None = None,
                  clock: Callable[[], float] = time.time) -> None:
         super().__init__(start, max_frames)
+        _check_live_options(reconnect_attempts, backoff, backoff_max, read_timeout, reset_frames)
         self.target = target
         self.reconnect_attempts = reconnect_attempts
         self.backoff = backoff
         self.backoff_max = backoff_max
-        self._opener = opener or cv2.VideoCapture
+        self.read_timeout = read_timeout
+        self.reset_frames = reset_frames
+        self._opener = opener or self._capture
         self._sleep = sleep
         self._clock = clock
-        what = f"camera {target}" if isinstance(target, int) else f"stream {target}"
-        self._what = what
-        cap = self._open()
-        if cap is None:
-            raise SourceError(f"cannot open {what}")
-        self._cap = cap
-        ok, first = cap.read()
-        if not ok or first is None:
-            cap.release()
-            raise SourceError(f"{what} opened but delivered no frame")
-        self._first = first
-        fps = float(cap.get(cv2.CAP_PROP_FPS) or 0.0)
-        self.info = SourceInfo(name=what, width=first.shape[1], height=first.shape[0],
-                               fps=fps if 0 < fps < 1000 else None, frame_count=None, live=True)
+        self._what = f"camera {target}" if isinstance(target, int) else f"stream {target}"
         #: reconnections performed so far
         self.reconnects = 0
-
-    def _open(self) -> Any:
-        cap = self._opener(self.target)
-        if not cap.isOpened():
+        self._attempts = 0       # reconnection attempts since the stream was last stable
+        self._delay = backoff    # the next back-off wait (s)
+        self._stable = 0         # frames read since the last reconnection
+        self._read = 0           # frames read in all
+        self._busy_until = 0.0   # monotonic time by which the current OpenCV call returns
+        self._abandoned = threading.Event()
+        self._requests: queue.Queue = queue.Queue(maxsize=1)
+        self._replies: queue.Queue = queue.Queue(maxsize=1)
+        self._reader: threading.Thread | None = None
+        cap = self._open()
+        if cap is None:
+            raise SourceError(f"cannot open {self._what}")
+        self._cap = cap
+        ok, first = self._call(cap.read)
+        if not ok or first is None:
             cap.release()
-            return None
-        return cap
+            raise SourceError(f"{self._what} opened but delivered no frame")
+        self._first: np.ndarray | None = first
+        self._read = 1
+        fps = float(cap.get(cv2.CAP_PROP_FPS) or 0.0)
+        count = float(cap.get(cv2.CAP_PROP_FRAME_COUNT) or 0.0)
+        #: frames a stream of known length announces (a video file over HTTP), else None
+        self.length = int(count) if 0 < count < 2**31 else None
+        self.info = SourceInfo(name=self._what, width=first.shape[1], height=first.shape[0],
+                               fps=fps if 0 < fps < 1000 else None, frame_count=self.length,
+                               live=self.length is None)
 
-    def _reconnect(self) -> bool:
-        delay = self.backoff
-        for attempt in range(1, self.reconnect_attempts + 1):
-            log.warning("%s dropped; reconnecting (attempt %d/%d) in %.1f s", self._what, attempt,
-                        self.reconnect_attempts, delay)
-            self._sleep(delay)
-            cap = self._open()
-            if cap is not None:
-                self._cap = cap
-                self.reconnects += 1
-                return True
-            delay = min(delay * 2, self.backoff_max)
-        return False
-
+    # ---------------------------------------------------------------- the consumer's side
     def __iter__(self) -> Iterator[Frame]:
         index = 0
         produced = 0
-        pending = self._first
+        fps = self.info.fps or 25.0
         try:
             while not self.max_frames or produced < self.max_frames:
-                if pending is not None:
-                    img, pending = pending, None
-                else:
-                    ok, img = self._cap.read()
-                    if not ok or img is None:
-                        self._cap.release()
-                        if not self._reconnect():
-                            self.truncated = True
-                            raise SourceError(f"{self._what} failed after {index} frames and "
-                                              f"{self.reconnect_attempts} reconnection attempts")
-                        continue
+                img = self._next_image()
+                if img is None:
+                    return
                 if index >= self.start:
-                    yield Frame(index=index, image=img, timestamp=self._clock())
+                    stamp = self._clock() if self.info.live else index / fps
+                    yield Frame(index=index, image=img, timestamp=stamp)
                     produced += 1
                 index += 1
         finally:
             self.close()
 
+    def _next_image(self) -> np.ndarray | None:
+        """The next image from the reader thread; None at the end or on a stop request."""
+        if self._first is not None:
+            img, self._first = self._first, None
+            return img
+        if self._reader is None:
+            _register_exit_hook()
+            self._reader = threading.Thread(target=self._serve, name="motiontrack-live",
+                                            daemon=True)
+            _READERS.add(self)
+            self._reader.start()
+        self._requests.put(True)   # never blocks: every earlier request has had its reply
+        while True:
+            try:
+                item = self._replies.get(timeout=_POLL)
+            except queue.Empty:
+                if self._stopping():
+                    return None
+                continue
+            if isinstance(item, BaseException):
+                raise item
+            return item
+
+    def _stopping(self) -> bool:
+        return self._abandoned.is_set() or _EXITING.is_set() or bool(self.stop_requested())
+
     def close(self) -> None:
-        cap = getattr(self, "_cap", None)
-        if cap is not None:
+        """Stop reading. A reader thread inside an OpenCV call is not waited for: it releases the
+        capture when the call returns."""
+        if self._abandoned.is_set():
+            return
+        self._abandoned.set()
+        if self._reader is None:
+            cap, self._cap = getattr(self, "_cap", None), None
+            if cap is not None:
+                cap.release()
+        elif not self.in_opencv_call:   # it notices within one slice
+            self._reader.join(timeout=2 * _POLL)
+
+    def _join_reader(self) -> None:
+        """Wait until the reader thread has ended: as long as its current OpenCV call may last,
+        and a second for it to notice the stop otherwise."""
+        thread = self._reader
+        deadline = time.monotonic() + 1.0
+        while thread is not None and thread.is_alive():
+            deadline = max(deadline, self._busy_until)
+            left = deadline - time.monotonic()
+            if left <= 0:
+                return
+            thread.join(timeout=min(left, _POLL))
+
+    # ---------------------------------------------------------------- the reader thread
+    def _serve(self) -> None:
+        """The reader thread: one :meth:`_read_next` for each request of the consumer."""
+        try:
+            while not self._stopping():
+                try:
+                    self._requests.get(timeout=_POLL)
+                except queue.Empty:
+                    continue
+                try:
+                    item: Any = self._read_next()
+                except BaseException as exc:  # handed to the consumer
+                    item = exc
+                self._replies.put(item)
+                if not isinstance(item, np.ndarray):
+                    return
+        finally:
+            if self._cap is not None:
+                self._cap.release()
+                self._cap = None
+            _READERS.discard(self)
+
+    def _read_next(self) -> np.ndarray | None:
+        """The next image, reconnecting as far as the failure budget allows; None at the end of
+        a stream of known length or on a stop request."""
+        while True:
+            if self._stopping():
+                return None
+            if self._cap is None and not self._reconnect():
+                if self._stopping():
+                    return None
+                self.truncated = True
+                raise SourceError(f"{self._what} failed after {self._read} frames and "
+                                  f"{self._attempts} reconnection attempts (the attempts start "
+                                  f"afresh after {self.reset_frames} frames in a row)")
+            ok, img = self._call(self._cap.read)
+            if ok and img is not None:
+                self._read += 1
+                self._stable += 1
+                if self._stable >= self.reset_frames:
+                    self._attempts, self._delay = 0, self.backoff
+                return img
+            self._cap.release()
+            self._cap = None
+            if self.length is not None:
+                if self._read < self.length - 1:
+                    self.truncated = True
+                    log.warning("%s ended at frame %d of %d; keeping the frames read", self._what,
+                                self._read, self.length)
+                return None
+            if self._stopping():
+                return None
+
+    def _reconnect(self) -> bool:
+        """Open the stream again within the failure budget; False when it is spent or a stop
+        came."""
+        while self._attempts < self.reconnect_attempts:
+            self._attempts += 1
+            log.warning("%s dropped; reconnecting (attempt %d/%d) in %.1f s", self._what,
+                        self._attempts, self.reconnect_attempts, self._delay)
+            if self._wait(self._delay):
+                return False
+            self._delay = min(self._delay * 2, self.backoff_max)
+            cap = self._open()
+            if cap is not None:
+                self._cap = cap
+                self.reconnects += 1
+                self._stable = 0
+                return True
+            if self._stopping():
+                return False
+        return False
+
+    def _wait(self, delay: float) -> bool:
+        """Wait ``delay`` seconds in slices of ``_POLL``; True when a stop came first."""
+        if self._sleep is not None:
+            self._sleep(delay)
+            return self._stopping()
+        end = time.monotonic() + delay
+        while not self._stopping():
+            left = end - time.monotonic()
+            if left <= 0:
+                return False
+            self._abandoned.wait(min(left, _POLL))
+        return True
+
+    def _capture(self, target: int | str) -> cv2.VideoCapture:
+        """OpenCV's capture of ``target``: streams through FFmpeg with the open and read
+        timeouts, cameras as they are."""
+        if isinstance(target, int):
+            return cv2.VideoCapture(target)
+        ms = max(1, int(round(self.read_timeout * 1000)))
+        return cv2.VideoCapture(target, cv2.CAP_FFMPEG, [cv2.CAP_PROP_OPEN_TIMEOUT_MSEC, ms,
+                                                         cv2.CAP_PROP_READ_TIMEOUT_MSEC, ms])
+
+    def _open(self) -> Any:
+        cap = self._call(self._opener, self.target)
+        if not cap.isOpened():
             cap.release()
+            return None
+        return cap
+
+    @property
+    def call_bound(self) -> float:
+        """The longest an OpenCV call of this source can block (s): the read timeout of a
+        stream, the backend's own limit for a camera."""
+        return _CAMERA_CALL_BOUND if isinstance(self.target, int) else self.read_timeout
+
+    @property
+    def in_opencv_call(self) -> bool:
+        """Whether the reader thread is inside an OpenCV call (opening or reading)."""
+        reader = self._reader
+        return self._busy_until > 0 and reader is not None and reader.is_alive()
+
+    def _call(self, fn: Callable[..., Any], *args: Any) -> Any:
+        """``fn(*args)``, an OpenCV call that may block, with the time by which it returns in
+        :attr:`_busy_until` meanwhile (for :meth:`_join_reader`)."""
+        self._busy_until = time.monotonic() + self.call_bound + 1.0
+        try:
+            return fn(*args)
+        finally:
+            self._busy_until = 0.0
 
 
 def _natural_key(s: str) -> list[Any]:
@@ -380,7 +639,8 @@ class ArraySource(Source):
 def open_source(spec: Any, start: int = 0, max_frames: int = 0, **live_options: Any) -> Source:
     """Open ``spec``: a :class:`Source` (returned as is), a registered scheme (:data:`SCHEMES`,
     e.g. ``synth:NAME``), a camera index (``0`` or ``"0"``), a URL (``rtsp://``, ``http://``...),
-    an image folder or glob, or a video file."""
+    an image folder or glob, or a video file. An existing file is always the video file, even
+    when its name holds glob characters (``*?[``)."""
     if isinstance(spec, Source):
         return spec
     if isinstance(spec, int) or (isinstance(spec, str) and spec.isdigit()):
@@ -393,6 +653,8 @@ def open_source(spec: Any, start: int = 0, max_frames: int = 0, **live_options: 
         return LiveSource(spec, start, max_frames, **live_options)
     if spec.startswith("file://"):
         spec = spec[len("file://"):]
+    if Path(spec).is_file():   # whatever its name holds: `video[1080p].mp4` is no glob
+        return VideoFileSource(spec, start, max_frames)
     if any(ch in spec for ch in "*?[") or Path(spec).is_dir():
         return ImageSequenceSource(spec, start, max_frames)
     return VideoFileSource(spec, start, max_frames)

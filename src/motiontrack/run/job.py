@@ -262,7 +262,9 @@ class Job:
         """Process the source and write the outputs.
 
         ``should_stop`` is polled after each complete frame (the CLI's signal handlers set it), so
-        an interruption never splits a frame between the outputs.
+        an interruption never splits a frame between the outputs. The source polls it too
+        (:attr:`Source.stop_requested`) while it waits for a frame, so that a live stream backing
+        off, reconnecting or stalled ends the run as soon as a stop is asked.
         """
         info = self.info
         self.out.mkdir(parents=True, exist_ok=True)
@@ -270,6 +272,8 @@ class Job:
         summary = JobSummary(source=info.name, width=info.width, height=info.height,
                              source_fps=info.fps)
         t0 = time.perf_counter()
+        if should_stop is not None:
+            self.source.stop_requested = should_stop
         try:
             self._clear_folder()
             for w in self.writers:
@@ -337,6 +341,8 @@ class Job:
                     return
                 if should_stop is not None and should_stop():
                     raise KeyboardInterrupt
+            if should_stop is not None and should_stop():
+                raise KeyboardInterrupt   # the source ended early because a stop was asked
         finally:
             close = getattr(results, "close", None)
             if close is not None:
