@@ -6,6 +6,7 @@ they are discovered automatically so that commands live in their own small modul
 from __future__ import annotations
 
 import argparse
+import errno
 import importlib
 import logging
 import pkgutil
@@ -13,7 +14,7 @@ import sys
 import traceback
 
 from .. import __version__
-from ..errors import MotionTrackError
+from ..errors import MotionTrackError, describe_os_error, printable
 
 log = logging.getLogger("motiontrack")
 
@@ -39,12 +40,25 @@ def build_parser() -> argparse.ArgumentParser:
 def _configure_logging(debug: bool, quiet: bool) -> None:
     level = logging.DEBUG if debug else (logging.WARNING if quiet else logging.INFO)
     handler = logging.StreamHandler(sys.stderr)
-    handler.setFormatter(logging.Formatter("motiontrack: %(levelname)s: %(message)s"
+    handler.setFormatter(_OneLineFormatter("motiontrack: %(levelname)s: %(message)s"
                                            if not debug else "%(name)s: %(levelname)s: %(message)s"))
     root = logging.getLogger("motiontrack")
     root.handlers[:] = [handler]
     root.setLevel(level)
     root.propagate = False
+
+
+#: failed file operations that are the machine's state, not a bug, even without a file name
+_ENVIRONMENT_ERRNOS = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EROFS, errno.EACCES,
+                                 errno.EPERM})
+
+
+class _OneLineFormatter(logging.Formatter):
+    """Log messages with control characters escaped (:func:`~motiontrack.errors.printable`): a
+    file name or file content in a message cannot start a line that looks like another message."""
+
+    def formatMessage(self, record: logging.LogRecord) -> str:  # noqa: N802 (logging API)
+        return printable(super().formatMessage(record))
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -60,20 +74,34 @@ def main(argv: list[str] | None = None) -> int:
     except MotionTrackError as exc:
         if args.debug:
             traceback.print_exc()
-        print(f"motiontrack: error: {exc}", file=sys.stderr)
+        print(f"motiontrack: error: {printable(exc)}", file=sys.stderr)
         return exc.exit_code
     except KeyboardInterrupt:
         print("motiontrack: interrupted", file=sys.stderr)
         return 130
     except BrokenPipeError:
         return 141
-    except Exception as exc:  # a bug: still one line unless --debug
+    except OSError as exc:
+        if exc.filename is None and exc.errno not in _ENVIRONMENT_ERRNOS:
+            return _internal_error(exc, args.debug)
+        # a file or folder the user named cannot be read or written, or the disk is full:
+        # their input or their machine, not a bug
         if args.debug:
             traceback.print_exc()
-        else:
-            print(f"motiontrack: internal error: {type(exc).__name__}: {exc} (run with --debug for "
-                  "the traceback)", file=sys.stderr)
-        return 1
+        print(f"motiontrack: error: {describe_os_error(exc)}", file=sys.stderr)
+        return 2
+    except Exception as exc:  # a bug: still one line unless --debug
+        return _internal_error(exc, args.debug)
+
+
+def _internal_error(exc: Exception, debug: bool) -> int:
+    """Report a bug: the traceback with ``--debug``, otherwise one line; exit code 1."""
+    if debug:
+        traceback.print_exc()
+    else:
+        print(f"motiontrack: internal error: {type(exc).__name__}: {printable(exc)} (run with "
+              "--debug for the traceback)", file=sys.stderr)
+    return 1
 
 
 if __name__ == "__main__":  # pragma: no cover
