@@ -9,6 +9,8 @@ are errors. ``--set stage.param=value`` on the command line maps onto the same f
 from __future__ import annotations
 
 import dataclasses
+import logging
+import math
 import sys
 import typing
 from dataclasses import dataclass, field, fields, is_dataclass
@@ -18,9 +20,11 @@ from typing import Any, Iterable
 
 import tomli_w
 
-from .errors import ConfigError
+from .errors import EXCERPT_CHARS, ConfigError, excerpt, printable
 from .io.atomic import atomic_write_text
 from .io.tomlfile import parse_toml, read_toml
+
+log = logging.getLogger(__name__)
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -51,13 +55,26 @@ __all__ = [
     "to_dict",
     "from_dict",
     "apply_overrides",
+    "warn_if_oversized",
 ]
+
+
+#: bounds of an integer field that gives none: what OpenCV's ``int`` parameters hold
+INT_MIN, INT_MAX = -(2**31), 2**31 - 1
 
 
 def param(default: Any, *, lo: float | None = None, hi: float | None = None,
           choices: Iterable[Any] | None = None, odd: bool = False, doc: str = "") -> Any:
     """A config field with its allowed range: ``lo <= value <= hi``, one of ``choices``,
-    and for kernel sizes ``odd`` (0 means "off" and is always allowed for odd fields)."""
+    and for kernel sizes ``odd`` (0 means "off" and is always allowed for odd fields).
+
+    Every number must be finite. An integer field without ``lo``/``hi`` is bounded by
+    :data:`INT_MIN`/:data:`INT_MAX`, so that no value reaches OpenCV (or a loop or an allocation)
+    that a C ``int`` cannot hold.
+    """
+    if isinstance(default, int) and not isinstance(default, bool) and choices is None:
+        lo = INT_MIN if lo is None else lo
+        hi = INT_MAX if hi is None else hi
     meta = {"lo": lo, "hi": hi, "choices": tuple(choices) if choices is not None else None,
             "odd": odd, "doc": doc}
     return field(default=default, metadata=meta)
@@ -74,14 +91,32 @@ class _Section:
             if not m:
                 continue
             if m.get("choices") is not None and v not in m["choices"]:
-                raise ConfigError(f"{name}.{f.name} must be one of {list(m['choices'])}, got {v!r}")
+                raise ConfigError(f"{name}.{f.name} must be one of {list(m['choices'])}, "
+                                  f"got {_shown(v)}")
             if isinstance(v, (int, float)) and not isinstance(v, bool):
                 lo, hi = m.get("lo"), m.get("hi")
-                if (lo is not None and v < lo) or (hi is not None and v > hi):
-                    rng = f"[{'-inf' if lo is None else lo}, {'inf' if hi is None else hi}]"
-                    raise ConfigError(f"{name}.{f.name} must be in {rng}, got {v!r}")
+                rng = f"[{'-inf' if lo is None else lo}, {'inf' if hi is None else hi}]"
+                if isinstance(v, float) and not math.isfinite(v):
+                    raise ConfigError(f"{name}.{f.name} must be a finite number in {rng}, "
+                                      f"got {v!r}")
+                # written as "not inside" so that a value no comparison holds for is refused too
+                if not ((lo is None or lo <= v) and (hi is None or v <= hi)):
+                    raise ConfigError(f"{name}.{f.name} must be in {rng}, got {_shown(v)}")
                 if m.get("odd") and v != 0 and int(v) % 2 == 0:
-                    raise ConfigError(f"{name}.{f.name} must be 0 (off) or an odd kernel size, got {v!r}")
+                    raise ConfigError(f"{name}.{f.name} must be 0 (off) or an odd kernel size, "
+                                      f"got {_shown(v)}")
+
+
+def _shown(v: Any) -> str:
+    """A value for a message: numbers as written, an integer too long to read by its size, text
+    as a short excerpt (it may come from any file given as a config), tables and arrays by kind."""
+    if isinstance(v, bool) or isinstance(v, float):
+        return repr(v)
+    if isinstance(v, int):
+        return f"an integer of {len(str(abs(v)))} digits" if abs(v) >= 10**30 else repr(v)
+    if isinstance(v, str):
+        return excerpt(v)
+    return {dict: "a table", list: "an array"}.get(type(v), f"a {type(v).__name__}")
 
 
 # --------------------------------------------------------------------------------------- stages
@@ -209,7 +244,9 @@ class CNTParams(_Section):
 
 @dataclass(frozen=True)
 class GSOCParams(_Section):
-    n_samples: int = param(20, lo=1)
+    n_samples: int = param(20, lo=1, hi=50,
+                           doc="samples kept per pixel; each takes about 60 bytes per processed "
+                               "pixel")
     replace_rate: float = param(0.003, lo=0.0, hi=1.0)
     propagation_rate: float = param(0.01, lo=0.0, hi=1.0)
     hits_threshold: int = param(32, lo=1)
@@ -428,6 +465,31 @@ class PipelineConfig(_Section):
     people: PeopleConfig = field(default_factory=PeopleConfig)
 
 
+# ---------------------------------------------------------------------------------- source size
+#: the largest frames the defaults are sized for (4K UHD); larger sources get a warning
+SIZED_FOR = (3840, 2160)
+#: memory of a run with the default configuration: a fixed part plus this much per source pixel
+#: (``track`` on 1920x1080, 3840x2160 and 8000x6000 videos: 0.37, 0.90 and 4.0 GB peak)
+_RUN_BASE_BYTES = 250e6
+_RUN_BYTES_PER_PIXEL = 80
+
+
+def warn_if_oversized(width: int, height: int, what: str = "source") -> bool:
+    """Log a warning when frames of ``width`` x ``height`` are far beyond what the defaults are
+    sized for (:data:`SIZED_FOR`), with the memory a run is likely to take; returns whether it
+    warned. Call it once per source, when its frame size is known."""
+    pixels = int(width) * int(height)
+    limit = SIZED_FOR[0] * SIZED_FOR[1]
+    if pixels <= limit:
+        return False
+    gb = (_RUN_BASE_BYTES + _RUN_BYTES_PER_PIXEL * pixels) / 1e9
+    log.warning("%s frames are %dx%d (%.1f Mpx), beyond the %dx%d (%.1f Mpx) the defaults are "
+                "sized for: expect about %.0f GB of memory and slow processing (lower "
+                "preprocess.scale, or resize the video)", printable(what), width, height,
+                pixels / 1e6, *SIZED_FOR, limit / 1e6, max(1.0, gb))
+    return True
+
+
 # ------------------------------------------------------------------------------- (de)serialise
 def to_dict(cfg: Any) -> dict[str, Any]:
     """Nested plain dict (TOML-ready) of a config dataclass."""
@@ -439,35 +501,43 @@ def _coerce(value: Any, typ: Any, where: str) -> Any:
     if typ is bool:
         if isinstance(value, bool):
             return value
-        raise ConfigError(f"{where} must be true or false, got {value!r}")
+        raise ConfigError(f"{where} must be true or false, got {_shown(value)}")
     if typ is int:
         if isinstance(value, bool) or not isinstance(value, int):
             if isinstance(value, float) and value.is_integer():
                 return int(value)
-            raise ConfigError(f"{where} must be an integer, got {value!r}")
+            raise ConfigError(f"{where} must be an integer, got {_shown(value)}")
         return value
     if typ is float:
         if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise ConfigError(f"{where} must be a number, got {value!r}")
+            raise ConfigError(f"{where} must be a number, got {_shown(value)}")
         return float(value)
     if typ is str:
         if not isinstance(value, str):
-            raise ConfigError(f"{where} must be a string, got {value!r}")
+            raise ConfigError(f"{where} must be a string, got {_shown(value)}")
         return value
     return value
+
+
+def _keys_shown(keys: list[str], prefix: str = "", most: int = 5) -> str:
+    """Key names from a file for a message: the first ``most``, each after ``prefix`` as written
+    when short and printable, else as a short excerpt."""
+    shown = ", ".join(prefix + (k if len(k) <= EXCERPT_CHARS and k.isprintable() else excerpt(k))
+                      for k in keys[:most])
+    return shown + (f" and {len(keys) - most} more" if len(keys) > most else "")
 
 
 def from_dict(cls: type, data: dict[str, Any], where: str = "") -> Any:
     """Build a config dataclass from a nested dict; unknown keys and bad types are errors."""
     if not isinstance(data, dict):
-        raise ConfigError(f"{where or cls.__name__} must be a table, got {data!r}")
+        raise ConfigError(f"{where or cls.__name__} must be a table, got {_shown(data)}")
     hints = typing.get_type_hints(cls)
     known = {f.name for f in fields(cls)}
     unknown = sorted(set(data) - known)
     if unknown:
         prefix = f"{where}." if where else ""
         raise ConfigError(
-            f"unknown config key(s) {', '.join(prefix + k for k in unknown)}; "
+            f"unknown config key(s) {_keys_shown(unknown, prefix)}; "
             f"valid keys{' in ' + where if where else ''}: {', '.join(sorted(known))}"
         )
     kwargs: dict[str, Any] = {}
@@ -478,7 +548,14 @@ def from_dict(cls: type, data: dict[str, Any], where: str = "") -> Any:
             kwargs[name] = from_dict(typ, value, sub)
         else:
             kwargs[name] = _coerce(value, typ, sub)
-    return cls(**kwargs)
+    try:
+        return cls(**kwargs)
+    except ConfigError as exc:
+        # a section names its fields by class ("KNNParams.history"); the user wrote the key path
+        msg, prefix = str(exc), f"{cls.__name__}."
+        if where and msg.startswith(prefix):
+            raise ConfigError(f"{where}.{msg[len(prefix):]}") from None
+        raise
 
 
 def presets() -> dict[str, str]:
@@ -522,6 +599,8 @@ def _parse_value(text: str) -> Any:
         return tomllib.loads(f"v = {text}")["v"]
     except tomllib.TOMLDecodeError:
         return text
+    except RecursionError:
+        raise ConfigError("--set value nested too deeply") from None
 
 
 def apply_overrides(cfg: Any, overrides: Iterable[str]) -> Any:
