@@ -21,13 +21,14 @@ import logging
 import re
 from pathlib import Path
 
-from ..errors import ConfigError, InputError
+from ..errors import ConfigError, InputError, excerpt, location, token_at
 from ..types import Annotations
 from .cvat import read_cvat, write_cvat
 from .cvml import read_cvml, write_cvml
 from .jsonfmt import read_json, write_json
 from .mot import read_mot, write_mot
 from .viper import read_viper, write_viper
+from .xmlsafe import tag_text
 
 __all__ = [
     "FORMATS",
@@ -77,40 +78,52 @@ def detect_format(path: str | Path) -> str:
     Returns one of :data:`FORMATS`. Raises :class:`InputError` when the content fits none.
     """
     p = Path(path)
-    if not p.is_file():
-        raise InputError(f"annotation file not found: {p}")
+    _check_file(p)
     with open(p, "rb") as fh:
         head = fh.read(_SNIFF_BYTES)
     if not head.strip(b"\xef\xbb\xbf \t\r\n"):
-        raise InputError(f"{p}: empty annotation file")
+        raise InputError(f"{location(p)}: empty annotation file")
     body = _strip_prolog(head)
     if body.startswith(b"{"):
         return "json"
     if body.startswith(b"<") or head.lstrip(b"\xef\xbb\xbf").lstrip().startswith(b"<"):
         m = _ROOT_RE.match(body)
         if not m:
-            raise InputError(f"{p}:1: XML without a recognisable root element")
+            raise InputError(f"{location(p)}: XML without a recognisable root element")
         root = m.group(2).decode("ascii", "replace")
         fmt = _XML_ROOTS.get(root.lower())
         if fmt is None:
-            raise InputError(f"{p}: unknown XML annotation format with root element <{root}> "
-                             f"(expected <viper>, <dataset> (PETS CVML) or <annotations> (CVAT))")
+            raise InputError(f"{location(p)}: unknown XML annotation format with root element "
+                             f"<{tag_text(root)}> (expected <viper>, <dataset> (PETS CVML) or "
+                             f"<annotations> (CVAT))")
         return fmt
     try:
         text = head.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
         if exc.start < len(head) - 4:  # not just a multi-byte character cut by the sniff limit
-            raise InputError(f"{p}: not a text annotation file (undecodable byte at offset "
-                             f"{exc.start})") from None
+            raise InputError(f"{location(p)}: not a text annotation file (undecodable byte at "
+                             f"offset {exc.start})") from None
         text = head[: exc.start].decode("utf-8-sig")
     for lineno, line in enumerate(text.splitlines(), start=1):
         if not line.strip() or line.lstrip().startswith("#"):
             continue
         if _MOT_LINE_RE.match(line):
             return "mot"
-        raise InputError(f"{p}:{lineno}: unknown annotation format (not MOTChallenge CSV, XML or "
-                         f"JSON): {line[:80]!r}")
-    raise InputError(f"{p}: no annotation rows found")
+        col = len(line) - len(line.lstrip())
+        raise InputError(f"{location(p, lineno, col + 1)}: unknown annotation format: expected "
+                         f"MOTChallenge CSV (a row of numbers), XML or JSON, got "
+                         f"{excerpt(token_at(line, col))}")
+    raise InputError(f"{location(p)}: no annotation rows found")
+
+
+def _check_file(p: Path) -> None:
+    """:class:`InputError` unless ``p`` is a regular file."""
+    if p.is_dir():
+        raise InputError(f"{location(p)}: is a folder, not an annotation file")
+    if not p.is_file():
+        if p.exists():
+            raise InputError(f"{location(p)}: not a regular file (a device, pipe or socket)")
+        raise InputError(f"annotation file not found: {location(p)}")
 
 
 def read_annotations(path: str | Path, kind: str = "auto", mot_kind: str = "auto") -> Annotations:
@@ -140,8 +153,7 @@ def read_annotations(path: str | Path, kind: str = "auto", mot_kind: str = "auto
         raise ConfigError(f"unknown annotation format {kind!r}; expected 'auto' or one of "
                           f"{', '.join(FORMATS)}")
     p = Path(path)
-    if not p.is_file():
-        raise InputError(f"annotation file not found: {p}")
+    _check_file(p)
     fmt = detect_format(p) if kind == "auto" else kind
     log.debug("reading %s as %s", p, fmt)
     if fmt == "mot":

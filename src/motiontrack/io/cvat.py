@@ -43,7 +43,7 @@ from xml.sax.saxutils import escape, quoteattr
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, excerpt, location
 from ..types import Annotations
 from .xmlsafe import XmlNode, parse_xml, read_bytes, xml_float, xml_int
 from .atomic import atomic_open
@@ -78,7 +78,7 @@ def read_cvat(path: str | Path) -> Annotations:
 def _flag(node: XmlNode, key: str, name: str) -> bool:
     raw = node.attrib.get(key, "0").strip()
     if raw not in ("0", "1", "true", "false", "True", "False"):
-        raise InputError(f"{node.where(name)}: attribute {key}={raw[:20]!r} must be 0 or 1")
+        raise InputError(f"{node.where(name)}: attribute {key}={excerpt(raw)} must be 0 or 1")
     return raw in ("1", "true", "True")
 
 
@@ -117,7 +117,8 @@ def parse_cvat(data: bytes, name: str = "<bytes>") -> Annotations:
                          f"<annotations>)")
     version = root.find("version")
     if version is not None and version.text and version.text != "1.1":
-        log.warning("%s: CVAT format version %s, expected 1.1; reading anyway", name, version.text)
+        log.warning("%s: CVAT format version %s, expected 1.1; reading anyway", location(name),
+                    excerpt(version.text))
     labels = _declared_labels(root.find("meta"))
     rows = _Rows()
     skipped = 0

@@ -32,7 +32,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..types import Annotations
-from .xmlsafe import XmlNode, parse_xml, read_bytes, xml_float, xml_int
+from .xmlsafe import MAX_ROWS, XmlNode, parse_xml, read_bytes, xml_float, xml_int
 from .atomic import atomic_open
 
 __all__ = ["read_cvml", "parse_cvml", "write_cvml", "format_cvml"]
@@ -110,6 +110,11 @@ def format_cvml(ann: Annotations, dataset_name: str | None = None) -> str:
         if ann.frames.min() < 1:
             raise InputError(f"cannot write CVML: frame numbers must be >= 1, got "
                              f"{int(ann.frames.min())}")
+        span = int(ann.frames.max()) - int(ann.frames.min()) + 1
+        if span > MAX_ROWS:
+            raise InputError(f"cannot write CVML: frames {int(ann.frames.min())} to "
+                             f"{int(ann.frames.max())} would be {span} <frame> elements, more "
+                             f"than {MAX_ROWS}")
         groups = ann.by_frame()
         for f in range(int(ann.frames.min()), int(ann.frames.max()) + 1):
             rows = groups.get(f)

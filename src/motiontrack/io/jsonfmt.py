@@ -39,7 +39,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import EXCERPT_CHARS, InputError, excerpt, location, printable
 from ..types import INT_LIMIT, Annotations
 from .atomic import atomic_open
 
@@ -50,6 +50,8 @@ VERSION = 1
 _TOP_KEYS = {"format", "version", "meta", "tracks"}
 _TRACK_KEYS = {"id", "boxes"}
 _BOX_KEYS = {"frame", "box", "score", "consider", "class", "visibility", "world"}
+#: deepest "meta" object kept (and written back by format_json, whose encoder recurses)
+MAX_META_DEPTH = 64
 
 
 def read_json(path: str | Path) -> Annotations:
@@ -64,33 +66,60 @@ def read_json(path: str | Path) -> Annotations:
         meta={**ann.meta, "path": str(p)})
 
 
+def _shown(v: Any) -> str:
+    """A JSON value for a message: lists and objects by kind, anything else as a short excerpt
+    (the file may be anything a user passed by mistake)."""
+    if isinstance(v, dict):
+        return "an object"
+    if isinstance(v, list):
+        return "a list"
+    text = json.dumps(v)
+    if isinstance(v, (int, float)) and not isinstance(v, bool) and len(text) <= EXCERPT_CHARS:
+        return text
+    return excerpt(text)
+
+
+def _depth(obj: Any) -> int:
+    """How deeply lists and objects nest in ``obj`` (a scalar is 0), without recursion."""
+    deepest, stack = 0, [(obj, 1)]
+    while stack:
+        node, d = stack.pop()
+        children = node.values() if isinstance(node, dict) else node if isinstance(node, list) \
+            else None
+        if children is None:
+            continue
+        deepest = max(deepest, d)
+        stack.extend((c, d + 1) for c in children)
+    return deepest
+
+
 def _reject_constant(token: str) -> Any:
     raise ValueError(f"non-finite number {token} is not allowed")
 
 
 def _int(v: Any, where: str, lo: int = -INT_LIMIT) -> int:
     if isinstance(v, bool) or not isinstance(v, int):
-        raise InputError(f"{where}: expected an integer, got {json.dumps(v)[:40]}")
+        raise InputError(f"{where}: expected an integer, got {_shown(v)}")
     if not lo <= v < INT_LIMIT:
-        raise InputError(f"{where}: {v} out of range [{lo}, 2**62)")
+        raise InputError(f"{where}: {_shown(v)} out of range [{lo}, 2**62)")
     return v
 
 
 def _float(v: Any, where: str) -> float:
     if isinstance(v, bool) or not isinstance(v, (int, float)):
-        raise InputError(f"{where}: expected a number, got {json.dumps(v)[:40]}")
+        raise InputError(f"{where}: expected a number, got {_shown(v)}")
     try:
         f = float(v)
     except OverflowError:
         raise InputError(f"{where}: number too large") from None
     if not math.isfinite(f):
-        raise InputError(f"{where}: expected a finite number, got {v}")
+        raise InputError(f"{where}: expected a finite number, got {_shown(v)}")
     return f
 
 
 def _vec(v: Any, n: int, where: str) -> list[float]:
     if not isinstance(v, list) or len(v) != n:
-        raise InputError(f"{where}: expected a list of {n} numbers, got {json.dumps(v)[:60]}")
+        raise InputError(f"{where}: expected a list of {n} numbers, got {_shown(v)}")
     return [_float(x, f"{where}[{i}]") for i, x in enumerate(v)]
 
 
@@ -99,7 +128,9 @@ def _keys(obj: Any, allowed: set[str], required: tuple[str, ...], where: str) ->
         raise InputError(f"{where}: expected an object, got {type(obj).__name__}")
     unknown = sorted(set(obj) - allowed)
     if unknown:
-        raise InputError(f"{where}: unknown key(s) {', '.join(map(repr, unknown))}; allowed: "
+        shown = ", ".join(excerpt(k) for k in unknown[:5])
+        shown += f" and {len(unknown) - 5} more" if len(unknown) > 5 else ""
+        raise InputError(f"{where}: unknown key(s) {shown}; allowed: "
                          f"{', '.join(sorted(allowed))}")
     for k in required:
         if k not in obj:
@@ -110,17 +141,20 @@ def _keys(obj: Any, allowed: set[str], required: tuple[str, ...], where: str) ->
 def parse_json(data: bytes | str, name: str = "<json>") -> Annotations:
     """Parse motiontrack JSON into :class:`Annotations`; errors name the JSON path
     (``tracks[3].boxes[7].box``) or the line and column of a syntax error."""
+    name = location(name)
     doc = _load(data, name)
     doc = _keys(doc, _TOP_KEYS, ("format", "version", "tracks"), f"{name}: top level")
     if doc["format"] != FORMAT_NAME:
         raise InputError(f"{name}: \"format\" must be {FORMAT_NAME!r}, got "
-                         f"{json.dumps(doc['format'])[:40]}")
+                         f"{_shown(doc['format'])}")
     version = _int(doc["version"], f"{name}: version")
     if version != VERSION:
         raise InputError(f"{name}: unsupported version {version} (this reader knows {VERSION})")
     meta_in = doc.get("meta", {})
     if not isinstance(meta_in, dict):
         raise InputError(f"{name}: meta: expected an object")
+    if _depth(meta_in) > MAX_META_DEPTH:
+        raise InputError(f"{name}: meta: nested deeper than {MAX_META_DEPTH} levels")
     tracks = doc["tracks"]
     if not isinstance(tracks, list):
         raise InputError(f"{name}: tracks: expected a list")
@@ -144,14 +178,16 @@ def _load(data: bytes | str, name: str) -> Any:
     try:
         return json.loads(data, parse_constant=_reject_constant)
     except json.JSONDecodeError as exc:
-        raise InputError(f"{name}:{exc.lineno}:{exc.colno}: malformed JSON: {exc.msg}") from None
+        # the decoder's messages ("Expecting ',' delimiter") quote nothing of the file
+        raise InputError(f"{location(name, exc.lineno, exc.colno)}: malformed JSON: {exc.msg}") \
+            from None
     except UnicodeDecodeError as exc:
         raise InputError(f"{name}: not UTF-8 JSON (undecodable byte at offset {exc.start})") \
             from None
     except RecursionError:
         raise InputError(f"{name}: JSON nested too deeply") from None
-    except ValueError as exc:  # _reject_constant, huge integer literals
-        raise InputError(f"{name}: malformed JSON: {exc}") from None
+    except ValueError as exc:  # _reject_constant, huge integer literals (no content quoted)
+        raise InputError(f"{name}: malformed JSON: {printable(exc)}") from None
 
 
 class _Rows:
@@ -180,7 +216,7 @@ class _Rows:
         self.scores.append(_float(b.get("score", 1.0), f"{w}.score"))
         c = b.get("consider", True)
         if not isinstance(c, bool):
-            raise InputError(f"{w}.consider: expected true or false, got {json.dumps(c)[:40]}")
+            raise InputError(f"{w}.consider: expected true or false, got {_shown(c)}")
         self.consider.append(c)
         self.classes.append(_int(b.get("class", -1), f"{w}.class"))
         self.vis.append(_float(b.get("visibility", -1.0), f"{w}.visibility"))

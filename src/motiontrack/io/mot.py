@@ -15,13 +15,15 @@ from __future__ import annotations
 
 import configparser
 import io
+import math
+import re
 import warnings
 from pathlib import Path
 from typing import Iterable
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, excerpt, location
 from ..types import INT_LIMIT, Annotations
 from .atomic import atomic_open
 
@@ -38,14 +40,17 @@ def read_mot(path: str | Path, kind: str = "auto") -> Annotations:
         ``"auto"``: ``gt`` when the file is named ``gt*`` and otherwise ``results``.
     """
     p = Path(path)
+    if p.is_dir():
+        raise InputError(f"{location(p)}: is a folder, not an annotation file")
     if not p.is_file():
-        raise InputError(f"annotation file not found: {p}")
+        raise InputError(f"annotation file not found: {location(p)}")
     if kind == "auto":
         kind = "gt" if p.name.lower().startswith("gt") else "results"
     try:
         text = p.read_text(encoding="utf-8-sig")
     except UnicodeDecodeError as exc:
-        raise InputError(f"{p}: not a text file ({exc.reason} at byte {exc.start})") from None
+        raise InputError(f"{location(p)}: not a text file ({exc.reason} at byte {exc.start})") \
+            from None
     ann = parse_mot(text, kind=kind, name=str(p))
     return Annotations(**{k: getattr(ann, k) for k in (
         "frames", "ids", "boxes", "scores", "consider", "classes", "visibility", "world")},
@@ -89,32 +94,68 @@ def parse_mot(text: str, kind: str = "results", name: str = "<string>") -> Annot
     rows: list[list[float]] = []
     ncols: int | None = None
     for lineno, raw in enumerate(io.StringIO(text), start=1):
-        line = raw.strip()
-        if not line or line.startswith("#"):
+        line = raw.rstrip("\r\n")
+        if not line.strip() or line.lstrip().startswith("#"):
             continue
-        parts = [t.strip() for t in (line.split(",") if "," in line else line.split())]
-        if len(parts) < 6:
-            raise InputError(f"{name}:{lineno}: expected at least 6 comma-separated values "
-                             f"(frame,id,left,top,width,height), got {len(parts)}: {line[:80]!r}")
-        try:
-            vals = [float(t) for t in parts[:10]]
-        except ValueError:
-            raise InputError(f"{name}:{lineno}: non-numeric value in {line[:80]!r}") from None
-        if not all(np.isfinite(vals)):
-            raise InputError(f"{name}:{lineno}: non-finite value in {line[:80]!r}")
+        fields = _split_fields(line)
+        if len(fields) < 6:
+            raise InputError(f"{location(name, lineno)}: expected at least 6 comma-separated "
+                             f"values (frame,id,left,top,width,height), got {len(fields)}")
+        vals = [_number(col, tok, k, location(name, lineno, col))
+                for k, (col, tok) in enumerate(fields[:10])]
         # frame, id and (9-column gt) class become int64: refuse values that cannot be one
-        if any(abs(v) >= INT_LIMIT for v in (vals[0], vals[1], vals[7] if len(vals) > 7 else 0)):
-            raise InputError(f"{name}:{lineno}: frame, id or class out of range in {line[:80]!r}")
+        for k in (0, 1, 7):
+            if k < len(vals) and abs(vals[k]) >= INT_LIMIT:
+                col, tok = fields[k]
+                raise InputError(f"{location(name, lineno, col)}: {_field(k)} out of range "
+                                 f"(|value| < 2**62), got {excerpt(tok)}")
         if vals[0] < 1 or not float(vals[0]).is_integer():
-            raise InputError(f"{name}:{lineno}: frame must be an integer >= 1, got {parts[0]!r}")
-        if vals[4] <= 0 or vals[5] <= 0:
-            raise InputError(f"{name}:{lineno}: box width and height must be > 0, got "
-                             f"w={parts[4]}, h={parts[5]}")
-        ncols = len(parts) if ncols is None else ncols
+            raise InputError(f"{location(name, lineno, fields[0][0])}: frame must be an integer "
+                             f">= 1, got {excerpt(fields[0][1])}")
+        for k in (4, 5):
+            if vals[k] <= 0:
+                col, tok = fields[k]
+                raise InputError(f"{location(name, lineno, col)}: box width and height must be "
+                                 f"> 0, got {_field(k)} {excerpt(tok)}")
+        ncols = len(fields) if ncols is None else ncols
         rows.append(vals + [-1.0] * (10 - len(vals)))
     if not rows:
         return Annotations.empty()
     return _annotations(np.asarray(rows, dtype=np.float64), ncols, kind)
+
+
+_FIELDS = ("frame", "id", "left", "top", "width", "height")
+
+
+def _field(k: int) -> str:
+    """The name of (0-based) field ``k`` for messages: ``field 3 (left)``."""
+    return f"field {k + 1}" + (f" ({_FIELDS[k]})" if k < len(_FIELDS) else "")
+
+
+def _split_fields(line: str) -> list[tuple[int, str]]:
+    """The fields of a row (comma-separated, or whitespace-separated when it has no comma), each
+    with the 1-based character column where it starts."""
+    if "," not in line:
+        return [(m.start() + 1, m.group()) for m in re.finditer(r"\S+", line)]
+    out, start = [], 0
+    for part in line.split(","):
+        lead = len(part) - len(part.lstrip())
+        out.append((start + lead + 1, part.strip()))
+        start += len(part) + 1
+    return out
+
+
+def _number(col: int, tok: str, k: int, where: str) -> float:
+    """Field ``k`` of a row as a finite number, or :class:`InputError` quoting a short excerpt."""
+    try:
+        v = float(tok)
+    except ValueError:
+        raise InputError(f"{where}: non-numeric value in {_field(k)}: expected a number, got "
+                         f"{excerpt(tok)}") from None
+    if not math.isfinite(v):
+        raise InputError(f"{where}: non-finite value in {_field(k)}: expected a finite number, "
+                         f"got {excerpt(tok)}")
+    return v
 
 
 def _annotations(a: np.ndarray, ncols: int | None, kind: str) -> Annotations:
@@ -178,17 +219,28 @@ def read_seqinfo(path: str | Path) -> dict[str, object]:
     if p.is_dir():
         p = p / "seqinfo.ini"
     if not p.is_file():
-        raise InputError(f"seqinfo.ini not found: {p}")
-    cp = configparser.ConfigParser()
+        raise InputError(f"seqinfo.ini not found: {location(p)}")
+    cp = configparser.ConfigParser(interpolation=None)
     try:
         cp.read_string(p.read_text(encoding="utf-8"))
-        sec = cp["Sequence"]
-    except (configparser.Error, KeyError) as exc:
-        raise InputError(f"malformed {p}: {exc}") from None
+    except UnicodeDecodeError as exc:
+        raise InputError(f"{location(p)}: not UTF-8 text (byte at offset {exc.start})") from None
+    except configparser.Error as exc:
+        # configparser's messages quote the offending line: name only where it is
+        line = getattr(exc, "lineno", None) or next(iter(getattr(exc, "errors", [])), (None,))[0]
+        raise InputError(f"{location(p, line)}: malformed seqinfo.ini "
+                         f"({type(exc).__name__})") from None
+    if "Sequence" not in cp:
+        raise InputError(f"{location(p)}: no [Sequence] section")
     out: dict[str, object] = {}
-    for key, value in sec.items():
+    for key, value in cp["Sequence"].items():
         try:
-            out[key] = int(value) if value.strip().lstrip("-").isdigit() else float(value)
+            number = int(value) if value.strip().lstrip("-").isdigit() else float(value)
         except ValueError:
             out[key] = value
+            continue
+        if not math.isfinite(number) or abs(number) >= INT_LIMIT:
+            raise InputError(f"{location(p)}: {excerpt(key)}: expected a finite number "
+                             f"below 2**62, got {excerpt(value.strip())}")
+        out[key] = number
     return out

@@ -6,32 +6,53 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from ..errors import InputError
+from ..errors import InputError, location, printable
 
 if sys.version_info >= (3, 11):
     import tomllib
 else:  # pragma: no cover
     import tomli as tomllib
 
-__all__ = ["read_toml", "parse_toml"]
+__all__ = ["read_toml", "parse_toml", "MAX_TOML_BYTES"]
+
+#: largest TOML file read (configs, cameras and manifests are a few kB)
+MAX_TOML_BYTES = 16 * 2**20
 
 
 def parse_toml(text: str, where: str) -> dict[str, Any]:
-    """Parse TOML text; a syntax error raises :class:`InputError` naming ``where`` and the line."""
+    """Parse TOML text; a syntax error raises :class:`InputError` naming ``where``, the line and
+    the column (never the text: the file may be anything a user passed by mistake), and so does
+    nesting deeper than the parser can follow (arrays in arrays thousands deep)."""
     try:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        raise InputError(f"malformed {where}: {exc}") from None
+        # tomllib's messages name the line and column and quote no content
+        raise InputError(f"malformed {printable(where)}: {printable(exc)}") from None
+    except ValueError:  # an integer literal of thousands of digits (int's conversion limit)
+        raise InputError(f"malformed {printable(where)}: a number with too many digits") \
+            from None
+    except RecursionError:
+        raise InputError(f"malformed {printable(where)}: arrays or tables nested too deeply") \
+            from None
 
 
 def read_toml(path: str | Path, what: str = "TOML file") -> dict[str, Any]:
     """Read a TOML file; a missing, undecodable or malformed file raises :class:`InputError`
     (``what`` names the kind of file in the message, e.g. ``"camera TOML"``)."""
     p = Path(path)
+    if p.is_dir():
+        raise InputError(f"{what} {printable(p)}: is a folder, not a file")
     if not p.is_file():
-        raise InputError(f"{what} not found: {p}")
+        raise InputError(f"{what} not found: {printable(p)}")
+    if p.stat().st_size > MAX_TOML_BYTES:
+        raise InputError(f"{what} {printable(p)}: {p.stat().st_size} bytes, more than the "
+                         f"{MAX_TOML_BYTES} a TOML file may have")
+    data = p.read_bytes()
     try:
-        text = p.read_text(encoding="utf-8")
+        text = data.decode("utf-8")
     except UnicodeDecodeError as exc:
-        raise InputError(f"malformed {what} {p}: {exc}") from None
+        line = data.count(b"\n", 0, exc.start) + 1
+        column = exc.start - (data.rfind(b"\n", 0, exc.start) + 1) + 1
+        raise InputError(f"malformed {what} {location(p, line, column)}: not UTF-8 text "
+                         f"(byte 0x{data[exc.start]:02x})") from None
     return parse_toml(text, f"{what} {p}")

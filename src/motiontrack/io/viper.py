@@ -51,9 +51,10 @@ import defusedxml.ElementTree as DET
 import numpy as np
 from defusedxml import DefusedXmlException
 
-from ..errors import InputError
-from ..types import Annotations
+from ..errors import InputError, excerpt, location, printable
+from ..types import INT_LIMIT, Annotations
 from .atomic import atomic_write_text
+from .xmlsafe import MAX_ROWS, tag_text, unsafe_xml_reason
 
 __all__ = ["read_viper", "parse_viper", "write_viper", "format_viper", "VIPER_NS", "VIPERDATA_NS"]
 
@@ -88,10 +89,13 @@ def _parse_framespan(text: str, where: str) -> list[tuple[int, int]]:
     for part in text.split():
         m = _SPAN_RE.match(part)
         if not m:
-            raise InputError(f"{where}: framespan must look like 'a:b' (e.g. '1:74'), got {text!r}")
+            raise InputError(f"{where}: framespan must look like 'a:b' (e.g. '1:74'), got "
+                             f"{excerpt(part)}")
+        if max(len(m.group(1)), len(m.group(2))) > 18:  # beyond any frame number (and int64)
+            raise InputError(f"{where}: framespan frame out of range, got {excerpt(part)}")
         a, b = int(m.group(1)), int(m.group(2))
         if b < a:
-            raise InputError(f"{where}: framespan end < start in {text!r}")
+            raise InputError(f"{where}: framespan end < start in {excerpt(part)}")
         spans.append((a, b))
     if not spans:
         raise InputError(f"{where}: empty framespan")
@@ -141,6 +145,7 @@ def parse_viper(
     attribute: str | None = None,
 ) -> Annotations:
     """Parse ViPER XML given as bytes/str; see :func:`read_viper`."""
+    name = location(name)
     root, where = _parse_tree(data, name)
     if root.tag != _V + "viper":
         raise InputError(f"{where(root)}: root element must be <viper> in namespace {VIPER_NS}")
@@ -187,17 +192,19 @@ def _parse_tree(data: bytes | str, name: str) -> tuple[Element, Callable[[Elemen
         parser.feed(data)
         root = parser.close()
     except DefusedXmlException as exc:
-        raise InputError(f"{name}: refused unsafe XML ({type(exc).__name__}: {exc})") from None
+        raise InputError(f"{name}: refused unsafe XML: {unsafe_xml_reason(exc)}") from None
     except ParseError as exc:
+        # expat's message ("not well-formed (invalid token): line 3, column 5") quotes nothing
         line, col = getattr(exc, "position", (None, None))
-        raise InputError(f"{name}: not well-formed XML at line {line}, column {col}: {exc}") from None
-    except LookupError as exc:  # an XML declaration naming an unknown encoding
-        raise InputError(f"{name}: unsupported XML encoding ({exc})") from None
+        raise InputError(f"{name}: not well-formed XML at line {line}, column {col}: "
+                         f"{printable(exc)}") from None
+    except LookupError:  # an XML declaration naming an unknown encoding
+        raise InputError(f"{name}: unsupported XML encoding in the XML declaration") from None
     lines = builder.lines
 
     def where(el: Element) -> str:
         tag = el.tag.split("}")[-1]
-        return f"{name}: line {lines.get(id(el), '?')}: <{tag}>"
+        return f"{name}: line {lines.get(id(el), '?')}: <{tag_text(tag)}>"
 
     return root, where
 
@@ -231,13 +238,27 @@ def _read_information(fel: Element, meta: dict[str, object],
         for val in att:
             if val.get("value") is not None:
                 info[att.get("name")] = val.get("value")
+    def number(key: str) -> int:
+        return _int(info[key], f"{where(fel)}: Information {key} must be an integer in "
+                               f"[0, 2**62)", lo=0)
+
+    if "NUMFRAMES" in info:
+        meta["num_frames"] = number("NUMFRAMES")
+    if "H-FRAME-SIZE" in info and "V-FRAME-SIZE" in info:
+        meta["frame_size"] = (number("H-FRAME-SIZE"), number("V-FRAME-SIZE"))
+
+
+def _int(raw: str | None, message: str, label: str = "", lo: int = -INT_LIMIT) -> int:
+    """An integer attribute in ``[lo, 2**62)``; otherwise :class:`InputError` with ``message``
+    and a short excerpt of what was there (``label=`` before it)."""
+    text = "" if raw is None else raw.strip()
     try:
-        if "NUMFRAMES" in info:
-            meta["num_frames"] = int(info["NUMFRAMES"])
-        if "H-FRAME-SIZE" in info and "V-FRAME-SIZE" in info:
-            meta["frame_size"] = (int(info["H-FRAME-SIZE"]), int(info["V-FRAME-SIZE"]))
-    except ValueError as exc:
-        raise InputError(f"{where(fel)}: bad Information value ({exc})") from None
+        v = int(text) if len(text) <= 20 else None
+    except ValueError:
+        v = None
+    if v is None or not lo <= v < INT_LIMIT:
+        raise InputError(f"{message}, got {label + '=' if label else ''}{excerpt(text)}")
+    return v
 
 
 def _read_object(obj: Element, bbox_attr: str, rows: "_Rows",
@@ -255,20 +276,19 @@ def _read_object(obj: Element, bbox_attr: str, rows: "_Rows",
         for val in att:
             x, y, w, h = _bbox(val, aname, where)
             for a, b in _parse_framespan(val.get("framespan", ""), where(val)):
+                if len(rows.frames) + (b - a + 1) > MAX_ROWS:
+                    raise InputError(f"{where(val)}: framespan {a}:{b} would make more than "
+                                     f"{MAX_ROWS} rows")
                 rows.add(range(a, b + 1), oid, (x, y, w, h))
 
 
 def _bbox(val: Element, aname: str, where: Callable[[Element], str]) -> tuple[int, int, int, int]:
     """``x, y, width, height`` of a ``<data:bbox>`` element (integers, sizes >= 0)."""
     if val.tag != _D + "bbox":
-        raise InputError(f"{where(val)}: expected <data:bbox> in attribute {aname!r}")
-    try:
-        x, y, w, h = (int(val.get(k, "")) for k in ("x", "y", "width", "height"))
-    except ValueError:
-        raise InputError(
-            f"{where(val)}: bbox needs integer x, y, width, height, got "
-            + ", ".join(f"{k}={val.get(k)!r}" for k in ("x", "y", "width", "height"))
-        ) from None
+        raise InputError(f"{where(val)}: expected <data:bbox> in attribute {excerpt(aname)}")
+    x, y, w, h = (_int(val.get(k), f"{where(val)}: bbox needs integer x, y, width, height "
+                                   "(|value| < 2**62)", k)
+                  for k in ("x", "y", "width", "height"))
     if w < 0 or h < 0:
         raise InputError(f"{where(val)}: bbox width/height must be >= 0, "
                          f"got width={w}, height={h}")
@@ -288,14 +308,10 @@ class _Rows:
     def claim_id(self, obj: Element, where: Callable[[Element], str]) -> int:
         """The object's integer id, refused when another object already has it."""
         dname = obj.get("name")
-        try:
-            oid = int(obj.get("id", ""))
-        except ValueError:
-            raise InputError(f"{where(obj)}: object id must be an integer, "
-                             f"got {obj.get('id')!r}") from None
+        oid = _int(obj.get("id"), f"{where(obj)}: object id must be an integer (|id| < 2**62)")
         if oid in self.seen and self.seen[oid] != dname:
             raise InputError(f"{where(obj)}: object id {oid} used by descriptors "
-                             f"{self.seen[oid]!r} and {dname!r}; pass descriptor=")
+                             f"{excerpt(self.seen[oid])} and {excerpt(dname)}; pass descriptor=")
         if oid in self.seen:
             raise InputError(f"{where(obj)}: duplicate object id {oid}")
         self.seen[oid] = dname

@@ -17,10 +17,15 @@ from pathlib import Path
 import defusedxml
 import defusedxml.sax
 
-from ..errors import InputError
+from ..errors import EXCERPT_CHARS, InputError, excerpt, location, printable
 from ..types import INT_LIMIT
 
-__all__ = ["XmlNode", "parse_xml", "xml_int", "xml_float", "read_bytes"]
+__all__ = ["XmlNode", "parse_xml", "xml_int", "xml_float", "read_bytes", "unsafe_xml_reason",
+           "tag_text", "MAX_ROWS"]
+
+#: most rows an annotation file may expand to (a ViPER framespan "1:1000000000" is one line but
+#: a billion rows; a CVML file written from frames 1 and 10**9 a billion empty frames)
+MAX_ROWS = 10_000_000
 
 @dataclass(eq=False)
 class XmlNode:
@@ -43,7 +48,24 @@ class XmlNode:
 
     def where(self, name: str) -> str:
         """``"file.xml:12: <box>"`` for error messages."""
-        return f"{name}:{self.line}: <{self.tag}>"
+        return f"{location(name, self.line)}: <{tag_text(self.tag)}>"
+
+
+def tag_text(tag: str) -> str:
+    """An element name from a file, for a message: escaped and cut like an excerpt."""
+    return printable(tag[:EXCERPT_CHARS]) + ("..." if len(tag) > EXCERPT_CHARS else "")
+
+
+def unsafe_xml_reason(exc: Exception) -> str:
+    """What ``defusedxml`` refused, in words; its own messages quote the file's entity names and
+    system identifiers (which may be anything, e.g. ``file:///etc/passwd``)."""
+    reasons = {
+        "DTDForbidden": "a document type declaration",
+        "EntitiesForbidden": "an entity declaration (entity expansion)",
+        "ExternalReferenceForbidden": "a reference to an external file or URL",
+        "NotSupportedError": "an XML feature the safe parser does not support",
+    }
+    return reasons.get(type(exc).__name__, "unsafe content")
 
 
 class _TreeBuilder(xml.sax.handler.ContentHandler):
@@ -92,15 +114,23 @@ def parse_xml(data: bytes, name: str = "<bytes>") -> XmlNode:
         defusedxml.sax.parse(io.BytesIO(data), handler, forbid_dtd=False, forbid_entities=True,
                              forbid_external=True)
     except defusedxml.DefusedXmlException as exc:
-        raise InputError(f"{name}: refused unsafe XML ({type(exc).__name__}: {exc})") from None
+        raise InputError(f"{location(name)}: refused unsafe XML: {unsafe_xml_reason(exc)}") \
+            from None
     except xml.sax.SAXParseException as exc:
-        raise InputError(f"{name}:{exc.getLineNumber()}:{exc.getColumnNumber()}: malformed XML: "
-                         f"{exc.getMessage()}") from None
-    except (xml.sax.SAXException, ValueError, LookupError) as exc:
-        # LookupError: an unknown encoding in the XML declaration
-        raise InputError(f"{name}: malformed XML: {exc}") from None
+        # expat's messages ("not well-formed (invalid token)") quote nothing of the file; the
+        # column is expat's (0-based)
+        raise InputError(f"{location(name, exc.getLineNumber(), exc.getColumnNumber())}: "
+                         f"malformed XML: {printable(exc.getMessage())}") from None
+    except LookupError:  # an unknown encoding in the XML declaration
+        raise InputError(f"{location(name)}: malformed XML: unknown encoding in the XML "
+                         "declaration") from None
+    except xml.sax.SAXException as exc:
+        raise InputError(f"{location(name)}: malformed XML: {printable(exc.getMessage())}") \
+            from None
+    except ValueError as exc:
+        raise InputError(f"{location(name)}: malformed XML ({type(exc).__name__})") from None
     if handler.root is None:
-        raise InputError(f"{name}: empty XML document")
+        raise InputError(f"{location(name)}: empty XML document")
     return handler.root
 
 
@@ -119,10 +149,11 @@ def xml_int(node: XmlNode, key: str, name: str, lo: int = -INT_LIMIT) -> int:
     try:
         v = int(raw.strip())
     except ValueError:
-        raise InputError(f"{node.where(name)}: attribute {key}={raw[:40]!r} is not an integer") \
-            from None
+        raise InputError(f"{node.where(name)}: attribute {key}={excerpt(raw)} is not an "
+                         "integer") from None
     if not lo <= v < INT_LIMIT:
-        raise InputError(f"{node.where(name)}: attribute {key}={v} out of range [{lo}, 2**62)")
+        raise InputError(f"{node.where(name)}: attribute {key}={_number_text(raw)} out of "
+                         f"range [{lo}, 2**62)")
     return v
 
 
@@ -132,15 +163,24 @@ def xml_float(node: XmlNode, key: str, name: str) -> float:
     try:
         v = float(raw.strip())
     except ValueError:
-        raise InputError(f"{node.where(name)}: attribute {key}={raw[:40]!r} is not a number") \
-            from None
+        raise InputError(f"{node.where(name)}: attribute {key}={excerpt(raw)} is not a "
+                         "number") from None
     if not math.isfinite(v):
-        raise InputError(f"{node.where(name)}: attribute {key}={raw[:40]!r} is not finite")
+        raise InputError(f"{node.where(name)}: attribute {key}={excerpt(raw)} is not finite")
     return v
 
 
+def _number_text(raw: str) -> str:
+    """A number from a file for a message: as written when short, else a short excerpt."""
+    text = raw.strip()
+    return text if len(text) <= EXCERPT_CHARS and text.isprintable() else excerpt(text)
+
+
 def read_bytes(path: str | Path) -> bytes:
+    """The bytes of an annotation file; a missing file or a folder is an :class:`InputError`."""
     p = Path(path)
+    if p.is_dir():
+        raise InputError(f"{location(p)}: is a folder, not an annotation file")
     if not p.is_file():
-        raise InputError(f"annotation file not found: {p}")
+        raise InputError(f"annotation file not found: {location(p)}")
     return p.read_bytes()
