@@ -19,11 +19,11 @@ from typing import Protocol, Union
 import numpy as np
 
 
-from ..errors import InputError
+from ..errors import InputError, excerpt, location
 from ..io.tomlfile import read_toml
 from .chessboard import OpenCVCamera, read_opencv_yaml
 from .ground import GroundHomography, ground_from_toml_doc
-from .tsai import TsaiCamera, read_tsai_xml, tsai_from_toml_doc
+from .tsai import TsaiCamera, _kind, read_tsai_xml, tsai_from_toml_doc
 
 __all__ = ["Camera", "load_camera", "AnyCamera"]
 
@@ -41,8 +41,10 @@ class Camera(Protocol):
 def load_camera(path: str | Path) -> AnyCamera:
     """Read any supported camera file; raises :class:`InputError` on a missing/malformed file."""
     p = Path(path)
+    if p.is_dir():
+        raise InputError(f"camera file {location(p)}: is a folder, not a file")
     if not p.is_file():
-        raise InputError(f"camera file not found: {p}")
+        raise InputError(f"camera file not found: {location(p)}")
     suffix = p.suffix.lower()
     if suffix == ".xml":
         return read_tsai_xml(p)
@@ -55,5 +57,7 @@ def load_camera(path: str | Path) -> AnyCamera:
             return tsai_from_toml_doc(doc, str(p))
         if model == "homography":
             return ground_from_toml_doc(doc, str(p))
-        raise InputError(f"{p}: model must be 'tsai' or 'homography', got {model!r}")
-    raise InputError(f"{p}: unknown camera file type {suffix!r} (expected .xml, .yml/.yaml or .toml)")
+        shown = excerpt(model) if isinstance(model, str) else _kind(model)
+        raise InputError(f"{location(p)}: model must be 'tsai' or 'homography', got {shown}")
+    raise InputError(f"{location(p)}: unknown camera file type {excerpt(suffix)} (expected .xml, "
+                     ".yml/.yaml or .toml)")

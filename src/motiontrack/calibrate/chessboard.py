@@ -16,6 +16,7 @@ from __future__ import annotations
 import functools
 import logging
 import math
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Sequence
@@ -23,10 +24,10 @@ from typing import Sequence
 import cv2
 import numpy as np
 
-from ..errors import ConfigError, InputError
+from ..errors import ConfigError, InputError, location, printable
 from ..io.atomic import commit_temp, temp_path_for
 from ..imaging import to_gray
-from .tsai import _as_pixels, _as_world, _intersect_plane
+from .tsai import MAX_IMAGE_SIDE, _as_pixels, _as_world, _intersect_plane
 
 log = logging.getLogger(__name__)
 
@@ -151,7 +152,14 @@ def parse_pattern(text: str) -> tuple[int, int]:
         raise ConfigError(f"pattern must look like 9x6 (inner corners), got {text!r}") from None
     if c < 2 or r < 2:
         raise ConfigError(f"pattern needs at least 2x2 inner corners, got {text!r}")
+    if c > MAX_PATTERN_SIDE or r > MAX_PATTERN_SIDE:
+        raise ConfigError(f"pattern must have at most {MAX_PATTERN_SIDE} inner corners per side, "
+                          f"got {c if c > MAX_PATTERN_SIDE else r}")
     return c, r
+
+
+#: most inner corners per side of a chessboard (printed boards have up to a few dozen)
+MAX_PATTERN_SIDE = 100
 
 
 def board_points(pattern: tuple[int, int], square: float) -> np.ndarray:
@@ -297,32 +305,189 @@ def write_opencv_yaml(path: str | Path, camera: OpenCVCamera,
 
 
 def read_opencv_yaml(path: str | Path) -> OpenCVCamera:
-    """Read ``camera_matrix``, ``distortion_coefficients``, image size and optional ground pose."""
+    """Read ``camera_matrix``, ``distortion_coefficients``, image size and optional ground pose.
+
+    The text is checked before OpenCV's ``FileStorage`` parses it (:func:`check_yaml_text`):
+    OpenCV's parsers recurse on nesting and crash the process on a file nested thousands deep,
+    and read XML content in a ``.yml`` file. Every node is checked for its kind and size before
+    it is read, so a matrix of the wrong size (or one claiming 10**5 x 10**5 elements) is an
+    :class:`InputError` naming it, not an OpenCV assertion or allocation.
+    """
     p = Path(path)
     if not p.is_file():
-        raise InputError(f"camera file not found: {p}")
+        raise InputError(f"camera file not found: {location(p)}")
+    check_yaml_text(p)
+    where = f"OpenCV camera YAML {location(p)}"
     try:
         fs = cv2.FileStorage(str(p), cv2.FILE_STORAGE_READ)
     except (cv2.error, SystemError) as exc:
-        cause = exc.__cause__ or exc.__context__ or exc
-        msg = str(cause).strip().splitlines()[-1] if str(cause).strip() else "parse error"
-        raise InputError(f"malformed OpenCV camera YAML {p}: {msg}") from None
+        raise InputError(f"malformed {where}: {_opencv_parse_message(exc)}") from None
     try:
-        if not fs.isOpened():
-            raise InputError(f"malformed OpenCV camera YAML {p}: cannot open")
-        K = fs.getNode("camera_matrix").mat()
-        dist = fs.getNode("distortion_coefficients").mat()
+        if not fs.isOpened() or not fs.root().isMap():
+            raise InputError(f"malformed {where}: expected a mapping of names to values")
+        K = _yaml_matrix(fs, "camera_matrix", where, lambda r, c: (r, c) == (3, 3), "3x3")
+        dist = _yaml_matrix(fs, "distortion_coefficients", where,
+                            lambda r, c: min(r, c) == 1 and r * c in _DIST_COUNTS,
+                            f"1xN or Nx1 with N in {_DIST_COUNTS}")
         if K is None or dist is None:
-            raise InputError(f"{p}: needs camera_matrix and distortion_coefficients matrices")
-        w = fs.getNode("image_width").real()
-        h = fs.getNode("image_height").real()
-        rv = fs.getNode("ground_rvec").mat()
-        tv = fs.getNode("ground_tvec").mat()
+            raise InputError(f"{location(p)}: needs camera_matrix and distortion_coefficients "
+                             "matrices")
+        w, h = (_yaml_side(fs, k, where) for k in ("image_width", "image_height"))
+        three = (lambda r, c: r * c == 3 and min(r, c) == 1)
+        rv = _yaml_matrix(fs, "ground_rvec", where, three, "3x1")
+        tv = _yaml_matrix(fs, "ground_tvec", where, three, "3x1")
+    except cv2.error as exc:
+        raise InputError(f"malformed {where}: {_opencv_parse_message(exc)}") from None
     finally:
         fs.release()
+    if (rv is None) != (tv is None):
+        raise InputError(f"{where}: ground_rvec and ground_tvec go together; found only one")
     try:
-        return OpenCVCamera(K=K, dist=dist.reshape(-1), size=(int(w), int(h)),
+        return OpenCVCamera(K=K, dist=dist.reshape(-1), size=(w, h),
                             rvec=None if rv is None else rv.reshape(3),
                             tvec=None if tv is None else tv.reshape(3))
     except ValueError as exc:
-        raise InputError(f"invalid camera in {p}: {exc}") from None
+        raise InputError(f"invalid camera in {location(p)}: {exc}") from None
+
+
+#: distortion coefficient counts OpenCV's models use
+_DIST_COUNTS = (4, 5, 8, 12, 14)
+#: largest OpenCV camera YAML read (a calibration with many views is a few hundred kB)
+MAX_YAML_BYTES = 16 * 2**20
+#: deepest nesting of sequences and mappings accepted (OpenCV's own files nest 2 deep)
+MAX_YAML_DEPTH = 32
+#: most flow brackets accepted: a bound on the nesting that holds however the text is quoted
+#: (OpenCV's parsers read 20,000 levels and crash on 50,000; a camera file has a few)
+MAX_YAML_BRACKETS = 1000
+
+
+def check_yaml_text(path: Path) -> None:
+    """Refuse, before OpenCV parses it, a camera YAML that is too large, not UTF-8 text, XML,
+    or nested deeper than :data:`MAX_YAML_DEPTH` (OpenCV's parser recurses per level and a file
+    nested 50,000 deep crashes the process with a segmentation fault)."""
+    size = path.stat().st_size
+    if size > MAX_YAML_BYTES:
+        raise InputError(f"OpenCV camera YAML {location(path)}: {size} bytes, more than the "
+                         f"{MAX_YAML_BYTES} a camera file may have")
+    data = path.read_bytes()
+    try:
+        text = data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        line = data.count(b"\n", 0, exc.start) + 1
+        raise InputError(f"OpenCV camera YAML {location(path, line)}: not UTF-8 text (byte at "
+                         f"offset {exc.start})") from None
+    if text.lstrip().startswith("<"):
+        raise InputError(f"OpenCV camera YAML {location(path)}: XML content; expected the YAML "
+                         "that 'motiontrack calibrate chessboard' writes")
+    deep = _too_deep(text, MAX_YAML_DEPTH)
+    if deep is not None:
+        raise InputError(f"OpenCV camera YAML {location(path, *deep)}: nested deeper than "
+                         f"{MAX_YAML_DEPTH} levels")
+    brackets = text.count("[") + text.count("{")
+    if brackets > MAX_YAML_BRACKETS:
+        # whatever quotes and comments hide from _too_deep, no nesting can be deeper than this
+        raise InputError(f"OpenCV camera YAML {location(path)}: {brackets} brackets '[' and '{{', "
+                         f"more than the {MAX_YAML_BRACKETS} a camera file may have")
+
+
+_YAML_SPECIAL = re.compile(r"[\[\]{}\"'#\\]")
+
+
+def _too_deep(text: str, limit: int) -> tuple[int, int] | None:
+    """``(line, column)`` (1-based) where the nesting of YAML text first exceeds ``limit``, or
+    None. Counts flow brackets ``[ {`` outside quotes and comments, plus block nesting by
+    indentation and ``- `` sequence entries; it over-counts brackets in plain scalars, which only
+    makes it stricter."""
+    flow = 0
+    indents: list[int] = []
+    quote = ""
+    for lineno, line in enumerate(text.splitlines(), 1):
+        if not quote and flow == 0:
+            body = line.lstrip(" ")
+            if not body or body.startswith("#"):
+                continue
+            indent = len(line) - len(body)
+            while indents and indents[-1] >= indent:
+                indents.pop()
+            indents.append(indent)
+            while body.startswith("- ") or body == "-":  # "- - x": a sequence in a sequence
+                body = body[2:].lstrip(" ")
+                indent += 2
+                indents.append(indent)
+        block = len(indents)
+        escaped_at = -1
+        for m in _YAML_SPECIAL.finditer(line):
+            ch, col = m.group(), m.start() + 1
+            if quote:
+                if col == escaped_at:
+                    pass
+                elif ch == "\\" and quote == '"':
+                    escaped_at = col + 1
+                elif ch == quote:
+                    quote = ""
+            elif ch in "\"'":
+                quote = ch
+            elif ch == "#" and (col == 1 or line[col - 2] in " \t"):
+                break
+            elif ch in "[{":
+                flow += 1
+                if flow + block > limit:
+                    return lineno, col
+            elif ch in "]}":
+                flow = max(0, flow - 1)
+        if block > limit:
+            return lineno, 1
+    return None
+
+
+def _opencv_parse_message(exc: Exception) -> str:
+    """The useful part of an OpenCV persistence error: ``line N: what`` (OpenCV's parse messages
+    are fixed texts, such as "Missing , between the elements", that quote nothing of the file)."""
+    cause = exc.__cause__ or exc.__context__  # FileStorage() raises SystemError from cv2.error
+    text = str(cause if isinstance(exc, SystemError) and cause is not None else exc)
+    m = re.search(r"\((\d+)\): ([^'\n]*)'?\s*$", text)
+    if m:
+        return f"line {m.group(1)}: {printable(m.group(2).strip())[:120]}"
+    m = re.search(r"error: \(([-\d]+):([^)]*)\)", text)
+    return printable(m.group(2)) if m else "not a readable OpenCV file"
+
+
+def _yaml_matrix(fs, key: str, where: str, shape_ok, shape: str) -> np.ndarray | None:
+    """Matrix ``key`` of an open FileStorage, or None when absent; checked for kind, size and
+    finite values before and after OpenCV reads it."""
+    node = fs.getNode(key)
+    if node.empty() or node.isNone():
+        return None
+    if not node.isMap():
+        raise InputError(f"{where}: {key}: expected an OpenCV matrix (!!opencv-matrix with rows, "
+                         "cols, dt and data)")
+    rows, cols, data = node.getNode("rows"), node.getNode("cols"), node.getNode("data")
+    if not (rows.isInt() and cols.isInt() and data.isSeq()):
+        raise InputError(f"{where}: {key}: an OpenCV matrix needs integer rows and cols and a "
+                         "data sequence")
+    r, c = int(rows.real()), int(cols.real())
+    if not shape_ok(r, c):
+        raise InputError(f"{where}: {key}: expected a {shape} matrix, got {r}x{c}")
+    if data.size() != r * c:
+        raise InputError(f"{where}: {key}: a {r}x{c} matrix needs {r * c} values in data, got "
+                         f"{data.size()}")
+    m = node.mat()
+    if m is None or m.size != r * c:
+        raise InputError(f"{where}: {key}: not a single-channel {r}x{c} matrix")
+    m = np.asarray(m, dtype=np.float64)
+    if not np.isfinite(m).all():
+        raise InputError(f"{where}: {key}: values must be finite numbers")
+    return m
+
+
+def _yaml_side(fs, key: str, where: str) -> int:
+    """``image_width`` or ``image_height``: a whole number of pixels."""
+    node = fs.getNode(key)
+    if node.empty() or node.isNone():
+        raise InputError(f"{where}: needs {key} (pixels)")
+    v = node.real() if (node.isInt() or node.isReal()) else math.nan
+    if not (math.isfinite(v) and v.is_integer() and 1 <= v <= MAX_IMAGE_SIDE):
+        shown = f"{v:g}" if math.isfinite(v) else "no number"
+        raise InputError(f"{where}: {key} must be a whole number of pixels in "
+                         f"[1, {MAX_IMAGE_SIDE}], got {shown}")
+    return int(v)

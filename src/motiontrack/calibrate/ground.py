@@ -9,9 +9,8 @@ same pairs instead give a full pose with ``cv2.solvePnP``, so heights can be mea
 
 from __future__ import annotations
 
-import csv
-import io
 import logging
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -20,11 +19,11 @@ import numpy as np
 import tomli_w
 
 
-from ..errors import ConfigError, InputError
+from ..errors import ConfigError, InputError, excerpt, location
 from ..io.atomic import atomic_write_text
 from ..io.tomlfile import read_toml
 from .chessboard import OpenCVCamera
-from .tsai import _as_pixels, _as_world
+from .tsai import MAX_IMAGE_SIDE, _as_pixels, _as_world, _kind
 
 log = logging.getLogger(__name__)
 
@@ -95,12 +94,29 @@ def fit_homography(image_pts: np.ndarray, world_pts: np.ndarray,
         raise ConfigError(f"need as many image as world points, got {len(img)} and {len(wld)}")
     if len(img) < 4:
         raise InputError(f"a ground homography needs at least 4 point pairs, got {len(img)}")
+    _check_spread(img, "image")
+    _check_spread(wld, "world")
     H, _ = cv2.findHomography(np.ascontiguousarray(img), np.ascontiguousarray(wld), 0)
     if H is None:
         raise InputError("point pairs are degenerate (three or more collinear?): no homography")
-    g = GroundHomography(H=H, size=size)
+    try:
+        g = GroundHomography(H=H, size=size)
+    except ValueError:
+        raise InputError("point pairs are degenerate: the fitted homography is singular (are "
+                         "the points nearly on one line?)") from None
     res = np.linalg.norm(g.image_to_world(img) - wld, axis=1)
     return GroundHomography(H=H, size=size, rms=float(np.sqrt(np.mean(res ** 2))))
+
+
+def _check_spread(pts: np.ndarray, what: str) -> None:
+    """:class:`InputError` when the points do not span a plane: all on one line (or one point),
+    from which no homography follows."""
+    centred = pts - pts.mean(axis=0)
+    s = np.linalg.svd(centred, compute_uv=False)
+    if not (s[0] > 0 and s[1] > 1e-9 * s[0]):
+        raise InputError(f"the {len(pts)} {what} points lie on one line (or are one point): a "
+                         "ground homography needs points spread over the plane, at least 4 with "
+                         "no 3 on a line")
 
 
 def fit_pose(camera, image_pts: np.ndarray, world_pts: np.ndarray):
@@ -109,9 +125,14 @@ def fit_pose(camera, image_pts: np.ndarray, world_pts: np.ndarray):
     wld = _as_world(world_pts)
     if len(img) < 4 or len(img) != len(wld):
         raise InputError(f"pose needs at least 4 matching point pairs, got {len(img)}/{len(wld)}")
-    ok, rvec, tvec = cv2.solvePnP(np.ascontiguousarray(wld), np.ascontiguousarray(img), camera.K,
-                                  camera.dist, flags=cv2.SOLVEPNP_ITERATIVE)
-    if not ok:
+    _check_spread(img, "image")
+    _check_spread(wld[:, :2], "world")
+    try:
+        ok, rvec, tvec = cv2.solvePnP(np.ascontiguousarray(wld), np.ascontiguousarray(img),
+                                      camera.K, camera.dist, flags=cv2.SOLVEPNP_ITERATIVE)
+    except cv2.error:
+        ok = False
+    if not ok or not (np.isfinite(rvec).all() and np.isfinite(tvec).all()):
         raise InputError("solvePnP failed for these point pairs")
     return OpenCVCamera(K=camera.K, dist=camera.dist, size=camera.size, rvec=rvec.reshape(3),
                         tvec=tvec.reshape(3))
@@ -123,24 +144,74 @@ def read_point_pairs(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
     Returns ``(image (N, 2), world (N, 2))`` float64.
     """
     p = Path(path)
-    if not p.is_file():
-        raise InputError(f"point-pairs file not found: {p}")
     rows = []
-    for lineno, rec in enumerate(csv.reader(io.StringIO(p.read_text(encoding="utf-8-sig"))), 1):
-        rec = [c.strip() for c in rec]
-        if not rec or not rec[0] or rec[0].startswith("#"):
+    for lineno, fields in read_csv_fields(p, "point-pairs file"):
+        if not fields or not fields[0][1] or fields[0][1].startswith("#"):
             continue
-        try:
-            vals = [float(c) for c in rec]
-        except ValueError:
-            if not rows and lineno == 1:
-                continue  # header
-            raise InputError(f"{p}:{lineno}: expected numbers u,v,x,y, got {','.join(rec)!r}") from None
-        if len(vals) not in (4, 5) or not np.all(np.isfinite(vals)):
-            raise InputError(f"{p}:{lineno}: expected 4 finite values u,v,x,y, got {','.join(rec)!r}")
+        if lineno == 1 and not rows and not _is_number(fields[0][1]):
+            continue  # header
+        if len(fields) not in (4, 5):
+            raise InputError(f"{location(p, lineno)}: expected 4 finite values u,v,x,y, got "
+                             f"{len(fields)} values")
+        vals = []
+        for col, text in fields:
+            if not _is_number(text):
+                raise InputError(f"{location(p, lineno, col)}: expected numbers u,v,x,y, got "
+                                 f"{excerpt(text)}")
+            v = float(text)
+            if not math.isfinite(v):
+                raise InputError(f"{location(p, lineno, col)}: expected 4 finite values u,v,x,y, "
+                                 f"got {excerpt(text)}")
+            vals.append(v)
         rows.append(vals[:4])
     a = np.asarray(rows, dtype=np.float64).reshape(-1, 4)
     return a[:, :2], a[:, 2:4]
+
+
+#: largest CSV of points or lines read (they hold tens to thousands of rows)
+MAX_CSV_BYTES = 64 * 2**20
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def read_csv_fields(path: Path, what: str) -> list[tuple[int, list[tuple[int, str]]]]:
+    """The rows of a small comma-separated text file: ``(line number, [(column, field), ...])``
+    with 1-based line numbers and character columns, fields stripped of surrounding blanks.
+
+    A missing file, a folder, a file larger than :data:`MAX_CSV_BYTES` or one that is not UTF-8
+    text is an :class:`InputError` naming ``what``. No quoting: these files hold numbers and
+    names.
+    """
+    if path.is_dir():
+        raise InputError(f"{what} {location(path)}: is a folder, not a file")
+    if not path.is_file():
+        raise InputError(f"{what} not found: {location(path)}")
+    size = path.stat().st_size
+    if size > MAX_CSV_BYTES:
+        raise InputError(f"{what} {location(path)}: {size} bytes, more than the {MAX_CSV_BYTES} "
+                         "such a file may have")
+    data = path.read_bytes()
+    try:
+        text = data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        line = data.count(b"\n", 0, exc.start) + 1
+        raise InputError(f"{what} {location(path, line)}: not UTF-8 text (byte at offset "
+                         f"{exc.start})") from None
+    out = []
+    for lineno, line in enumerate(text.splitlines(), 1):
+        fields, start = [], 0
+        for part in line.split(","):
+            lead = len(part) - len(part.lstrip())
+            fields.append((start + lead + 1, part.strip()))
+            start += len(part) + 1
+        out.append((lineno, fields if line.strip() else []))
+    return out
 
 
 def write_ground_toml(g: GroundHomography, path: str | Path) -> None:
@@ -154,12 +225,45 @@ def write_ground_toml(g: GroundHomography, path: str | Path) -> None:
 
 
 def ground_from_toml_doc(doc: dict, name: str) -> GroundHomography:
+    """A :class:`GroundHomography` from our TOML layout (see :func:`write_ground_toml`): ``H`` a
+    3x3 array of finite numbers, optional whole ``width`` and ``height`` in pixels, optional
+    ``rms_m``; a bad value is an :class:`InputError` naming it (never quoting the file)."""
+    where = f"{location(name)}: invalid homography camera"
+    H = doc.get("H")
+    if H is None:
+        raise InputError(f"{where}: no H (3x3 array, image pixels to ground metres)")
+    if not (isinstance(H, list) and len(H) == 3
+            and all(isinstance(r, list) and len(r) == 3 for r in H)):
+        raise InputError(f"{where}: H must be a 3x3 array of numbers")
+    flat = [_toml_number(v, f"{where}: H", name) for r in H for v in r]
+    size = None
+    if "width" in doc or "height" in doc:
+        size = tuple(_toml_side(doc.get(k), f"{where}: {k}") for k in ("width", "height"))
+    rms = _toml_number(doc.get("rms_m", math.nan), f"{where}: rms_m", name, nan_ok=True)
     try:
-        H = np.asarray(doc["H"], dtype=np.float64)
-        size = (int(doc["width"]), int(doc["height"])) if "width" in doc else None
-        return GroundHomography(H=H, size=size, rms=float(doc.get("rms_m", float("nan"))))
-    except (KeyError, ValueError, TypeError) as exc:
-        raise InputError(f"{name}: invalid homography camera: {exc}") from None
+        return GroundHomography(H=np.asarray(flat, dtype=np.float64).reshape(3, 3), size=size,
+                                rms=rms)
+    except ValueError:
+        raise InputError(f"{where}: H must be invertible") from None
+
+
+def _toml_number(v: object, where: str, name: str, nan_ok: bool = False) -> float:
+    """A TOML number as a finite float (or NaN, "unknown", with ``nan_ok``)."""
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or (
+            isinstance(v, int) and not abs(v) < 1e300):
+        raise InputError(f"{where} must be numbers, got {_kind(v)}")
+    if not (math.isfinite(v) or (nan_ok and math.isnan(v))):
+        raise InputError(f"{where} must be finite numbers, got {v}")
+    return float(v)
+
+
+def _toml_side(v: object, where: str) -> int:
+    """An image width or height from a camera file: a whole number of pixels."""
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not (
+            float(v).is_integer() and 1 <= v <= MAX_IMAGE_SIDE):
+        raise InputError(f"{where} must be a whole number of pixels in [1, {MAX_IMAGE_SIDE}], "
+                         f"got {v if isinstance(v, (int, float)) else _kind(v)}")
+    return int(v)
 
 
 def read_ground_toml(path: str | Path) -> GroundHomography:

@@ -375,8 +375,13 @@ def fit_coplanar_tsai(image_pts: np.ndarray, world_pts: np.ndarray, geom: Sensor
     K0 = np.array([[fy0 * aspect, 0, geom.cx], [0, fy0, geom.cy], [0, 0, 1]], dtype=np.float64)
     flags = (cv2.CALIB_USE_INTRINSIC_GUESS | cv2.CALIB_FIX_PRINCIPAL_POINT | cv2.CALIB_FIX_ASPECT_RATIO
              | cv2.CALIB_ZERO_TANGENT_DIST | cv2.CALIB_FIX_K1 | cv2.CALIB_FIX_K2 | cv2.CALIB_FIX_K3)
-    _, K, _, rv, tv = cv2.calibrateCamera([W.astype(np.float32)], [und.reshape(-1, 1, 2)],
-                                          (geom.width, geom.height), K0, np.zeros(5), flags=flags)
+    try:
+        _, K, _, rv, tv = cv2.calibrateCamera([W.astype(np.float32)], [und.reshape(-1, 1, 2)],
+                                              (geom.width, geom.height), K0, np.zeros(5),
+                                              flags=flags)
+    except cv2.error:
+        raise InputError(f"the {len(img)} grid points do not determine a camera (all on one "
+                         "line, or world positions repeated?)") from None
     R, _ = cv2.Rodrigues(rv[0])
     rx, ry, rz = rotation_to_tsai_angles(R)
     f0 = K[1, 1] * geom.dpy
@@ -392,10 +397,15 @@ def fit_coplanar_tsai(image_pts: np.ndarray, world_pts: np.ndarray, geom: Sensor
     sol = least_squares(resid, x0, method="lm", x_scale="jac", max_nfev=5000)
     p = sol.x
     cx, cy = (p[8], p[9]) if fit_center else (geom.cx, geom.cy)
-    cam = TsaiCamera(width=int(geom.width), height=int(geom.height), ncx=geom.ncx, nfx=geom.nfx,
-                     dx=geom.dx, dy=geom.dy, dpx=geom.dpx, dpy=geom.dpy, focal=float(p[0]),
-                     kappa1=float(p[1]), cx=float(cx), cy=float(cy), sx=geom.sx, tx=float(p[5]),
-                     ty=float(p[6]), tz=float(p[7]), rx=float(p[2]), ry=float(p[3]), rz=float(p[4]))
+    try:
+        cam = TsaiCamera(width=int(geom.width), height=int(geom.height), ncx=geom.ncx,
+                         nfx=geom.nfx, dx=geom.dx, dy=geom.dy, dpx=geom.dpx, dpy=geom.dpy,
+                         focal=float(p[0]), kappa1=float(p[1]), cx=float(cx), cy=float(cy),
+                         sx=geom.sx, tx=float(p[5]), ty=float(p[6]), tz=float(p[7]),
+                         rx=float(p[2]), ry=float(p[3]), rz=float(p[4]))
+    except ValueError as exc:  # e.g. a negative focal length: the points fit no real camera
+        raise InputError(f"the coplanar Tsai fit found no valid camera for these "
+                         f"{len(img)} points ({exc})") from None
     r = sol.fun.reshape(-1, 2)
     return CoplanarFit(camera=cam, rms=float(np.sqrt(np.mean(np.sum(r * r, axis=1)))),
                        residuals=np.linalg.norm(r, axis=1))

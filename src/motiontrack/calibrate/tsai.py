@@ -35,10 +35,12 @@ import cv2
 import defusedxml.ElementTree as ET
 import numpy as np
 import tomli_w
+from defusedxml import DefusedXmlException
 
-from ..errors import InputError
+from ..errors import InputError, excerpt, location, printable
 from ..io.atomic import atomic_write_text
 from ..io.tomlfile import read_toml
+from ..io.xmlsafe import unsafe_xml_reason
 
 log = logging.getLogger(__name__)
 
@@ -128,6 +130,9 @@ def distort_sensor(xu: np.ndarray, yu: np.ndarray, kappa1: float,
     scale = np.where(valid & np.isfinite(ru), scale, np.nan)
     return xu * scale, yu * scale
 
+
+#: largest image width or height a camera file may give (pixels)
+MAX_IMAGE_SIDE = 100_000
 
 _GEOMETRY = ("width", "height", "ncx", "nfx", "dx", "dy", "dpx", "dpy")
 _INTRINSIC = ("focal", "kappa1", "cx", "cy", "sx")
@@ -336,32 +341,70 @@ def read_tsai_xml(path: str | Path) -> TsaiCamera:
     """Read a PETS 2009 / Tsai calibration XML (``<Camera><Geometry/><Intrinsic/><Extrinsic/>``)."""
     p = Path(path)
     if not p.is_file():
-        raise InputError(f"camera file not found: {p}")
+        raise InputError(f"camera file not found: {location(p)}")
     try:
         root = ET.parse(p).getroot()
-    except (ParseError, ValueError) as exc:
-        raise InputError(f"malformed Tsai camera XML {p}: {exc}") from None
-    except Exception as exc:  # defusedxml security errors
-        raise InputError(f"refusing to parse camera XML {p}: {exc}") from None
+    except DefusedXmlException as exc:
+        raise InputError(f"refusing to parse camera XML {location(p)}: "
+                         f"{unsafe_xml_reason(exc)}") from None
+    except ParseError as exc:
+        # expat's message ("not well-formed (invalid token): line 1, column 5") quotes nothing
+        raise InputError(f"malformed Tsai camera XML {location(p)}: {printable(exc)}") from None
+    except (ValueError, LookupError) as exc:  # e.g. an unknown encoding in the declaration
+        raise InputError(f"malformed Tsai camera XML {location(p)} ({type(exc).__name__})") \
+            from None
     values: dict[str, float] = {}
     for tag, names in (("Geometry", _GEOMETRY), ("Intrinsic", _INTRINSIC), ("Extrinsic", _EXTRINSIC)):
         el = root.find(tag)
         if el is None:
-            raise InputError(f"malformed Tsai camera XML {p}: missing <{tag}> element")
+            raise InputError(f"malformed Tsai camera XML {location(p)}: missing <{tag}> element")
         for n in names:
             if n not in el.attrib:
-                raise InputError(f"malformed Tsai camera XML {p}: <{tag}> has no attribute {n!r}")
+                raise InputError(f"malformed Tsai camera XML {location(p)}: <{tag}> has no "
+                                 f"attribute {n!r}")
             try:
                 values[n] = float(el.attrib[n])
             except ValueError:
-                raise InputError(f"malformed Tsai camera XML {p}: <{tag} {n}={el.attrib[n]!r}> "
-                                 "is not a number") from None
-    values["width"] = int(values["width"])
-    values["height"] = int(values["height"])
+                raise InputError(f"malformed Tsai camera XML {location(p)}: <{tag} "
+                                 f"{n}={excerpt(el.attrib[n])}> is not a number") from None
+    return _tsai_camera(values, str(p))
+
+
+def _tsai_camera(values: dict, name: str, unit: float = 1000.0) -> TsaiCamera:
+    """:class:`TsaiCamera` from a file's values, :class:`InputError` naming the bad one: every
+    value a finite number (not a boolean), width and height whole numbers of pixels in
+    ``[1, MAX_IMAGE_SIDE]``."""
+    for n, v in values.items():
+        if isinstance(v, bool) or not isinstance(v, (int, float)):
+            raise InputError(f"invalid Tsai camera {location(name)}: {n} must be a number, got "
+                             f"{_kind(v)}")
+        if not abs(v) < 1e300:  # also NaN; and an integer too large for a float
+            shown = v if isinstance(v, float) else f"an integer of {len(str(abs(v)))} digits"
+            raise InputError(f"invalid Tsai camera {location(name)}: {n} must be a finite number "
+                             f"(below 1e300), got {shown}")
+    for n in ("width", "height"):
+        v = values[n]
+        if not (float(v).is_integer() and 1 <= v <= MAX_IMAGE_SIDE):
+            raise InputError(f"invalid Tsai camera {location(name)}: {n} must be a whole number "
+                             f"of pixels in [1, {MAX_IMAGE_SIDE}], got {v}")
+        values[n] = int(v)
     try:
-        return TsaiCamera(**values)
+        return TsaiCamera(**values, unit=unit)
     except ValueError as exc:
-        raise InputError(f"invalid Tsai camera {p}: {exc}") from None
+        raise InputError(f"invalid Tsai camera {location(name)}: {exc}") from None
+
+
+def _kind(v: object) -> str:
+    """A value from a camera file for a message: text as a short excerpt, others by kind."""
+    if v is None:
+        return "nothing"
+    if isinstance(v, str):
+        return excerpt(v)
+    if isinstance(v, bool):
+        return repr(v).lower()
+    if isinstance(v, (int, float)):
+        return f"{v:g}" if isinstance(v, float) or abs(v) < 10**20 else "a longer integer"
+    return {dict: "a table", list: "an array"}.get(type(v), f"a {type(v).__name__}")
 
 
 def write_tsai_xml(cam: TsaiCamera, path: str | Path, name: str = "camera") -> None:
@@ -393,23 +436,33 @@ def write_tsai_toml(cam: TsaiCamera, path: str | Path) -> None:
 
 
 def tsai_from_toml_doc(doc: dict, name: str) -> TsaiCamera:
+    """A :class:`TsaiCamera` from our TOML layout (see :func:`write_tsai_toml`); every table and
+    value is checked, and a bad one is an :class:`InputError` naming it."""
+    where = location(name)
     values: dict[str, float] = {}
     for table, names in (("geometry", _GEOMETRY), ("intrinsic", _INTRINSIC), ("extrinsic", _EXTRINSIC)):
         t = doc.get(table)
         if not isinstance(t, dict):
-            raise InputError(f"{name}: missing [{table}] table for a Tsai camera")
-        unknown = set(t) - set(names)
+            raise InputError(f"{where}: missing [{table}] table for a Tsai camera")
+        unknown = sorted(set(t) - set(names))
         if unknown:
-            raise InputError(f"{name}: unknown keys in [{table}]: {', '.join(sorted(unknown))}")
+            raise InputError(f"{where}: unknown keys in [{table}]: "
+                             f"{', '.join(excerpt(k) for k in unknown[:5])}; valid keys: "
+                             f"{', '.join(names)}")
         for n in names:
             if n not in t:
-                raise InputError(f"{name}: [{table}] has no {n!r}")
+                raise InputError(f"{where}: [{table}] has no {n!r}")
             values[n] = t[n]
-    unit = doc.get("units", {}).get("unit_per_metre", 1000.0)
-    try:
-        return TsaiCamera(**values, unit=float(unit))
-    except (ValueError, TypeError) as exc:
-        raise InputError(f"invalid Tsai camera {name}: {exc}") from None
+    units = doc.get("units", {})
+    if not isinstance(units, dict):
+        raise InputError(f"{where}: units must be a table (length, angle, unit_per_metre), got "
+                         f"{_kind(units)}")
+    unit = units.get("unit_per_metre", 1000.0)
+    if isinstance(unit, bool) or not isinstance(unit, (int, float)) or not (
+            math.isfinite(unit) and unit > 0):
+        raise InputError(f"{where}: units.unit_per_metre must be a finite number > 0, got "
+                         f"{unit if isinstance(unit, float) else _kind(unit)}")
+    return _tsai_camera(values, name, unit=float(unit))
 
 
 def read_tsai_toml(path: str | Path) -> TsaiCamera:

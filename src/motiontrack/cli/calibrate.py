@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import csv
-import io
 import logging
 import math
 import sys
@@ -13,7 +11,7 @@ from typing import TextIO
 
 import numpy as np
 
-from ..errors import ConfigError, InputError
+from ..errors import ConfigError, InputError, check_output_path, excerpt, location, printable
 
 log = logging.getLogger(__name__)
 
@@ -78,7 +76,14 @@ def register(subparsers) -> None:
 def _check_out(path: Path, force: bool) -> None:
     from ..io.atomic import check_writable
 
+    check_output_path(path, "-o")
     check_writable([path], force)
+
+
+def _positive(value: float | None, flag: str, hi: float, unit: str) -> None:
+    """A float option: finite, > 0 and at most ``hi`` (argparse takes "nan" and "inf")."""
+    if value is not None and not 0 < value <= hi:
+        raise ConfigError(f"{flag} must be a number in (0, {hi:g}] {unit}, got {value}")
 
 
 def _messages(args: argparse.Namespace) -> TextIO:
@@ -100,8 +105,10 @@ def _suffix(path: Path, default: str) -> str:
 def _read_image(path: Path, gray: bool = False) -> np.ndarray:
     import cv2
 
+    if path.is_dir():
+        raise InputError(f"{printable(path)}: is a folder, not an image")
     if not path.is_file():
-        raise InputError(f"image not found: {path}")
+        raise InputError(f"image not found: {printable(path)}")
     img = cv2.imread(str(path), cv2.IMREAD_GRAYSCALE if gray else cv2.IMREAD_COLOR)
     if img is None:  # maybe a video: take its first frame
         cap = cv2.VideoCapture(str(path))
@@ -122,8 +129,7 @@ def cmd_chessboard(args: argparse.Namespace) -> int:
     from ..calibrate.chessboard import calibrate_chessboard, parse_pattern, write_opencv_yaml
 
     pattern = parse_pattern(args.pattern)
-    if not (args.square > 0 and math.isfinite(args.square)):
-        raise ConfigError(f"--square must be > 0 (metres), got {args.square}")
+    _positive(args.square, "--square", 10.0, "metres")
     _check_out(args.output, args.force)
     images = [_read_image(p) for p in args.images]
     flags = 0 if args.free_aspect else cv2.CALIB_FIX_ASPECT_RATIO
@@ -171,11 +177,17 @@ def grid_overlay(camera, image: np.ndarray, step: float | None = None,
             raise InputError("the ground plane is not visible in this camera view")
         lo = np.percentile(world, 5, axis=0)
         hi = np.percentile(world, 95, axis=0)
+        # a view up to the horizon reaches far: keep the grid within the largest extent
+        lo, hi = np.clip(lo, -MAX_EXTENT_M, MAX_EXTENT_M), np.clip(hi, -MAX_EXTENT_M, MAX_EXTENT_M)
         extent = (lo[0], hi[0], lo[1], hi[1])
-    x0, x1, y0, y1 = extent
+    x0, x1, y0, y1 = _check_extent(extent)
     step = step or _nice_step(max(x1 - x0, y1 - y0))
-    if step <= 0:
-        raise ConfigError(f"--step must be > 0, got {step}")
+    _positive(step, "--step", MAX_EXTENT_M, "metres")
+    n = max((math.ceil(x1 / step) - math.floor(x0 / step) + 1),
+            (math.ceil(y1 / step) - math.floor(y0 / step) + 1))
+    if n > MAX_GRID_LINES:
+        raise ConfigError(f"--step {step:g} m draws {n} grid lines across the extent, more than "
+                          f"{MAX_GRID_LINES}; use a larger --step or a smaller --extent")
     xs = np.arange(math.floor(x0 / step), math.ceil(x1 / step) + 1) * step
     ys = np.arange(math.floor(y0 / step), math.ceil(y1 / step) + 1) * step
     t = np.linspace(0, 1, 300)
@@ -196,12 +208,31 @@ def grid_overlay(camera, image: np.ndarray, step: float | None = None,
     return out
 
 
+#: most grid lines ``calibrate show`` draws along each axis (each is 300 projected points)
+MAX_GRID_LINES = 1000
+#: largest grid extent coordinate (metres)
+MAX_EXTENT_M = 1e6
+
+
+def _check_extent(extent: tuple[float, ...]) -> tuple[float, float, float, float]:
+    """``xmin, xmax, ymin, ymax`` finite, within ±:data:`MAX_EXTENT_M` and each min < max."""
+    x0, x1, y0, y1 = (float(v) for v in extent)
+    if not all(abs(v) <= MAX_EXTENT_M for v in (x0, x1, y0, y1)):  # also refuses NaN
+        raise ConfigError(f"the grid extent must be finite numbers within ±{MAX_EXTENT_M:g} m, "
+                          f"got {x0:g},{x1:g},{y0:g},{y1:g}")
+    if not (x0 < x1 and y0 < y1):
+        raise ConfigError(f"the grid extent must be xmin,xmax,ymin,ymax with xmin < xmax and "
+                          f"ymin < ymax, got {x0:g},{x1:g},{y0:g},{y1:g}")
+    return x0, x1, y0, y1
+
+
 def cmd_show(args: argparse.Namespace) -> int:
     import cv2
 
     from ..calibrate.camera import load_camera
     from ..io.atomic import atomic_write_bytes
 
+    _positive(args.step, "--step", MAX_EXTENT_M, "metres")
     camera = load_camera(args.camera)
     image = _read_image(args.image)
     size = getattr(camera, "image_size", None)
@@ -216,6 +247,7 @@ def cmd_show(args: argparse.Namespace) -> int:
             extent = ()
         if len(extent) != 4:
             raise ConfigError(f"--extent must be xmin,xmax,ymin,ymax, got {args.extent!r}")
+        extent = _check_extent(extent)
     _check_out(args.output, args.force)
     out = grid_overlay(camera, image, args.step, extent)
     ext = _suffix(args.output, ".png") or ".png"
@@ -228,31 +260,55 @@ def cmd_show(args: argparse.Namespace) -> int:
 
 
 def read_lines_csv(path: Path) -> list[tuple[str, str, float, np.ndarray]]:
-    """``line,axis,value,u,v`` rows → ``[(name, axis, value, points (M, 2))]`` in file order."""
-    if not path.is_file():
-        raise InputError(f"lines file not found: {path}")
+    """``line,axis,value,u,v`` rows → ``[(name, axis, value, points (M, 2))]`` in file order.
+
+    ``value`` is NaN for axis ``-`` (straight only); every number is finite. Errors name the
+    line and column and quote at most a short excerpt of the offending field.
+    """
+    from ..calibrate.ground import read_csv_fields
+
     groups: dict[str, tuple[str, float, list]] = {}
-    for lineno, rec in enumerate(csv.reader(io.StringIO(path.read_text(encoding="utf-8-sig"))), 1):
-        rec = [c.strip() for c in rec]
-        if not rec or not rec[0] or rec[0].startswith("#"):
+    for lineno, fields in read_csv_fields(path, "lines file"):
+        if not fields or not fields[0][1] or fields[0][1].startswith("#"):
             continue
-        if lineno == 1 and rec[0].lower() == "line":
+        if lineno == 1 and fields[0][1].lower() == "line":
             continue
-        if len(rec) != 5 or rec[1].lower() not in ("x", "y", "-"):
-            raise InputError(f"{path}:{lineno}: expected line,axis(x|y|-),value,u,v, got {','.join(rec)!r}")
-        try:
-            value = float(rec[2]) if rec[1] != "-" else float("nan")
-            u, v = float(rec[3]), float(rec[4])
-        except ValueError:
-            raise InputError(f"{path}:{lineno}: non-numeric value in {','.join(rec)!r}") from None
-        axis, val, pts = groups.setdefault(rec[0], (rec[1].lower(), value, []))
-        if axis != rec[1].lower():
-            raise InputError(f"{path}:{lineno}: line {rec[0]!r} changes axis")
+        if len(fields) != 5:
+            raise InputError(f"{location(path, lineno)}: expected line,axis(x|y|-),value,u,v, got "
+                             f"{len(fields)} fields")
+        (_, name), (col, axis) = fields[0], fields[1]
+        if axis.lower() not in ("x", "y", "-"):
+            raise InputError(f"{location(path, lineno, col)}: expected line,axis(x|y|-),value,u,v: "
+                             f"axis must be x, y or -, got {excerpt(axis)}")
+        axis = axis.lower()
+        value = math.nan if axis == "-" else _csv_number(path, lineno, fields[2])
+        u, v = _csv_number(path, lineno, fields[3]), _csv_number(path, lineno, fields[4])
+        first_axis, _, pts = groups.setdefault(name, (axis, value, []))
+        if first_axis != axis:
+            raise InputError(f"{location(path, lineno, col)}: line {excerpt(name)} changes axis")
         pts.append((u, v))
     out = [(k, a, val, np.asarray(p, dtype=np.float64)) for k, (a, val, p) in groups.items()]
     if not out:
-        raise InputError(f"{path}: no lines")
+        raise InputError(f"{location(path)}: no lines")
     return out
+
+
+def _csv_number(path: Path, lineno: int, field: tuple[int, str]) -> float:
+    """A finite number from a CSV field ``(column, text)``, or :class:`InputError`."""
+    col, text = field
+    try:
+        v = float(text)
+    except ValueError:
+        raise InputError(f"{location(path, lineno, col)}: non-numeric value: expected a number, "
+                         f"got {excerpt(text)}") from None
+    if not math.isfinite(v):
+        raise InputError(f"{location(path, lineno, col)}: expected a finite number, got "
+                         f"{excerpt(text)}")
+    return v
+
+
+#: longest search along a line's normal, ``calibrate lines --half-width`` (pixels)
+MAX_HALF_WIDTH_PX = 200.0
 
 
 def cmd_lines(args: argparse.Namespace) -> int:
@@ -263,6 +319,7 @@ def cmd_lines(args: argparse.Namespace) -> int:
 
     if _suffix(args.output, ".toml") not in (".toml", ".xml"):
         raise ConfigError(f"output must be .toml or .xml, got {args.output}")
+    _positive(args.half_width, "--half-width", MAX_HALF_WIDTH_PX, "pixels")
     _check_out(args.output, args.force)
     gray = _read_image(args.image, gray=True)
     h, w = gray.shape
@@ -272,18 +329,19 @@ def cmd_lines(args: argparse.Namespace) -> int:
             raise InputError(f"{args.geometry}: --geometry needs a Tsai camera (.xml or .toml)")
         geom = SensorGeometry.from_camera(cam0)
     else:
-        if not args.pixel_mm > 0:
-            raise ConfigError(f"--pixel-mm must be > 0, got {args.pixel_mm}")
+        _positive(args.pixel_mm, "--pixel-mm", 1.0, "mm")
         geom = SensorGeometry.default(w, h, args.pixel_mm)
     spec = read_lines_csv(args.lines)
     refined = []
     for name, axis, value, pts in spec:
         if len(pts) < 2:
-            raise InputError(f"{args.lines}: line {name!r} needs at least 2 points")
+            raise InputError(f"{location(args.lines)}: line {excerpt(name)} needs at least 2 "
+                             "points")
         r = refine_line_points(gray, pts, half_width=args.half_width, mode=args.mode,
                                polarity=args.polarity)
         if len(r) < 3:
-            raise InputError(f"line {name!r}: no {args.polarity} {args.mode} found near its points")
+            raise InputError(f"line {excerpt(name)}: no {args.polarity} {args.mode} found near its "
+                             "points")
         refined.append((name, axis, value, r))
     kappa, cost = estimate_kappa1([r for *_, r in refined], geom)
     print(f"kappa1 = {kappa:.6g} 1/mm^2 (straightness RMS {cost:.4f} px over {len(refined)} "
@@ -311,6 +369,7 @@ def cmd_lines(args: argparse.Namespace) -> int:
 
 def cmd_ground(args: argparse.Namespace) -> int:
     from ..calibrate.ground import fit_homography, fit_pose, read_point_pairs, write_ground_toml
+    from ..calibrate.tsai import MAX_IMAGE_SIDE
 
     _check_out(args.output, args.force)
     img, world = read_point_pairs(args.points)
@@ -322,6 +381,9 @@ def cmd_ground(args: argparse.Namespace) -> int:
             size = ()
         if len(size) != 2:
             raise ConfigError(f"--size must look like 768x576, got {args.size!r}")
+        if not all(1 <= v <= MAX_IMAGE_SIDE for v in size):
+            raise ConfigError(f"--size must be between 1 and {MAX_IMAGE_SIDE} pixels each way, "
+                              f"got {args.size!r}")
     if args.intrinsics is not None:
         from ..calibrate.chessboard import read_opencv_yaml, write_opencv_yaml
 

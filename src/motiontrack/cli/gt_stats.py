@@ -24,12 +24,14 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def cmd_gt_stats(args) -> int:
+    from ..errors import check_output_path
     from ..evaluate.gtstats import gt_statistics, parse_image_size
     from ..io.atomic import atomic_write_text, check_writable, is_stdout
 
     if args.json:
         from pathlib import Path
 
+        check_output_path(args.json, "--json")
         check_writable([Path(args.json)], args.force)
     from ._common import read_gt
 

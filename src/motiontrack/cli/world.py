@@ -29,9 +29,11 @@ def register(subparsers) -> None:
 def cmd_world(args: argparse.Namespace) -> int:
     from ..calibrate.camera import load_camera
     from ..calibrate.measure import world_positions
+    from ..errors import check_output_path
     from ..io.atomic import check_writable, is_stdout
     from ..io.mot import read_mot, write_mot
 
+    check_output_path(args.output, "-o")
     camera = load_camera(args.camera)
     ann = read_mot(args.tracks)
     check_writable([args.output], args.force)

@@ -22,7 +22,7 @@ from typing import Iterable
 
 import numpy as np
 
-from ..errors import ConfigError
+from ..errors import ConfigError, InputError
 from ..types import Annotations
 
 __all__ = ["gt_statistics", "size_model", "parse_image_size"]
@@ -35,9 +35,14 @@ def parse_image_size(text: str) -> tuple[int, int]:
         w, h = (int(p) for p in parts)
     except ValueError:
         raise ConfigError(f"--image-size expects WxH in pixels, e.g. 768x576, got {text!r}") from None
-    if w <= 0 or h <= 0:
-        raise ConfigError(f"--image-size must be positive, got {text!r}")
+    if not (0 < w <= MAX_IMAGE_SIDE and 0 < h <= MAX_IMAGE_SIDE):
+        raise ConfigError(f"--image-size must be between 1 and {MAX_IMAGE_SIDE} pixels each way, "
+                          f"got {text!r}")
     return w, h
+
+
+#: largest image width or height (pixels) for the statistics
+MAX_IMAGE_SIDE = 1_000_000
 
 
 def size_model(values: np.ndarray, ddof: int = 0) -> tuple[float, float]:
@@ -72,14 +77,20 @@ def gt_statistics(annotations: Iterable[Annotations], image_size: tuple[int, int
         ``recommended_overrides`` lists the ``--set`` strings for the region filter.
     """
     W, H = image_size
-    if W <= 0 or H <= 0:
-        raise ConfigError(f"image size must be positive, got {W}x{H}")
+    if not (0 < W <= MAX_IMAGE_SIDE and 0 < H <= MAX_IMAGE_SIDE):
+        raise ConfigError(f"image size must be between 1 and {MAX_IMAGE_SIDE} pixels each way, "
+                          f"got {W}x{H}")
     if ddof not in (0, 1):
         raise ConfigError(f"ddof must be 0 or 1, got {ddof}")
     boxes = [a.boxes[np.asarray(a.consider, dtype=bool)] for a in annotations]
     b = np.concatenate(boxes) if boxes else np.zeros((0, 4))
     w, h = b[:, 2], b[:, 3]
-    area_px = w * h
+    with np.errstate(over="ignore"):
+        area_px = w * h
+    if not np.isfinite(area_px).all():
+        k = int(np.flatnonzero(~np.isfinite(area_px))[0])
+        raise InputError(f"ground-truth box {w[k]:g} x {h[k]:g} px: its area is not a finite "
+                         "number")
     rel = area_px / float(W * H)
     ratio = h / w if len(w) else np.zeros(0)
     mu, sd = size_model(rel, ddof)              # eqs. 4.27, 4.28
