@@ -4,13 +4,23 @@ from __future__ import annotations
 
 import argparse
 import logging
+import math
+import re
 from typing import Any
 
 log = logging.getLogger("motiontrack")
 
 
+#: bounds of an integer tracker parameter: what OpenCV's ``int`` parameters hold
+_INT_MIN, _INT_MAX = -(2**31), 2**31 - 1
+
+
 def parse_params(items: list[str], where: str) -> dict[str, Any]:
-    """``["key=value", ...]`` → dict; values parsed as int, float, true/false or left as text."""
+    """``["key=value", ...]`` → dict; values parsed as int, float, true/false or left as text.
+
+    Numbers are checked here, before any tracker sees them: integers must fit a C ``int`` and
+    floats must be finite (``nan`` and ``inf`` parse as floats but mean nothing to a tracker).
+    """
     from ..errors import ConfigError
 
     out: dict[str, Any] = {}
@@ -30,8 +40,47 @@ def parse_params(items: list[str], where: str) -> dict[str, Any]:
                     break
                 except ValueError:
                     pass
+        if isinstance(value, int) and not isinstance(value, bool) and not (
+                _INT_MIN <= value <= _INT_MAX):
+            raise ConfigError(f"{where} {key}: integer out of range [{_INT_MIN}, {_INT_MAX}]")
+        if isinstance(value, float) and not math.isfinite(value):
+            raise ConfigError(f"{where} {key}: expected a finite number, got {value}")
         out[key] = value
     return out
+
+
+def check_model_files(params: dict[str, Any], where: str) -> list[str]:
+    """Load every parameter that names an existing file as an OpenCV DNN model first, so that a
+    file that is not a model (corrupt, truncated, another format) is a clear error here rather
+    than an OpenCV exception once the video is open. Returns the keys that name model files."""
+    from pathlib import Path
+
+    import cv2
+
+    from ..errors import ConfigError, printable
+
+    models = []
+    for key, value in params.items():
+        if not isinstance(value, str) or not value or not Path(value).is_file():
+            continue
+        try:
+            cv2.dnn.readNet(value)
+        except cv2.error:
+            raise ConfigError(f"{where} {key}={printable(value)}: not a model OpenCV can read "
+                              "(expected an ONNX file from the OpenCV model zoo)") from None
+        models.append(key)
+    return models
+
+
+def _opencv_reason(exc: Exception) -> str:
+    """The message of an OpenCV error without its source file and function: ``input 'x' is not
+    found`` from ``OpenCV(5.0.0) /io/...cpp:1042: error: (-204:...) input 'x' is not found in
+    function '...'``."""
+    from ..errors import printable
+
+    text = " ".join(str(exc).split())
+    m = re.search(r"error: \([-\d]+:[^)]*\) (.*?)(?: in function .*)?$", text)
+    return printable((m.group(1) if m else text)[:120])
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -63,8 +112,10 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def cmd_follow(args) -> int:
+    import cv2
+
     from ..config import load_config
-    from ..errors import ConfigError, SourceError
+    from ..errors import ConfigError, SourceError, check_output_path
     from ..io.video import CODECS
     from ..run import follow_job
     from ..tracking.single import create_single_tracker, parse_box
@@ -73,6 +124,8 @@ def cmd_follow(args) -> int:
     box = parse_box(args.box)
     params = parse_params(args.params, "--param")
     tracker = create_single_tracker(args.tracker, **params)
+    models = check_model_files(params, "--param")
+    check_output_path(args.out, "-o", folder=True)
     if args.codec not in CODECS:
         raise ConfigError(f"unknown codec {args.codec!r}; valid: {', '.join(CODECS)}")
     if args.start < 0 or args.max_frames < 0:
@@ -83,8 +136,15 @@ def cmd_follow(args) -> int:
     job = follow_job(args.source, cfg, args.out, tracker, box, args.tracker, params=params,
                      video=not args.no_video, force=args.force, gt=gt, gt_id=args.gt_id)
     log.info("source %s", job.info.describe())
-    with frame_loop(job.expected_frames()) as loop:
-        s = job.run(progress=loop.update, should_stop=loop.stop)
+    try:
+        with frame_loop(job.expected_frames()) as loop:
+            s = job.run(progress=loop.update, should_stop=loop.stop)
+    except cv2.error as exc:
+        if not models:  # no model file of the user's: an OpenCV failure is a bug
+            raise
+        given = ", ".join(f"--param {k}" for k in models)
+        raise ConfigError(f"the {args.tracker} tracker cannot run with the model file(s) given "
+                          f"({given}): OpenCV says {_opencv_reason(exc)}") from None
     if s.frames == 0:
         raise SourceError(f"no frames to follow in {args.source} (check --start)")
     lines = [f"frames    {s.frames} in {s.seconds:.2f} s ({s.fps:.1f} fps), object found in "
