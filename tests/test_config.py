@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from motiontrack.config import (MotionConfig, PipelineConfig, PreprocessConfig, RegionsConfig,
                                 apply_overrides, load_config, save_config, to_dict)
@@ -114,3 +116,79 @@ def test_to_gray_converts_colour_and_passes_gray_through():
     assert g.shape == (4, 5) and int(g[0, 0]) == round(0.299 * 200)
     gray = np.full((4, 5), 7, np.uint8)
     assert to_gray(gray) is gray
+
+
+@pytest.mark.parametrize("override, message", [
+    ("motion.knn.dist2_threshold=nan", "motion.knn.dist2_threshold must be a finite number"),
+    ("motion.knn.dist2_threshold=inf", "must be a finite number in [0.0, inf], got inf"),
+    ("tracker.fill_gaps_s=nan", "tracker.fill_gaps_s must be a finite number in [0.0, 3600.0]"),
+    ("tracker.min_iou=-inf", "tracker.min_iou must be a finite number"),
+    ("motion.knn.history=99999999999999999999", "motion.knn.history must be in [1, 2147483647]"),
+    ("motion.knn.history=1e300", "an integer of 301 digits"),
+    ("source.start=-inf", "source.start must be an integer"),
+    ("motion.gsoc.n_samples=1000", "motion.gsoc.n_samples must be in [1, 50]"),
+    ("motion.knn.history=" + "[" * 100_000, "nested too deeply"),
+])
+def test_numbers_are_finite_and_in_range(override, message):
+    """NaN passes every "<" and ">" test, so a range check written as "lo <= v <= hi" let it in
+    (and it was written to config.toml); integers past 64 bits reached OpenCV."""
+    with pytest.raises(ConfigError) as err:
+        apply_overrides(PipelineConfig(), [override])
+    assert message in str(err.value)
+
+
+def test_a_config_file_with_nan_is_refused_and_names_the_key(tmp_path):
+    p = tmp_path / "c.toml"
+    p.write_text("[motion.knn]\ndist2_threshold = nan\n")
+    with pytest.raises(ConfigError, match=r"^motion\.knn\.dist2_threshold must be a finite"):
+        load_config(p)
+
+
+def test_every_field_refuses_nan_inf_and_huge_integers():
+    import dataclasses
+
+    from motiontrack.config import INT_MAX, INT_MIN
+
+    def leaves(cls, prefix=""):
+        for f in dataclasses.fields(cls):
+            default = f.default if f.default is not dataclasses.MISSING else f.default_factory()
+            if dataclasses.is_dataclass(default):
+                yield from leaves(type(default), f"{prefix}{f.name}.")
+            elif isinstance(default, (int, float)) and not isinstance(default, bool) \
+                    and not f.metadata.get("choices"):
+                yield f"{prefix}{f.name}", default, f.metadata
+
+    checked = 0
+    for key, default, meta in leaves(PipelineConfig):
+        bad = ["nan", "inf", "-inf"]
+        if isinstance(default, int):  # a float field may be large; an integer must fit a C int
+            bad += [str(2**64), str(-(2**64)), str(INT_MAX + 1)]
+            assert INT_MIN <= meta["lo"] and meta["hi"] <= INT_MAX, key
+        for value in bad:
+            with pytest.raises(ConfigError):
+                apply_overrides(PipelineConfig(), [f"{key}={value}"])
+        checked += 1
+    assert checked > 80
+
+
+@settings(max_examples=300, deadline=None, derandomize=True)
+@given(value=st.one_of(st.floats(allow_nan=True, allow_infinity=True),
+                       st.integers(min_value=-(2**80), max_value=2**80)),
+       key=st.sampled_from(["motion.knn.dist2_threshold", "motion.knn.history",
+                            "tracker.fill_gaps_s", "tracker.min_iou", "regions.min_area",
+                            "source.start", "motion.mog2.learning_rate", "people.samples"]))
+def test_a_number_is_taken_only_when_finite_and_inside_its_range(key, value):
+    try:
+        cfg = apply_overrides(PipelineConfig(), [f"{key}={value!r}"])
+    except ConfigError:
+        return
+    import dataclasses
+
+    section, name = key.rsplit(".", 1)
+    node = cfg
+    for k in section.split("."):
+        node = getattr(node, k)
+    meta = {f.name: f.metadata for f in dataclasses.fields(node)}[name]
+    v = getattr(node, name)
+    assert np.isfinite(v) and meta["lo"] <= v
+    assert meta["hi"] is None or v <= meta["hi"]
