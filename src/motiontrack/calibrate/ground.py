@@ -151,8 +151,8 @@ def read_point_pairs(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
         if lineno == 1 and not rows and not _is_number(fields[0][1]):
             continue  # header
         if len(fields) not in (4, 5):
-            raise InputError(f"{location(p, lineno)}: expected 4 finite values u,v,x,y, got "
-                             f"{len(fields)} values")
+            raise InputError(f"{location(p, lineno)}: expected 4 finite values u,v,x,y, found "
+                             f"{len(fields)}")
         vals = []
         for col, text in fields:
             if not _is_number(text):
