@@ -147,3 +147,16 @@ def test_sources_named_by_a_scheme_come_from_the_registry():
     src = open_source("test-blank:x", start=1)
     assert src.info.name == "test-blank:x" and len(list(src)) == 2
     assert "test-blank" in SCHEMES.names()
+
+
+def test_a_source_far_beyond_the_defaults_is_opened_with_a_memory_warning(tmp_path, caplog):
+    import cv2
+
+    from motiontrack.config import SourceConfig
+
+    cv2.imwrite(str(tmp_path / "f1.png"), np.zeros((2200, 4000, 3), np.uint8))   # 8.8 Mpx > 4K
+    with caplog.at_level("WARNING", logger="motiontrack"):
+        src = open_configured_source(str(tmp_path), SourceConfig())
+    src.close()
+    assert any("4000x2200" in r.getMessage() and "GB of memory" in r.getMessage()
+               for r in caplog.records)

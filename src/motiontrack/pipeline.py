@@ -21,7 +21,7 @@ from typing import Any, Iterable, Iterator
 import numpy as np
 
 from . import synth as _synth  # noqa: F401  (registers the synth: sources)
-from .config import PipelineConfig, SourceConfig, load_config
+from .config import PipelineConfig, SourceConfig, load_config, warn_if_oversized
 from .imaging import pixel_window, resolve_scale, scaled_size
 from .io.sources import Source, open_source, prefetch
 from .motion import create_detector
@@ -393,9 +393,12 @@ def run(source: Any, config: PipelineConfig | str | Path | None = None,
 
 def open_configured_source(source: Any, sc: SourceConfig) -> Source:
     """Open ``source`` with the start/length and live-reconnection settings ``sc``
-    (``PipelineConfig.source``); a :class:`Source` is returned as it is."""
+    (``PipelineConfig.source``); a :class:`Source` is returned as it is. Frames far larger than
+    the defaults are sized for get a warning with the memory to expect."""
     if isinstance(source, Source):
         return source
-    return open_source(source, sc.start, sc.max_frames, reconnect_attempts=sc.reconnect_attempts,
-                       backoff=sc.reconnect_backoff, backoff_max=sc.reconnect_backoff_max,
-                       reset_frames=sc.reconnect_reset_frames, read_timeout=sc.read_timeout_s)
+    src = open_source(source, sc.start, sc.max_frames, reconnect_attempts=sc.reconnect_attempts,
+                      backoff=sc.reconnect_backoff, backoff_max=sc.reconnect_backoff_max,
+                      reset_frames=sc.reconnect_reset_frames, read_timeout=sc.read_timeout_s)
+    warn_if_oversized(src.info.width, src.info.height, src.info.name)
+    return src
