@@ -103,7 +103,8 @@ def test_report_is_self_contained(study, tmp_path):
     assert main(["-q", "report", str(study), "-o", str(out)]) == 0
     html = out.read_text()
     assert html.startswith("<!DOCTYPE html>")
-    assert html.count("<svg") == 3                          # pr_regions, pr_tracks, tracking inline
+    # pr_regions, pr_tracks, tracking: SVG images (no SVG markup in the page, where it could run)
+    assert html.count('src="data:image/svg+xml;base64,') == 3 and "<svg" not in html
     # nothing fetched from elsewhere: no external scripts, styles, images or fonts
     assert not re.search(r'<(script|link)\b', html)
     assert not re.search(r'(src|href)="(https?:)?//', html)

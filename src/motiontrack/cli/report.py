@@ -19,13 +19,15 @@ def register(sub: argparse._SubParsersAction) -> None:
 def cmd_report(args) -> int:
     from pathlib import Path
 
+    from ..errors import check_output_path, printable
+    from ..io.atomic import check_writable, is_stdout
     from ..studies.report import write_report
 
-    from ..io.atomic import check_writable, is_stdout
-
     out = args.out or str(Path(args.study) / "report.html")
+    if not is_stdout(out):
+        check_output_path(out, "-o")  # not a folder, in a folder that can be written
     check_writable([Path(out)], args.force)
     written = write_report(args.study, out)
     if not is_stdout(out):
-        print(f"outputs   {written}")
+        print(f"outputs   {printable(written)}")
     return 0

@@ -38,6 +38,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--no-figures", action="store_true", help="skip the figures")
     p.add_argument("-o", "--out", required=True, help="output folder")
     p.add_argument("--force", action="store_true", help="overwrite an existing study in -o")
+    p.add_argument("--resume", action="store_true",
+                   help="continue the study in -o (same settings): runs already done are kept")
     p.set_defaults(func=cmd_sweep)
 
 
@@ -45,35 +47,39 @@ def cmd_sweep(args) -> int:
     from tqdm import tqdm
 
     from ..config import load_config
-    from ..errors import ConfigError
-    from ..studies.sweep import TABLE_FILE, load_study, run_sweep, study_from_args
+    from ..errors import ConfigError, printable
+    from ..studies.sweep import TABLE_FILE, load_study, run_sweep, study_from_args, versions
     from ..render.streams import parse_streams
     from ._common import sigterm_as_interrupt
 
+    # options that need no file: refused before anything is read or written
+    if args.jobs < 1:
+        raise ConfigError(f"-j must be >= 1, got {args.jobs}")
+    if args.resume and args.force:
+        raise ConfigError("--resume continues a study and --force starts it over: give one of them")
     if args.replay:
         if args.source or args.param or args.sequences or args.gt or args.config or args.overrides:
             raise ConfigError("--replay takes the study from DIR/study.json; do not give SOURCE, "
                               "--gt, --param, --sequences, --config or --set with it")
         study, meta = load_study(args.replay)
-        from ..studies.sweep import versions
-
         now = versions()
-        for k, v in (meta.get("versions") or {}).items():
+        for k, v in meta.get("versions", {}).items():
             if k != "platform" and now.get(k) != v:
-                log.warning("study was run with %s %s, this is %s: numbers may differ", k, v, now.get(k))
+                log.warning("study was run with %s %s, this is %s: numbers may differ",
+                            printable(k), printable(v), now.get(k))
     else:
         if not args.param:
             raise ConfigError("give at least one --param stage.name=v1,v2,... (or --replay DIR)")
         cfg = load_config(args.config, args.overrides)
         study = study_from_args(args.source, args.gt, args.param, cfg, args.sequences, args.xi,
                                 parse_streams(args.save))
-    n = len(study.points()) * len(study.sequences)
-    log.info("%d runs (%d grid points x %d sequences)%s", n, len(study.points()), len(study.sequences),
+    n = study.n_runs
+    log.info("%d runs (%d grid points x %d sequences)%s", n, n // len(study.sequences), len(study.sequences),
              f" on {args.cluster}" if args.cluster else (f" with {args.jobs} processes" if args.jobs > 1 else ""))
     with sigterm_as_interrupt(), tqdm(total=n, unit="run", disable=None, file=sys.stderr,
                                       dynamic_ncols=True) as bar:
         res = run_sweep(study, args.out, jobs=args.jobs, cluster=args.cluster, progress=bar.update,
-                        figures=not args.no_figures, force=args.force)
+                        figures=not args.no_figures, force=args.force, resume=args.resume)
     _print_best(res.rows, study.keys)
     if args.replay:
         from pathlib import Path
@@ -82,8 +88,9 @@ def cmd_sweep(args) -> int:
         # byte comparison: floats are written with repr, and nan == nan only as text
         same = (old.read_bytes() == (Path(args.out) / TABLE_FILE).read_bytes()) if old.is_file() else None
         if same is not None:
-            print(f"replay    {'identical to' if same else 'DIFFERS from'} {args.replay}/{TABLE_FILE}")
-    print(f"outputs   {args.out}/ (" + ", ".join(p.split('/')[-1] for v in res.outputs.values() for p in v)
+            print(f"replay    {'identical to' if same else 'DIFFERS from'} "
+                  f"{printable(args.replay)}/{TABLE_FILE}")
+    print(f"outputs   {printable(args.out)}/ (" + ", ".join(p.split('/')[-1] for v in res.outputs.values() for p in v)
           + ")")
     return 0
 

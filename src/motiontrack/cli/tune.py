@@ -47,6 +47,9 @@ def _sequences(items, what):
             out.extend(read_manifest(it))
             continue
         src, gt = (it.rsplit("=", 1) if "=" in it and not it.startswith("synth:") else (it, None))
+        if gt == "":
+            raise ConfigError(f"--{'train' if what == 'training' else 'val'} {it!r}: no ground "
+                              "truth after '='")
         out.append(SequenceSpec(name=_default_name(src), source=src if src.startswith("synth:")
                                 else _abs(src), gt=_abs(gt)))
     names = [s.name for s in out]
@@ -68,10 +71,23 @@ def _owning_out(cmd):
     def owned(args) -> int:
         from ..io.atomic import OutputLock
 
+        _check_options(args)  # before the lock creates the folder: a refusal writes nothing
         with OutputLock(args.out):
             return cmd(args)
 
     return owned
+
+
+def _check_options(args) -> None:
+    """Refuse options that need no file, and an -o that cannot be a folder, before anything is
+    written or searched (rather than when the search's results are written)."""
+    from ..errors import ConfigError, check_output_path
+
+    if args.jobs < 1:
+        raise ConfigError(f"-j must be >= 1, got {args.jobs}")
+    if args.trials < 1:
+        raise ConfigError(f"--trials must be >= 1, got {args.trials}")
+    check_output_path(args.out, "-o", folder=True)
 
 
 @_owning_out
@@ -79,7 +95,7 @@ def cmd_tune(args) -> int:
     from tqdm import tqdm
 
     from ..config import load_config
-    from ..errors import ConfigError
+    from ..errors import ConfigError, printable
     from ..studies.tune import parse_space, require_optuna, tune, write_tune_outputs
 
     from pathlib import Path
@@ -106,10 +122,10 @@ def cmd_tune(args) -> int:
                    direction="minimize" if args.minimize else "maximize", n_trials=args.trials,
                    seed=args.seed, xi=args.xi, jobs=args.jobs, progress=bar.update)
     paths = write_tune_outputs(res, args.out)
-    print("best      " + "  ".join(f"{k}={v:.6g}" if isinstance(v, float) else f"{k}={v}"
+    print("best      " + "  ".join(f"{k}={v:.6g}" if isinstance(v, float) else printable(f"{k}={v}")
                                    for k, v in res.best_params.items()))
     print(f"train     {args.metric} {res.train_score:.4f} (mean over {len(train)} sequence(s))")
     if res.validation_score is not None:
         print(f"validate  {args.metric} {res.validation_score:.4f} (mean over {len(val)} sequence(s))")
-    print(f"outputs   {', '.join(paths.values())}")
+    print(f"outputs   {printable(', '.join(paths.values()))}")
     return 0

@@ -2,25 +2,30 @@
 
 The page holds the evaluation meta data (base tracker parameters, the swept grid, sequences and
 their ground truth, evaluation parameters, software versions), the per-run summary table and the
-full run × sequence table, every figure of ``DIR/figures`` (SVG inlined, or PNG as base64 when no SVG
-exists) and relative links to the annotated clips / intermediate videos found under ``DIR``. It has
-no external resources (no scripts, fonts or style sheets), so it reads offline in any browser.
+full run × sequence table, every figure of ``DIR/figures`` (an ``<img>`` with the SVG, or the PNG
+when no SVG exists, as a base64 ``data:`` URL) and relative links to the annotated clips /
+intermediate videos found under ``DIR``. It has no scripts and no external resources (fonts, style
+sheets), so it reads offline in any browser; nothing read from ``DIR`` becomes markup: text is
+escaped, figures are images (an SVG shown as an image runs no scripts) and links are
+percent-encoded relative paths.
 """
 
 from __future__ import annotations
 
 import base64
 import html
-import json
+import logging
 import math
 import os
-import re
+import urllib.parse
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
-from ..errors import InputError
+from ..errors import printable
 from ..io.atomic import atomic_write_text
-from .sweep import STUDY_FILE, SUMMARY_FILE, TABLE_FILE, read_table
+from .sweep import STUDY_FILE, SUMMARY_FILE, TABLE_FILE, read_study_meta, read_table
+
+log = logging.getLogger(__name__)
 
 __all__ = ["build_report", "write_report"]
 
@@ -77,28 +82,50 @@ def _flat(d: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
     return out
 
 
-def _svg_inline(text: str) -> str:
-    """Strip the XML prolog/doctype so the SVG can sit inside HTML."""
-    text = re.sub(r"<\?xml[^>]*\?>", "", text)
-    text = re.sub(r"<!DOCTYPE[^>]*>", "", text, flags=re.S)
-    return text.strip()
+#: figure types embedded, in order of preference: suffix → media type
+FIGURE_TYPES = {".svg": "image/svg+xml", ".png": "image/png"}
+
+
+def _figure_bytes(path: Path, root: Path) -> bytes | None:
+    """The content of a figure file inside the study folder ``root``, or None (logged) for one
+    that lies outside it (a symbolic link) or cannot be read."""
+    try:
+        real = path.resolve()
+        if not real.is_relative_to(root):
+            log.warning("figure %s lies outside the study folder: left out", printable(path))
+            return None
+        return real.read_bytes()
+    except OSError as exc:
+        log.warning("cannot read figure %s (%s): left out", printable(path),
+                    printable(exc.strerror or exc))
+        return None
 
 
 def _figures(folder: Path) -> str:
+    """Every figure of ``folder/figures`` as an ``<img>`` with a ``data:`` URL (SVG preferred).
+
+    An SVG shown as an image runs no scripts and loads nothing, whatever it contains, so a study
+    folder from someone else cannot run code in the reader's browser; inlining the SVG markup
+    would.
+    """
     fig_dir = folder / "figures"
     if not fig_dir.is_dir():
         return "<p>No figures.</p>"
+    root = folder.resolve()
+    found: dict[str, dict[str, Path]] = {}
+    for p in fig_dir.iterdir():
+        if p.suffix in FIGURE_TYPES and p.is_file():
+            found.setdefault(p.stem, {})[p.suffix] = p
     parts = []
-    stems = sorted({p.stem for p in fig_dir.iterdir() if p.suffix in (".svg", ".png")})
-    for stem in stems:
-        svg, png = fig_dir / f"{stem}.svg", fig_dir / f"{stem}.png"
-        if svg.is_file():
-            body = _svg_inline(svg.read_text(encoding="utf-8"))
-        else:
-            b64 = base64.b64encode(png.read_bytes()).decode("ascii")
-            body = f"<img alt=\"{_e(stem)}\" src=\"data:image/png;base64,{b64}\">"
-        parts.append(f"<figure>{body}<figcaption>{_e(stem)}</figcaption></figure>")
-    return "\n".join(parts)
+    for stem in sorted(found):
+        for suffix, media in FIGURE_TYPES.items():
+            data = _figure_bytes(found[stem][suffix], root) if suffix in found[stem] else None
+            if data is not None:
+                b64 = base64.b64encode(data).decode("ascii")
+                parts.append(f"<figure><img alt=\"{_e(stem)}\" src=\"data:{media};base64,{b64}\">"
+                             f"<figcaption>{_e(stem)}</figcaption></figure>")
+                break
+    return "\n".join(parts) or "<p>No figures.</p>"
 
 
 def _clips(folder: Path, report_dir: Path) -> str:
@@ -109,21 +136,20 @@ def _clips(folder: Path, report_dir: Path) -> str:
     items = []
     for v in vids:
         rel = os.path.relpath(v, report_dir).replace(os.sep, "/")
-        items.append(f"<li><a href=\"{_e(rel)}\">{_e(v.relative_to(folder).as_posix())}</a></li>")
+        # percent-encoded, so that a file name such as "javascript:x.webm" stays a relative
+        # link rather than becoming a URL scheme, and "#" or "?" in a name stay part of it
+        href = urllib.parse.quote(rel)
+        items.append(f"<li><a href=\"{_e(href)}\">{_e(v.relative_to(folder).as_posix())}</a></li>")
     return "<ul>" + "".join(items) + "</ul>"
 
 
 def build_report(folder: str | Path, report_path: str | Path | None = None) -> str:
     """The HTML text of the report of the study in ``folder`` (links relative to ``report_path``)."""
     folder = Path(folder)
-    if not (folder / STUDY_FILE).is_file():
-        raise InputError(f"no {STUDY_FILE} in {folder}: not a sweep output folder")
-    try:
-        meta = json.loads((folder / STUDY_FILE).read_text(encoding="utf-8"))
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise InputError(f"malformed {folder / STUDY_FILE}: {exc}") from None
-    rows = read_table(folder / TABLE_FILE)
-    summary = read_table(folder / SUMMARY_FILE) if (folder / SUMMARY_FILE).is_file() else []
+    meta = read_study_meta(folder)  # InputError for a missing or malformed study.json
+    rows = read_table(folder / TABLE_FILE, required=("run", "sequence"))
+    summary = (read_table(folder / SUMMARY_FILE, required=("run",))
+               if (folder / SUMMARY_FILE).is_file() else [])
     keys = [g["key"] for g in meta.get("grid", [])]
     report_dir = Path(report_path).resolve().parent if report_path else folder.resolve()
     seqs = meta.get("sequences", [])

@@ -20,12 +20,16 @@ a process pool, or a Dask cluster), so the tables are byte-identical.
 
 Every study writes ``study.json`` (sources, ground truth, grid, base config, evaluation parameters,
 versions); :func:`load_study` + :func:`run_sweep` reproduce it (``motiontrack sweep --replay DIR``).
+Every finished run leaves its table row next to its files (``runs/rNNN/<sequence>/row.json``), so
+a sweep stopped part-way continues where it stopped (``run_sweep(..., resume=True)``,
+``motiontrack sweep ... --resume``). A study has at most :data:`MAX_RUNS` runs × sequences.
 """
 
 from __future__ import annotations
 
 import csv
 import functools
+import hashlib
 import io
 import itertools
 import json
@@ -38,7 +42,7 @@ import sys
 import tempfile
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
-from decimal import Decimal, InvalidOperation
+from decimal import Decimal, DecimalException, InvalidOperation
 from pathlib import Path
 from typing import Any, Callable, Iterable, Mapping, Sequence
 
@@ -47,7 +51,7 @@ import numpy as np
 
 from .. import __version__
 from ..config import PipelineConfig, apply_overrides, from_dict, save_config, to_dict
-from ..errors import ConfigError, InputError
+from ..errors import ConfigError, InputError, printable
 from ..evaluate.framewise import evaluate_framewise
 from ..evaluate.mot import evaluate_tracking
 from ..io.annotations import read_annotations
@@ -72,13 +76,23 @@ log = logging.getLogger(__name__)
 __all__ = [
     "parse_param", "format_value", "SequenceSpec", "Study", "RunSpec", "read_manifest",
     "execute_run", "execute", "run_sweep", "load_study", "write_table", "read_table",
-    "summarise_runs", "STUDY_FILE", "TABLE_FILE", "FRAMEWISE_PAIRS",
+    "summarise_runs", "read_study_meta", "study_meta_problem", "STUDY_FILE", "TABLE_FILE",
+    "RUN_RECORD_FILE", "MAX_RUNS", "FRAMEWISE_PAIRS",
 ]
 
 STUDY_FILE = "study.json"
 TABLE_FILE = "results.csv"
 SUMMARY_FILE = "summary.csv"
 STUDY_FORMAT = 1
+
+#: per run × sequence, next to its tracks and regions: the table row and the files' digests,
+#: written last, so that ``--resume`` knows the run finished
+RUN_RECORD_FILE = "row.json"
+#: the files of a run that ``--resume`` checks against the digests of its record
+RUN_FILES = ("tracks.txt", "regions.txt")
+
+#: most runs × sequences a study may have: a larger grid is refused before anything is written
+MAX_RUNS = 100_000
 
 #: the three precision–recall pairs of the thesis' figure 4.4: label → (precision key, recall key)
 FRAMEWISE_PAIRS: dict[str, tuple[str, str]] = {
@@ -117,7 +131,10 @@ def _range_values(a: str, b: str, step: str, item: str) -> tuple[Any, ...]:
         raise ConfigError(f"--param {item!r}: step must be > 0, got {step.strip()}")
     if db < da:
         raise ConfigError(f"--param {item!r}: a:b:step needs a <= b")
-    n = int((db - da) / ds) + 1
+    try:
+        n = int((db - da) / ds) + 1
+    except DecimalException:  # (b - a) / step beyond what decimal represents: far too many
+        raise ConfigError(f"--param {item!r}: far too many values (at most 10000)") from None
     if n > 10000:
         raise ConfigError(f"--param {item!r}: {n} values is too many (at most 10000)")
     is_int = all(d == d.to_integral_value() and "." not in t and "e" not in t.lower()
@@ -196,8 +213,16 @@ class SequenceSpec:
     group: str = ""
 
     def __post_init__(self) -> None:
-        if not self.name or any(c in self.name for c in "/\\"):
-            raise ConfigError(f"sequence name must be non-empty without slashes, got {self.name!r}")
+        for what, value in (("name", self.name), ("source", self.source), ("group", self.group)):
+            if not isinstance(value, str):
+                raise ConfigError(f"sequence {what} must be a string, got {value!r}")
+        if self.gt is not None and not isinstance(self.gt, str):
+            raise ConfigError(f"sequence {self.name!r}: gt must be a file name, got {self.gt!r}")
+        # the name is a folder of runs/rNNN/: one plain path component
+        if (not self.name or self.name in (".", "..") or any(c in self.name for c in "/\\")
+                or not self.name.isprintable()):
+            raise ConfigError(f"sequence name must be non-empty, not . or .., without slashes or "
+                              f"control characters, got {self.name!r}")
         if not self.source:
             raise ConfigError(f"sequence {self.name!r} has no source")
         if self.gt is None and not self.source.startswith("synth:"):
@@ -235,25 +260,32 @@ def read_manifest(path: str | Path) -> tuple[SequenceSpec, ...]:
     """
     p = Path(path)
     data = read_toml(p, "sequences manifest")
+    shown = printable(p)
     items = data.get("sequence")
     if not isinstance(items, list) or not items:
-        raise InputError(f"{p}: expected one or more [[sequence]] tables")
+        raise InputError(f"{shown}: expected one or more [[sequence]] tables")
     out = []
     for i, it in enumerate(items, 1):
         if not isinstance(it, dict):
-            raise InputError(f"{p}: sequence {i} is not a table")
+            raise InputError(f"{shown}: sequence {i} is not a table")
         unknown = sorted(set(it) - {"name", "source", "gt", "group"})
         if unknown:
-            raise InputError(f"{p}: sequence {i}: unknown key(s) {', '.join(unknown)}; "
-                             "valid: name, source, gt, group")
+            raise InputError(f"{shown}: sequence {i}: unknown key(s) "
+                             f"{printable(', '.join(unknown))}; valid: name, source, gt, group")
         if not isinstance(it.get("source"), str):
-            raise InputError(f"{p}: sequence {i} needs source = \"...\"")
-        src = it["source"] if it["source"].startswith("synth:") else _abs(it["source"], p.parent)
-        out.append(SequenceSpec(name=str(it.get("name") or _default_name(it["source"])), source=src,
-                                gt=_abs(it.get("gt"), p.parent), group=str(it.get("group", ""))))
+            raise InputError(f"{shown}: sequence {i} needs source = \"...\"")
+        for key in ("name", "gt", "group"):
+            if key in it and not isinstance(it[key], str):
+                raise InputError(f"{shown}: sequence {i}: {key} must be a string, got {it[key]!r}")
+        try:
+            src = it["source"] if it["source"].startswith("synth:") else _abs(it["source"], p.parent)
+            out.append(SequenceSpec(name=it.get("name") or _default_name(it["source"]), source=src,
+                                    gt=_abs(it.get("gt"), p.parent), group=it.get("group", "")))
+        except (ConfigError, ValueError) as exc:  # ValueError: a NUL in a path
+            raise InputError(f"{shown}: sequence {i}: {printable(exc)}") from None
     names = [s.name for s in out]
     if len(set(names)) != len(names):
-        raise InputError(f"{p}: sequence names must be unique, got {names}")
+        raise InputError(f"{shown}: sequence names must be unique, got {names}")
     return tuple(out)
 
 
@@ -306,6 +338,18 @@ class Study:
             raise ConfigError("a study needs at least one sequence")
         if not self.grid:
             raise ConfigError("a study needs at least one --param")
+        for key, values in self.grid:
+            if not isinstance(key, str) or not all(p.isidentifier() for p in key.split(".")):
+                raise ConfigError(f"--param key must be a dotted config key, got {key!r}")
+            if not values or not all(isinstance(v, (bool, int, float, str)) for v in values):
+                raise ConfigError(f"--param {key}: needs one or more numbers, booleans or strings, "
+                                  f"got {list(values)!r}")
+        # the bound comes before anything that walks the grid (a 10^8-point grid would hang)
+        if self.n_runs > MAX_RUNS:
+            n_points = math.prod(len(v) for _, v in self.grid)
+            raise ConfigError(
+                f"the grid has {n_points} points x {len(self.sequences)} sequence(s) = "
+                f"{self.n_runs} runs, more than the bound of {MAX_RUNS}; give fewer --param values")
         keys = [k for k, _ in self.grid]
         if len(set(keys)) != len(keys):
             raise ConfigError(f"--param keys must be distinct, got {keys}")
@@ -326,6 +370,11 @@ class Study:
     @property
     def keys(self) -> tuple[str, ...]:
         return tuple(k for k, _ in self.grid)
+
+    @property
+    def n_runs(self) -> int:
+        """Runs × sequences, without walking the grid."""
+        return math.prod(len(v) for _, v in self.grid) * len(self.sequences)
 
     def points(self) -> list[tuple[tuple[str, Any], ...]]:
         """Grid points in order (first parameter slowest)."""
@@ -351,18 +400,86 @@ class Study:
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any]) -> "Study":
-        try:
-            if d.get("format") != STUDY_FORMAT:
-                raise ConfigError(f"unsupported study format {d.get('format')!r} (expected {STUDY_FORMAT})")
-            return cls(
-                sequences=tuple(SequenceSpec(**s) for s in d["sequences"]),
-                grid=tuple((g["key"], tuple(g["values"])) for g in d["grid"]),
-                base_config=d["base_config"],
-                xi=float(d["evaluation"]["xi"]),
-                save=tuple(d.get("save", ())),
-            )
-        except (KeyError, TypeError) as exc:
-            raise InputError(f"malformed study meta data: missing or bad {exc}") from None
+        """The study of a ``study.json`` object; :class:`InputError` for a wrong JSON shape,
+        :class:`ConfigError` for settings out of range."""
+        problem = study_meta_problem(d)
+        if problem:
+            raise InputError(f"malformed study meta data: {problem}")
+        if d.get("format") != STUDY_FORMAT:
+            raise InputError(f"unsupported study format {d.get('format')!r} (expected {STUDY_FORMAT})")
+        return cls(
+            sequences=tuple(SequenceSpec(**s) for s in d["sequences"]),
+            grid=tuple((g["key"], tuple(g["values"])) for g in d["grid"]),
+            base_config=d["base_config"],
+            xi=float(d["evaluation"]["xi"]),
+            save=tuple(d.get("save", ())),
+        )
+
+
+def _json_type(v: Any) -> str:
+    """The JSON type of a parsed value, for messages."""
+    if v is None:
+        return "null"
+    for types, name in ((bool, "a boolean"), ((int, float), "a number"), (str, "a string"),
+                        (list, "a list"), (dict, "an object")):
+        if isinstance(v, types):
+            return name
+    return type(v).__name__  # pragma: no cover - json.loads gives only the types above
+
+
+def _is_number(v: Any) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool)
+
+
+def study_meta_problem(meta: Any) -> str | None:
+    """What is wrong with the JSON shape of a ``study.json`` object, in one phrase, or None.
+
+    Checked: the object, ``sequences`` (objects with string ``name`` and ``source``, string or
+    null ``gt``, string ``group``), ``grid`` (``{"key": string, "values": [number | boolean |
+    string, ...]}``), ``base_config`` and ``evaluation`` objects with a number ``xi``, and when
+    present ``save`` (strings), ``versions`` (an object) and ``runs`` (a number). The values
+    themselves are checked by :class:`Study`.
+    """
+    if not isinstance(meta, dict):
+        return f"expected a JSON object, got {_json_type(meta)}"
+    missing = [k for k in ("sequences", "grid", "base_config", "evaluation") if k not in meta]
+    if missing:
+        return "no " + ", ".join(f'"{k}"' for k in missing)
+    seqs = meta["sequences"]
+    if not isinstance(seqs, list) or not seqs:
+        return f'"sequences" must be a non-empty list, got {_json_type(seqs)}'
+    for i, s in enumerate(seqs, 1):
+        if not isinstance(s, dict):
+            return f"sequence {i} must be an object, got {_json_type(s)}"
+        unknown = sorted(set(s) - {"name", "source", "gt", "group"})
+        if unknown:
+            return f"sequence {i}: unknown key(s) {', '.join(map(json.dumps, unknown))}"
+        for key, ok, what in (("name", str, "a string"), ("source", str, "a string"),
+                              ("gt", (str, type(None)), "a string or null"),
+                              ("group", str, "a string")):
+            if (key in s or key in ("name", "source")) and not isinstance(s.get(key), ok):
+                return f'sequence {i}: "{key}" must be {what}, got {_json_type(s.get(key))}'
+    grid = meta["grid"]
+    if not isinstance(grid, list) or not grid:
+        return f'"grid" must be a non-empty list, got {_json_type(grid)}'
+    for i, g in enumerate(grid, 1):
+        if not (isinstance(g, dict) and isinstance(g.get("key"), str)
+                and isinstance(g.get("values"), list)):
+            return f'grid entry {i} must be {{"key": string, "values": list}}'
+        if not g["values"] or not all(isinstance(v, (str, bool)) or _is_number(v) for v in g["values"]):
+            return (f'grid entry {i} ({json.dumps(g["key"])}): "values" must be a non-empty list '
+                    "of numbers, booleans or strings")
+    for key in ("base_config", "evaluation") + tuple(k for k in ("versions",) if k in meta):
+        if not isinstance(meta[key], dict):
+            return f'"{key}" must be an object, got {_json_type(meta[key])}'
+    if not _is_number(meta["evaluation"].get("xi")):
+        return f'"evaluation" needs a number "xi", got {_json_type(meta["evaluation"].get("xi"))}'
+    save = meta.get("save", [])
+    if not isinstance(save, list) or not all(isinstance(x, str) for x in save):
+        return '"save" must be a list of strings'
+    if "runs" in meta and not _is_number(meta["runs"]):
+        return f'"runs" must be a number, got {_json_type(meta["runs"])}'
+    return None
 
 
 def versions() -> dict[str, str]:
@@ -371,16 +488,32 @@ def versions() -> dict[str, str]:
             "opencv": cv2.__version__, "platform": platform.platform()}
 
 
-def load_study(folder: str | Path) -> tuple[Study, dict[str, Any]]:
-    """Read ``study.json`` of a study folder: the :class:`Study` and the full meta dict."""
+def read_study_meta(folder: str | Path) -> dict[str, Any]:
+    """The ``study.json`` object of a study folder, its JSON shape checked
+    (:func:`study_meta_problem`); :class:`InputError` naming the file otherwise."""
     p = Path(folder) / STUDY_FILE
     if not p.is_file():
-        raise InputError(f"no {STUDY_FILE} in {folder}: not a sweep output folder")
+        raise InputError(f"no {STUDY_FILE} in {printable(folder)}: not a sweep output folder")
     try:
         meta = json.loads(p.read_text(encoding="utf-8"))
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise InputError(f"malformed {p}: {exc}") from None
-    return Study.from_dict(meta), meta
+    except UnicodeDecodeError as exc:
+        raise InputError(f"malformed {printable(p)}: not UTF-8 text (byte {exc.start})") from None
+    # JSONDecodeError, an integer of too many digits (both ValueError), nesting too deep
+    except (ValueError, RecursionError) as exc:
+        raise InputError(f"malformed {printable(p)}: {printable(exc)}") from None
+    problem = study_meta_problem(meta)
+    if problem:
+        raise InputError(f"malformed {printable(p)}: {problem}")
+    return meta
+
+
+def load_study(folder: str | Path) -> tuple[Study, dict[str, Any]]:
+    """Read ``study.json`` of a study folder: the :class:`Study` and the full meta dict."""
+    meta = read_study_meta(folder)
+    try:
+        return Study.from_dict(meta), meta
+    except (InputError, ConfigError) as exc:  # an unknown format, settings out of range
+        raise InputError(f"{printable(Path(folder) / STUDY_FILE)}: {printable(exc)}") from None
 
 
 # ------------------------------------------------------------------------------- one run
@@ -591,14 +724,45 @@ def _uncell(text: str) -> Any:
         return text
 
 
-def read_table(path: str | Path) -> list[dict[str, Any]]:
-    """Read a table written by :func:`write_table` (numbers parsed back to int/float)."""
+def read_table(path: str | Path, required: Sequence[str] = ()) -> list[dict[str, Any]]:
+    """Read a table written by :func:`write_table` (numbers parsed back to int/float).
+
+    Raises
+    ------
+    InputError
+        No such file, not UTF-8 text, no header, a repeated column or one of ``required``
+        missing, a row with more or fewer fields than the header, a ``run`` that is not an
+        integer.
+    """
     p = Path(path)
+    shown = printable(p)
     if not p.is_file():
-        raise InputError(f"results table not found: {p}")
-    with open(p, newline="", encoding="utf-8") as fh:
-        rd = csv.DictReader(fh)
-        rows = [{k: (v if k in ("sequence", "group") else _uncell(v)) for k, v in r.items()} for r in rd]
+        raise InputError(f"results table not found: {shown}")
+    try:
+        with open(p, newline="", encoding="utf-8") as fh:
+            header, *body = [r for r in csv.reader(fh) if r] or [[]]
+    except UnicodeDecodeError as exc:
+        raise InputError(f"malformed {shown}: not UTF-8 text (byte {exc.start})") from None
+    except csv.Error as exc:  # e.g. a field over the csv module's size limit
+        raise InputError(f"malformed {shown}: {printable(exc)}") from None
+    if not header:
+        raise InputError(f"malformed {shown}: empty, expected a header row")
+    if len(set(header)) != len(header):
+        raise InputError(f"malformed {shown}: repeated column names in the header")
+    missing = [c for c in required if c not in header]
+    if missing:
+        raise InputError(f"malformed {shown}: no {', '.join(missing)} "
+                         f"column{'s' if len(missing) > 1 else ''}")
+    rows = []
+    for n, r in enumerate(body, 2):
+        if len(r) != len(header):
+            raise InputError(f"malformed {shown}: row {n} has {len(r)} fields, the header "
+                             f"{len(header)}")
+        row = {k: (v if k in ("sequence", "group") else _uncell(v)) for k, v in zip(header, r)}
+        if "run" in row and (isinstance(row["run"], bool) or not isinstance(row["run"], int)):
+            raise InputError(f"malformed {shown}: row {n}: run must be an integer, got "
+                             f"{printable(repr(r[header.index('run')][:20]))}")
+        rows.append(row)
     return rows
 
 
@@ -621,6 +785,124 @@ def summarise_runs(rows: Sequence[Mapping[str, Any]], keys: Sequence[str]) -> li
             row[c] = float(finite.mean()) if len(finite) else float("nan")
         out.append(row)
     return out
+
+
+# ------------------------------------------------------------------------------- resuming
+#: the parts of study.json that decide a run's numbers (versions and run counts do not)
+SETTINGS = ("format", "sequences", "grid", "base_config", "evaluation", "save")
+
+
+def _settings(meta: Mapping[str, Any]) -> dict[str, Any]:
+    """The settings of a study as plain JSON values (tuples become lists, as in study.json)."""
+    return json.loads(json.dumps({k: meta.get(k) for k in SETTINGS}))
+
+
+def _canonical(value: Any) -> str:
+    return json.dumps(value, sort_keys=True, separators=(",", ":"))
+
+
+def study_key(study: Study) -> str:
+    """SHA-256 of the study's settings: a run record made under other settings is not reused."""
+    return hashlib.sha256(_canonical(_settings(study.as_dict())).encode("utf-8")).hexdigest()
+
+
+def _flat_items(value: Any, prefix: str = "") -> dict[str, Any]:
+    """The leaves of nested JSON objects by dotted key (``""`` for a value that is no object)."""
+    if isinstance(value, dict) and value:
+        out: dict[str, Any] = {}
+        for k, v in value.items():
+            out.update(_flat_items(v, f"{prefix}{k}."))
+        return out
+    return {prefix[:-1]: value}
+
+
+def _value_diffs(label: str, old: Any, new: Any) -> list[str]:
+    """``label key: OLD there, NEW now`` for every leaf that differs (values as JSON, so that
+    control characters stay escaped)."""
+    a, b = _flat_items(old), _flat_items(new)
+    out = []
+    for k in list(a) + [k for k in b if k not in a]:
+        there = _canonical(a[k]) if k in a else "(absent)"
+        now = _canonical(b[k]) if k in b else "(absent)"
+        if there != now:
+            out.append(f"{label}{' ' + printable(k) if k else ''}: {there} there, {now} now")
+    return out
+
+
+def settings_differences(old: Mapping[str, Any], new: Mapping[str, Any]) -> list[str]:
+    """What differs between the settings of two ``study.json`` objects, one phrase each
+    (empty when a study may be resumed)."""
+    a, b = _settings(old), _settings(new)
+    out: list[str] = []
+    if _canonical(a["format"]) != _canonical(b["format"]):
+        out += _value_diffs("study format", a["format"], b["format"])
+    if _canonical(a["sequences"]) != _canonical(b["sequences"]):
+        if len(a["sequences"]) != len(b["sequences"]):
+            out.append(f"sequences: {len(a['sequences'])} there, {len(b['sequences'])} now")
+        else:
+            for i, (sa, sb) in enumerate(zip(a["sequences"], b["sequences"]), 1):
+                out += _value_diffs(f"sequence {i}", sa, sb)
+    ga = [(g["key"], g["values"]) for g in a["grid"]]
+    gb = [(g["key"], g["values"]) for g in b["grid"]]
+    if [k for k, _ in ga] != [k for k, _ in gb]:
+        out.append(f"swept parameters: {printable(', '.join(k for k, _ in ga))} there, "
+                   f"{printable(', '.join(k for k, _ in gb))} now")
+    else:
+        out += [f"values of {printable(k)}: {_canonical(va)} there, {_canonical(vb)} now"
+                for (k, va), (_, vb) in zip(ga, gb) if _canonical(va) != _canonical(vb)]
+    out += _value_diffs("base config", a["base_config"], b["base_config"])
+    out += _value_diffs("evaluation", a["evaluation"], b["evaluation"])
+    out += _value_diffs("--save", a["save"] or [], b["save"] or [])
+    return out
+
+
+def _check_resumable(out: Path, study: Study) -> bool:
+    """Whether ``out`` holds ``study`` to resume: False when it holds no study yet;
+    :class:`InputError` naming the differences when it holds one with other settings."""
+    if not (out / STUDY_FILE).exists():
+        log.info("no %s in %s: nothing to resume, starting the study", STUDY_FILE, printable(out))
+        return False
+    meta = read_study_meta(out)
+    diffs = settings_differences(meta, study.as_dict())
+    if diffs:
+        more = f"; and {len(diffs) - 5} more" if len(diffs) > 5 else ""
+        raise InputError(f"cannot resume {printable(out)}: its study has other settings: "
+                         f"{'; '.join(diffs[:5])}{more} (resume with the same settings, or start "
+                         "over with --force or another -o)")
+    now = versions()
+    for k, v in meta.get("versions", {}).items():
+        if k != "platform" and k in now and now[k] != v:
+            log.warning("study was started with %s %s, this is %s: resumed runs may differ from "
+                        "the finished ones", printable(k), printable(v), now[k])
+    return True
+
+
+def _run_record(res: Mapping[str, Any], key: str) -> str:
+    """The record of a finished run: the study key, its table row (floats written with repr, so
+    they read back exactly) and the digests of its files."""
+    digests = {Path(rel).name: hashlib.sha256(text.encode("utf-8")).hexdigest()
+               for rel, text in res["files"].items()}
+    return json.dumps({"study": key, "row": res["row"], "files": digests}, indent=1,
+                      default=lambda o: o.item() if isinstance(o, np.generic) else str(o)) + "\n"
+
+
+def _finished_run(out: Path, spec: RunSpec, key: str) -> dict[str, Any] | None:
+    """The result (``{"row": ...}``) of a run finished in ``out`` under the study ``key``, or
+    None when its record or one of its files is missing, unreadable or does not match."""
+    folder = out / spec.run_dir()
+    try:
+        rec = json.loads((folder / RUN_RECORD_FILE).read_text(encoding="utf-8"))
+        digests = {name: hashlib.sha256((folder / name).read_text(encoding="utf-8")
+                                        .encode("utf-8")).hexdigest() for name in RUN_FILES}
+    except (OSError, ValueError, RecursionError):  # missing, not UTF-8, not JSON
+        return None
+    if not isinstance(rec, dict) or rec.get("study") != key or rec.get("files") != digests:
+        return None
+    row = rec.get("row")
+    if (not isinstance(row, dict) or row.get("run") != spec.run
+            or row.get("sequence") != spec.sequence.name):
+        return None
+    return {"row": row}
 
 
 # ------------------------------------------------------------------------------- the sweep
@@ -652,19 +934,33 @@ def _owning_folder(sweep: Callable[..., SweepResult]) -> Callable[..., SweepResu
 @_owning_folder
 def run_sweep(study: Study, out_dir: str | Path, *, jobs: int = 1, cluster: str | None = None,
               progress: Callable[[int], None] | None = None, figures: bool = True,
-              force: bool = False) -> SweepResult:
+              force: bool = False, resume: bool = False) -> SweepResult:
     """Run ``study`` and write its folder: ``study.json``, ``config.toml`` (base config),
     ``results.csv`` (+ ``.parquet``), ``summary.csv`` (per-run averages over sequences),
     ``summary.json`` (``"interrupted"``, runs done; on an interrupt the table holds the finished
     runs),
-    ``runs/rNNN/<sequence>/{tracks,regions}.txt`` and, with ``figures``, ``figures/*.png|svg``.
+    ``runs/rNNN/<sequence>/{tracks,regions}.txt`` and ``row.json`` (the run's table row, written
+    last) and, with ``figures``, ``figures/*.png|svg``.
 
     One sweep at a time owns the folder (a second one is refused at once). With ``force`` an
     old study in it (:data:`STUDY_OUTPUTS`, ``runs/``, ``figures/``) is removed before anything
     is written, so that old and new runs never mix.
+
+    With ``resume``, a folder that holds this study (same settings, :data:`SETTINGS`) is
+    continued: a run whose ``row.json`` was written under these settings and whose files match
+    its digests is not run again, and the table is the one an uninterrupted sweep writes. A
+    folder with other settings is refused (:class:`InputError` naming them); one without
+    ``study.json`` starts the study.
     """
+    if jobs < 1:
+        raise ConfigError(f"-j must be >= 1, got {jobs}")
+    if resume and force:
+        raise ConfigError("--resume continues a study and --force starts it over: give one of them")
+    check_ground_truth(study.sequences)  # a replayed study may name files this machine lacks
     out = Path(out_dir)
-    check_writable([out / STUDY_FILE, out / TABLE_FILE], force)
+    resuming = resume and _check_resumable(out, study)
+    if not resuming:
+        check_writable([out / STUDY_FILE, out / TABLE_FILE], force)
     if force:  # the old study goes before the new one appears: old and new runs never mix
         remove_outputs([out / n for n in STUDY_OUTPUTS], folders=[out / "runs", out / "figures"])
     remove_leftover_temps([out / n for n in STUDY_OUTPUTS])  # of a killed sweep
@@ -672,17 +968,29 @@ def run_sweep(study: Study, out_dir: str | Path, *, jobs: int = 1, cluster: str 
     meta = study.as_dict()
     meta["versions"] = versions()
     meta["runs"] = len(study.points())
-    atomic_write_text(out / STUDY_FILE, json.dumps(meta, indent=2) + "\n")
+    if not resuming:  # a resumed study keeps the versions it was started with
+        atomic_write_text(out / STUDY_FILE, json.dumps(meta, indent=2) + "\n")
     save_config(from_dict(PipelineConfig, dict(study.base_config)), out / "config.toml")
     specs = study.specs(out)
     log.info("sweep: %d runs x %d sequences = %d jobs", len(study.points()), len(study.sequences),
              len(specs))
+    key = study_key(study)
     finished: dict[int, dict[str, Any]] = {}
+    if resuming:
+        finished = {i: res for i, s in enumerate(specs) if (res := _finished_run(out, s, key))}
+        log.info("resuming: %d of %d runs were done, %d to run", len(finished), len(specs),
+                 len(specs) - len(finished))
+        if progress is not None and finished:
+            progress(len(finished))
+    todo = [i for i in range(len(specs)) if i not in finished]
 
-    def save_run(i: int, res: dict[str, Any]) -> None:
-        # each run's files are written as soon as it finishes: an interruption keeps them
+    def save_run(j: int, res: dict[str, Any]) -> None:
+        # each run's files are written as soon as it finishes: an interruption keeps them; the
+        # record comes last, so that a record means the files are complete (--resume)
+        i = todo[j]
         for rel, text in res["files"].items():
             atomic_write_text(out / rel, text)
+        atomic_write_text(out / specs[i].run_dir() / RUN_RECORD_FILE, _run_record(res, key))
         finished[i] = res
 
     def status(interrupted: bool) -> None:
@@ -690,17 +998,19 @@ def run_sweep(study: Study, out_dir: str | Path, *, jobs: int = 1, cluster: str 
             {"interrupted": interrupted, "runs_done": len(finished), "runs": len(specs)}, indent=2) + "\n")
 
     try:
-        results = execute(specs, jobs=jobs, cluster=cluster, progress=progress, on_result=save_run)
+        execute([specs[i] for i in todo], jobs=jobs, cluster=cluster, progress=progress,
+                on_result=save_run)
     except KeyboardInterrupt:
         rows = [finished[i]["row"] for i in sorted(finished)]
         if rows:
             write_table(rows, out / TABLE_FILE)
         status(interrupted=True)
-        log.warning("sweep interrupted after %d of %d runs; their table is in %s", len(finished),
-                    len(specs), out / TABLE_FILE)
+        log.warning("sweep interrupted after %d of %d runs%s (continue with --resume)",
+                    len(finished), len(specs),
+                    f"; their table is in {printable(out / TABLE_FILE)}" if rows else "")
         raise
     status(interrupted=False)
-    rows = [res["row"] for res in results]
+    rows = [finished[i]["row"] for i in range(len(specs))]
     outputs = {"table": write_table(rows, out / TABLE_FILE),
                "summary": write_table(summarise_runs(rows, study.keys), out / SUMMARY_FILE)[:1]}
     if figures:
@@ -711,6 +1021,14 @@ def run_sweep(study: Study, out_dir: str | Path, *, jobs: int = 1, cluster: str 
         else:
             outputs["figures"] = study_figures(rows, study, out / "figures")
     return SweepResult(rows=rows, out_dir=out, outputs=outputs)
+
+
+def check_ground_truth(sequences: Iterable[SequenceSpec]) -> None:
+    """:class:`InputError` for the first sequence whose ground-truth file does not exist, so
+    that a study stops before anything is written rather than at its first run."""
+    for s in sequences:
+        if s.gt is not None and not os.path.isfile(s.gt):
+            raise InputError(f"ground truth of sequence {s.name} not found: {printable(s.gt)}")
 
 
 def study_from_args(sources: Sequence[str], gt: Sequence[str] | None, params: Iterable[str],
@@ -740,9 +1058,7 @@ def study_from_args(sources: Sequence[str], gt: Sequence[str] | None, params: It
             nm = s.name if seen[s.name] == 1 else f"{s.name}-{seen[s.name]}"
             fixed.append(SequenceSpec(nm, s.source, s.gt, s.group))
         seqs = fixed
-    for s in seqs:
-        if s.gt is not None and not os.path.isfile(s.gt):
-            raise InputError(f"ground truth not found: {s.gt}")
+    check_ground_truth(seqs)
     grid = tuple(parse_param(p) for p in params)
     return Study(sequences=tuple(seqs), grid=grid, base_config=to_dict(base_config), xi=xi,
                  save=tuple(save))

@@ -27,8 +27,8 @@ from typing import Any, Callable, Sequence
 from ..config import PipelineConfig, apply_overrides, from_dict, save_config, to_dict
 from ..errors import ConfigError
 from ..io.atomic import atomic_write_text
-from .sweep import (RunSpec, SequenceSpec, _parse_literal, execute, format_value,
-                    write_table)
+from .sweep import (RunSpec, SequenceSpec, _parse_literal, check_ground_truth, execute,
+                    format_value, write_table)
 
 log = logging.getLogger(__name__)
 
@@ -94,6 +94,10 @@ def parse_space(item: str) -> SearchParam:
         is_int = all(p.lstrip("+-").isdigit() for p in parts[:2])
         return SearchParam(key, "int" if is_int else "float", lo, hi, log=use_log)
     choices = tuple(_parse_literal(p.strip()) for p in text.split(",") if p.strip())
+    if not all(isinstance(c, (bool, int, float, str)) for c in choices):
+        raise ConfigError(f"--param {item!r}: choices must be numbers, booleans or strings")
+    if len(set(map(repr, choices))) != len(choices):
+        raise ConfigError(f"--param {item!r} repeats a choice")
     return SearchParam(key, "categorical", choices=choices)
 
 
@@ -114,6 +118,21 @@ class TuneResult:
         return {"metric": self.metric, "direction": self.direction, "best_params": self.best_params,
                 "train_score": self.train_score, "validation_score": self.validation_score,
                 "n_trials": len(self.trials)}
+
+
+def _check_key(base: dict[str, Any], key: str) -> None:
+    """:class:`ConfigError` when ``key`` names no field of the config ``base`` (as a dict): every
+    trial would be invalid, and the search would end with nothing to say why."""
+    node: Any = base
+    parts = key.split(".")
+    for i, part in enumerate(parts):
+        if not isinstance(node, dict) or part not in node:
+            raise ConfigError(f"--param {key}: unknown config key {'.'.join(parts[:i + 1])!r}")
+        node = node[part]
+    if isinstance(node, dict):
+        valid = sorted(k for k, v in node.items() if not isinstance(v, dict))
+        raise ConfigError(f"--param {key}: a config section, not a key; valid keys here: "
+                          f"{', '.join(valid)}")
 
 
 def _score(rows: Sequence[dict[str, Any]], metric: str) -> float:
@@ -152,10 +171,18 @@ def tune(train: Sequence[SequenceSpec], validation: Sequence[SequenceSpec], spac
         raise ConfigError(f"direction must be maximize or minimize, got {direction!r}")
     if n_trials < 1:
         raise ConfigError(f"--trials must be >= 1, got {n_trials}")
+    # checked here rather than in the first trial, whose failure Optuna would log as its own
+    if jobs < 1:
+        raise ConfigError(f"-j must be >= 1, got {jobs}")
+    if not 0.0 <= xi <= 1.0:
+        raise ConfigError(f"--xi must be in [0, 1], got {xi}")
     keys = [p.key for p in space]
     if len(set(keys)) != len(keys):
         raise ConfigError(f"--param keys must be distinct, got {keys}")
     base = to_dict(base_config)
+    for key in keys:
+        _check_key(base, key)
+    check_ground_truth([*train, *validation])
 
     def specs(params: dict[str, Any], seqs: Sequence[SequenceSpec], run: int) -> list[RunSpec]:
         return [RunSpec(run=run, params=tuple(params.items()), sequence=s, base_config=base, xi=xi)
