@@ -162,6 +162,7 @@ def _deep_yaml(tmp_path: Path, kind: str) -> Path:
     return p
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("kind", ["sequences", "mappings", "behind a quote", "xml in a .yml"])
 @pytest.mark.parametrize("command", ["world", "track"])
 def test_deeply_nested_camera_yaml_is_refused_before_opencv_parses_it(tmp_path, tracks, kind,

@@ -174,6 +174,7 @@ def test_a_stream_that_keeps_dropping_fails_after_its_reconnect_attempts(mjpeg):
     assert src.truncated and time.monotonic() - t0 < 10
 
 
+@pytest.mark.slow
 def test_a_stalled_stream_times_out_and_counts_in_the_budget(mjpeg):
     # every connection delivers 3 frames, then stays open without sending anything: each
     # stall ends after the read timeout (0.5 s) and costs one reconnect attempt of 2
@@ -189,6 +190,7 @@ def test_a_stalled_stream_times_out_and_counts_in_the_budget(mjpeg):
     assert 3 * 0.5 <= elapsed < 3 * 0.5 + 3.0      # three stalls of 0.5 s, not 30 s each
 
 
+@pytest.mark.slow
 def test_the_read_timeout_comes_from_the_config(mjpeg, tmp_path, capsys):
     server = mjpeg(3, then="stall")
     out = tmp_path / "o"
@@ -220,6 +222,7 @@ def _stopped_job(url: str, out: Path, after: threading.Event, delay: float):
     return time.monotonic() - asked[0]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("phase", ["backing off", "stalled"])
 def test_a_stop_request_ends_a_job_on_a_live_stream_within_two_seconds(mjpeg, tmp_path, phase):
     # backing off: 20 frames, then the server stops, so reconnections are refused and the source
@@ -299,6 +302,7 @@ def test_a_signal_ends_a_live_run_within_two_seconds(mjpeg, tmp_path, sig, phase
     print(f"{sig.name} while {phase}: outputs final in {finalised:.2f} s, exit in {exited:.2f} s")
 
 
+@pytest.mark.slow
 def test_a_live_source_left_open_at_interpreter_exit_ends_the_process_cleanly(mjpeg, tmp_path):
     # the reader thread sits in a read of a silent stream (0.5 s timeout) when the interpreter
     # exits, and finalisation is slow (an object whose finaliser takes 1.5 s): were the read to
