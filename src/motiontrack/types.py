@@ -339,8 +339,8 @@ class Annotations:
         )
 
     @classmethod
-    def empty(cls) -> "Annotations":
-        return cls.from_columns(np.zeros(0), np.zeros(0), np.zeros((0, 4)))
+    def empty(cls, meta: Mapping[str, object] | None = None) -> "Annotations":
+        return cls.from_columns(np.zeros(0), np.zeros(0), np.zeros((0, 4)), meta=meta)
 
     def __len__(self) -> int:
         return len(self.frames)

@@ -26,6 +26,7 @@ import numpy as np
 
 from ..errors import ConfigError, InputError, location, printable
 from ..io.atomic import commit_temp, temp_path_for
+from ..io.textfile import read_text
 from ..imaging import to_gray
 from .tsai import MAX_IMAGE_SIDE, _as_pixels, _as_world, _intersect_plane
 
@@ -365,17 +366,7 @@ def check_yaml_text(path: Path) -> None:
     """Refuse, before OpenCV parses it, a camera YAML that is too large, not UTF-8 text, XML,
     or nested deeper than :data:`MAX_YAML_DEPTH` (OpenCV's parser recurses per level and a file
     nested 50,000 deep crashes the process with a segmentation fault)."""
-    size = path.stat().st_size
-    if size > MAX_YAML_BYTES:
-        raise InputError(f"OpenCV camera YAML {location(path)}: {size} bytes, more than the "
-                         f"{MAX_YAML_BYTES} a camera file may have")
-    data = path.read_bytes()
-    try:
-        text = data.decode("utf-8-sig")
-    except UnicodeDecodeError as exc:
-        line = data.count(b"\n", 0, exc.start) + 1
-        raise InputError(f"OpenCV camera YAML {location(path, line)}: not UTF-8 text (byte at "
-                         f"offset {exc.start})") from None
+    text = read_text(path, "OpenCV camera YAML", MAX_YAML_BYTES)
     if text.lstrip().startswith("<"):
         raise InputError(f"OpenCV camera YAML {location(path)}: XML content; expected the YAML "
                          "that 'motiontrack calibrate chessboard' writes")

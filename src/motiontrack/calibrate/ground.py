@@ -21,6 +21,7 @@ import tomli_w
 
 from ..errors import ConfigError, InputError, excerpt, location
 from ..io.atomic import atomic_write_text
+from ..io.textfile import read_text
 from ..io.tomlfile import read_toml
 from .chessboard import OpenCVCamera
 from .tsai import MAX_IMAGE_SIDE, _as_pixels, _as_world, _kind
@@ -188,21 +189,7 @@ def read_csv_fields(path: Path, what: str) -> list[tuple[int, list[tuple[int, st
     text is an :class:`InputError` naming ``what``. No quoting: these files hold numbers and
     names.
     """
-    if path.is_dir():
-        raise InputError(f"{what} {location(path)}: is a folder, not a file")
-    if not path.is_file():
-        raise InputError(f"{what} not found: {location(path)}")
-    size = path.stat().st_size
-    if size > MAX_CSV_BYTES:
-        raise InputError(f"{what} {location(path)}: {size} bytes, more than the {MAX_CSV_BYTES} "
-                         "such a file may have")
-    data = path.read_bytes()
-    try:
-        text = data.decode("utf-8-sig")
-    except UnicodeDecodeError as exc:
-        line = data.count(b"\n", 0, exc.start) + 1
-        raise InputError(f"{what} {location(path, line)}: not UTF-8 text (byte at offset "
-                         f"{exc.start})") from None
+    text = read_text(path, what, MAX_CSV_BYTES)
     out = []
     for lineno, line in enumerate(text.splitlines(), 1):
         fields, start = [], 0

@@ -204,9 +204,7 @@ class _Rows:
 
     def annotations(self, meta: dict) -> Annotations:
         if not self.frames:
-            return Annotations(**{k: getattr(Annotations.empty(), k) for k in (
-                "frames", "ids", "boxes", "scores", "consider", "classes", "visibility", "world")},
-                meta=meta)
+            return Annotations.empty(meta)
         return Annotations.from_columns(self.frames, self.ids,
                                         np.asarray(self.boxes, dtype=np.float64),
                                         classes=self.classes, visibility=self.vis, meta=meta)

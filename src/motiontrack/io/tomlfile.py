@@ -6,7 +6,8 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from ..errors import InputError, location, printable
+from ..errors import InputError, printable
+from .textfile import read_text
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -40,19 +41,5 @@ def read_toml(path: str | Path, what: str = "TOML file") -> dict[str, Any]:
     """Read a TOML file; a missing, undecodable or malformed file raises :class:`InputError`
     (``what`` names the kind of file in the message, e.g. ``"camera TOML"``)."""
     p = Path(path)
-    if p.is_dir():
-        raise InputError(f"{what} {printable(p)}: is a folder, not a file")
-    if not p.is_file():
-        raise InputError(f"{what} not found: {printable(p)}")
-    if p.stat().st_size > MAX_TOML_BYTES:
-        raise InputError(f"{what} {printable(p)}: {p.stat().st_size} bytes, more than the "
-                         f"{MAX_TOML_BYTES} a TOML file may have")
-    data = p.read_bytes()
-    try:
-        text = data.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        line = data.count(b"\n", 0, exc.start) + 1
-        column = exc.start - (data.rfind(b"\n", 0, exc.start) + 1) + 1
-        raise InputError(f"malformed {what} {location(p, line, column)}: not UTF-8 text "
-                         f"(byte 0x{data[exc.start]:02x})") from None
+    text = read_text(p, what, MAX_TOML_BYTES, encoding="utf-8")
     return parse_toml(text, f"{what} {p}")
