@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 
 class MotionTrackError(Exception):
     """Base for errors caused by the user's input (files, parameters), not by a bug."""
@@ -56,6 +58,21 @@ def excerpt(token: object, limit: int = EXCERPT_CHARS) -> str:
     s = str(token)
     cut = len(s) > limit
     return "'" + printable(s[:limit]).replace("'", "\\'") + ("...'" if cut else "'")
+
+
+def finite_number(text: str, where: str, field: str = "") -> float:
+    """A field of a text file as a finite float; otherwise an :class:`InputError` at ``where``
+    (``file:line:column``) naming the ``field`` and quoting at most an :func:`excerpt` of it."""
+    named = f" in {field}" if field else ""
+    try:
+        v = float(text)
+    except ValueError:
+        raise InputError(f"{where}: non-numeric value{named}: expected a number, got "
+                         f"{excerpt(text)}") from None
+    if not math.isfinite(v):
+        raise InputError(f"{where}: non-finite value{named}: expected a finite number, got "
+                         f"{excerpt(text)}")
+    return v
 
 
 def token_at(text: str, start: int = 0) -> str:

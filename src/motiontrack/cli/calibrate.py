@@ -11,7 +11,8 @@ from typing import TextIO
 
 import numpy as np
 
-from ..errors import ConfigError, InputError, check_output_path, excerpt, location, printable
+from ..errors import (ConfigError, InputError, check_output_path, excerpt, finite_number, location,
+                      printable)
 
 log = logging.getLogger(__name__)
 
@@ -294,17 +295,9 @@ def read_lines_csv(path: Path) -> list[tuple[str, str, float, np.ndarray]]:
 
 
 def _csv_number(path: Path, lineno: int, field: tuple[int, str]) -> float:
-    """A finite number from a CSV field ``(column, text)``, or :class:`InputError`."""
+    """A finite number from a CSV field ``(column, text)`` (:func:`finite_number`)."""
     col, text = field
-    try:
-        v = float(text)
-    except ValueError:
-        raise InputError(f"{location(path, lineno, col)}: non-numeric value: expected a number, "
-                         f"got {excerpt(text)}") from None
-    if not math.isfinite(v):
-        raise InputError(f"{location(path, lineno, col)}: expected a finite number, got "
-                         f"{excerpt(text)}")
-    return v
+    return finite_number(text, location(path, lineno, col))
 
 
 #: longest search along a line's normal, ``calibrate lines --half-width`` (pixels)

@@ -23,7 +23,7 @@ from typing import Iterable
 
 import numpy as np
 
-from ..errors import InputError, excerpt, location
+from ..errors import InputError, excerpt, finite_number, location
 from ..types import INT_LIMIT, Annotations
 from .atomic import atomic_open
 
@@ -101,7 +101,7 @@ def parse_mot(text: str, kind: str = "results", name: str = "<string>") -> Annot
         if len(fields) < 6:
             raise InputError(f"{location(name, lineno)}: expected at least 6 comma-separated "
                              f"values (frame,id,left,top,width,height), got {len(fields)}")
-        vals = [_number(col, tok, k, location(name, lineno, col))
+        vals = [finite_number(tok, location(name, lineno, col), _field(k))
                 for k, (col, tok) in enumerate(fields[:10])]
         # frame, id and (9-column gt) class become int64: refuse values that cannot be one
         for k in (0, 1, 7):
@@ -143,19 +143,6 @@ def _split_fields(line: str) -> list[tuple[int, str]]:
         out.append((start + lead + 1, part.strip()))
         start += len(part) + 1
     return out
-
-
-def _number(col: int, tok: str, k: int, where: str) -> float:
-    """Field ``k`` of a row as a finite number, or :class:`InputError` quoting a short excerpt."""
-    try:
-        v = float(tok)
-    except ValueError:
-        raise InputError(f"{where}: non-numeric value in {_field(k)}: expected a number, got "
-                         f"{excerpt(tok)}") from None
-    if not math.isfinite(v):
-        raise InputError(f"{where}: non-finite value in {_field(k)}: expected a finite number, "
-                         f"got {excerpt(tok)}")
-    return v
 
 
 def _annotations(a: np.ndarray, ncols: int | None, kind: str) -> Annotations:
