@@ -281,6 +281,31 @@ def test_cli_folder_of_trackers_and_frames(tmp_path, capsys):
     assert res["none"]["FN"] == 3 and res["none"]["FP"] == 0
 
 
+def test_cli_scores_every_pred_and_names_runs_by_their_folder(tmp_path, capsys):
+    gt = tmp_path / "gt.txt"
+    gt.write_text("".join(f"{f},1,0,0,10,10,1,-1,-1,-1\n" for f in range(1, 6)))
+    for run, x in (("run1", 0), ("run2", 50)):         # run2's boxes miss the object
+        (tmp_path / run).mkdir()
+        (tmp_path / run / "tracks.txt").write_text(
+            "".join(f"{f},3,{x},0,10,10,1,-1,-1,-1\n" for f in range(1, 6)))
+    other = tmp_path / "other.txt"
+    other.write_text("".join(f"{f},4,0,0,10,10,1,-1,-1,-1\n" for f in range(1, 4)))
+    out = tmp_path / "all.json"
+    code = main(["evaluate", "--gt", str(gt), "--pred", str(tmp_path / "run1" / "tracks.txt"),
+                 "--pred", str(tmp_path / "run2" / "tracks.txt"), "--pred", str(other),
+                 "--metrics", "clear", "--json", str(out)])
+    assert code == 0
+    table = capsys.readouterr().out
+    assert all(n in table for n in ("run1/tracks", "run2/tracks", "other"))
+    res = json.loads(out.read_text())
+    assert sorted(res) == ["other", "run1/tracks", "run2/tracks"]
+    assert res["run1/tracks"]["MOTA"] == 1.0 and res["run2/tracks"]["FN"] == 5
+    assert res["other"]["TP"] == 3 and res["other"]["FN"] == 2
+    # the same file twice is a mistake, not two rows
+    assert main(["evaluate", "--gt", str(gt), "--pred", str(other), "--pred", str(other)]) == 2
+    assert "more than once" in capsys.readouterr().err
+
+
 @pytest.mark.parametrize("args,msg", [
     (["--gt", "missing.txt", "--pred", "x.txt"], "not found"),
     (["--gt", "{gt}", "--pred", "{gt}", "--metrics", "clear,nope"], "unknown metric"),

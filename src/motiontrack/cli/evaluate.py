@@ -47,8 +47,10 @@ def register(subparsers) -> None:
                     "zero-marked gt rows are ignored); framewise metrics follow ViPER-PE.",
     )
     p.add_argument("--gt", required=True, help="ground-truth file (MOT CSV, ViPER, CVML, CVAT, JSON)")
-    p.add_argument("--pred", required=True,
-                   help="tracker result file, or a folder with one result file per tracker")
+    p.add_argument("--pred", required=True, action="append",
+                   help="tracker result file, or a folder with one result file per tracker; "
+                        "repeatable: one row per result file, named by the file, or by its folder "
+                        "when file names repeat (e.g. many tracks.txt)")
     p.add_argument("--frames", type=frame_range, metavar="A:B",
                    help="evaluate only frames A..B (inclusive, 1-based)")
     p.add_argument("--metrics", default=None,
@@ -105,6 +107,24 @@ def _pred_files(pred: Path) -> list[tuple[str, Path]]:
     if not pred.exists():
         raise InputError(f"result file not found: {pred}")
     return [(pred.stem, pred)]
+
+
+def _named(items: list[tuple[str, Path]]) -> list[tuple[str, Path]]:
+    """Unique row names: a file's stem, or as many of its folders as it takes to tell it from
+    the others with the same stem (``run1/tracks``, ``run2/tracks``); the path when nothing
+    else does."""
+    out = []
+    for name, path in items:
+        same = [p for n, p in items if n == name and p != path]
+        depth = 0
+        while same and depth < len(path.parts):
+            depth += 1
+            label = "/".join([*path.parent.parts[len(path.parent.parts) - depth:], path.stem])
+            same = [p for p in same
+                    if "/".join([*p.parent.parts[len(p.parent.parts) - depth:], p.stem]) == label]
+            name = label
+        out.append((name if not same else str(path), path))
+    return out
 
 
 def _clip_frames(ann: Annotations, frames: tuple[int, int | None] | None) -> Annotations:
@@ -196,7 +216,9 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"ground-truth file has no annotations: {args.gt}")
     results: dict[str, dict] = {}
     per_rows: list[dict] = []
-    files = _pred_files(Path(args.pred))
+    files = _named([f for pred in args.pred for f in _pred_files(Path(pred))])
+    if len({p.resolve() for _, p in files}) < len(files):
+        raise ConfigError("the same result file is given more than once in --pred")
     for name, path in files:
         pred = _read(path, "result")
         log.info("evaluating %s (%d boxes) against %s (%d boxes)", path, len(pred), args.gt, len(gt))
@@ -211,7 +233,7 @@ def run(args: argparse.Namespace) -> int:
     (sys.stderr if any(map(is_stdout, outputs)) else sys.stdout).write(format_table(results))
     if args.json:
         obj = ({k: _jsonable(v) for k, v in next(iter(results.values())).items()}
-               if len(results) == 1 and not Path(args.pred).is_dir()
+               if len(args.pred) == 1 and not Path(args.pred[0]).is_dir()
                else {n: {k: _jsonable(v) for k, v in r.items()} for n, r in results.items()})
         atomic_write_text(args.json, json.dumps(obj, indent=2, sort_keys=True) + "\n")
         log.info("wrote %s", args.json)
