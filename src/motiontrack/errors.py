@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+import errno
 import math
+import tempfile
+from pathlib import Path
 
 
 class MotionTrackError(Exception):
@@ -60,6 +63,21 @@ def excerpt(token: object, limit: int = EXCERPT_CHARS) -> str:
     return "'" + printable(s[:limit]).replace("'", "\\'") + ("...'" if cut else "'")
 
 
+def require_file(path: object, what: str) -> Path:
+    """``path`` as a :class:`~pathlib.Path` when it names an existing regular file; otherwise an
+    :class:`InputError` saying which ``what`` (e.g. ``"camera file"``) is missing, a folder, or
+    a device, pipe or socket."""
+    p = Path(path)
+    if p.is_dir():
+        raise InputError(f"{what} {location(p)}: is a folder, not a file")
+    if not p.is_file():
+        if p.exists():
+            raise InputError(f"{what} {location(p)}: not a regular file (a device, pipe or "
+                             "socket)")
+        raise InputError(f"{what} not found: {location(p)}")
+    return p
+
+
 def finite_number(text: str, where: str, field: str = "") -> float:
     """A field of a text file as a finite float; otherwise an :class:`InputError` at ``where``
     (``file:line:column``) naming the ``field`` and quoting at most an :func:`excerpt` of it."""
@@ -100,9 +118,6 @@ def describe_os_error(exc: OSError) -> str:
     """One line for a failed file operation, in the user's terms: which path, and what is wrong
     with it (a folder where a file was expected, a file where a folder was expected, no
     permission, a full disk, ...)."""
-    import errno
-    from pathlib import Path
-
     name = exc.filename if exc.filename is not None else ""
     shown = printable(name)
     code = exc.errno
@@ -139,9 +154,6 @@ def check_output_path(path: object, what: str = "output", folder: bool = False) 
     temporary file there, which also holds for root). ``-`` (standard output) passes. Whether an
     existing output may be overwritten is for the caller (``--force``).
     """
-    import tempfile
-    from pathlib import Path
-
     if str(path) == "-":  # standard output
         return
     p = Path(str(path))

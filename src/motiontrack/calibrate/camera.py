@@ -19,7 +19,7 @@ from typing import Protocol, Union
 import numpy as np
 
 
-from ..errors import InputError, excerpt, location
+from ..errors import InputError, excerpt, location, require_file
 from ..io.tomlfile import read_toml
 from .chessboard import OpenCVCamera, read_opencv_yaml
 from .ground import GroundHomography, ground_from_toml_doc
@@ -40,11 +40,7 @@ class Camera(Protocol):
 
 def load_camera(path: str | Path) -> AnyCamera:
     """Read any supported camera file; raises :class:`InputError` on a missing/malformed file."""
-    p = Path(path)
-    if p.is_dir():
-        raise InputError(f"camera file {location(p)}: is a folder, not a file")
-    if not p.is_file():
-        raise InputError(f"camera file not found: {location(p)}")
+    p = require_file(path, "camera file")
     suffix = p.suffix.lower()
     if suffix == ".xml":
         return read_tsai_xml(p)

@@ -12,7 +12,7 @@ from typing import TextIO
 import numpy as np
 
 from ..errors import (ConfigError, InputError, check_output_path, excerpt, finite_number, location,
-                      printable)
+                      require_file)
 
 log = logging.getLogger(__name__)
 
@@ -106,10 +106,7 @@ def _suffix(path: Path, default: str) -> str:
 def _read_image(path: Path, gray: bool = False) -> np.ndarray:
     import cv2
 
-    if path.is_dir():
-        raise InputError(f"{printable(path)}: is a folder, not an image")
-    if not path.is_file():
-        raise InputError(f"image not found: {printable(path)}")
+    require_file(path, "image")
     img = cv2.imread(str(path), cv2.IMREAD_GRAYSCALE if gray else cv2.IMREAD_COLOR)
     if img is None:  # maybe a video: take its first frame
         cap = cv2.VideoCapture(str(path))

@@ -21,7 +21,7 @@ import logging
 import re
 from pathlib import Path
 
-from ..errors import ConfigError, InputError, excerpt, location, token_at
+from ..errors import ConfigError, InputError, excerpt, location, require_file, token_at
 from ..types import Annotations
 from .cvat import read_cvat, write_cvat
 from .cvml import read_cvml, write_cvml
@@ -118,12 +118,7 @@ def detect_format(path: str | Path) -> str:
 
 def _check_file(p: Path) -> None:
     """:class:`InputError` unless ``p`` is a regular file."""
-    if p.is_dir():
-        raise InputError(f"{location(p)}: is a folder, not an annotation file")
-    if not p.is_file():
-        if p.exists():
-            raise InputError(f"{location(p)}: not a regular file (a device, pipe or socket)")
-        raise InputError(f"annotation file not found: {location(p)}")
+    require_file(p, "annotation file")
 
 
 def read_annotations(path: str | Path, kind: str = "auto", mot_kind: str = "auto") -> Annotations:

@@ -23,7 +23,7 @@ from typing import Iterable
 
 import numpy as np
 
-from ..errors import InputError, excerpt, finite_number, location
+from ..errors import InputError, excerpt, finite_number, location, require_file
 from ..types import INT_LIMIT, Annotations
 from .atomic import atomic_open
 
@@ -39,11 +39,7 @@ def read_mot(path: str | Path, kind: str = "auto") -> Annotations:
     kind : ``"gt"`` (column 7 = consider flag), ``"results"``/``"det"`` (column 7 = confidence), or
         ``"auto"``: ``gt`` when the file is named ``gt*`` and otherwise ``results``.
     """
-    p = Path(path)
-    if p.is_dir():
-        raise InputError(f"{location(p)}: is a folder, not an annotation file")
-    if not p.is_file():
-        raise InputError(f"annotation file not found: {location(p)}")
+    p = require_file(path, "annotation file")
     if kind == "auto":
         kind = "gt" if p.name.lower().startswith("gt") else "results"
     try:

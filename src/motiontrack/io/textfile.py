@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..errors import InputError, location
+from ..errors import InputError, location, require_file
 
 __all__ = ["read_text"]
 
@@ -14,11 +14,7 @@ def read_text(path: str | Path, what: str, max_bytes: int, encoding: str = "utf-
     kind of file, e.g. ``"camera TOML"``) when it is missing, a folder, larger than
     ``max_bytes``, or not text in ``encoding`` (then with the line and column of the first byte
     that does not decode)."""
-    p = Path(path)
-    if p.is_dir():
-        raise InputError(f"{what} {location(p)}: is a folder, not a file")
-    if not p.is_file():
-        raise InputError(f"{what} not found: {location(p)}")
+    p = require_file(path, what)
     size = p.stat().st_size
     if size > max_bytes:
         raise InputError(f"{what} {location(p)}: {size} bytes, more than the {max_bytes} such a "

@@ -17,7 +17,7 @@ from pathlib import Path
 import defusedxml
 import defusedxml.sax
 
-from ..errors import EXCERPT_CHARS, InputError, excerpt, location, printable
+from ..errors import EXCERPT_CHARS, InputError, excerpt, location, printable, require_file
 from ..types import INT_LIMIT
 
 __all__ = ["XmlNode", "parse_xml", "xml_int", "xml_float", "read_bytes", "unsafe_xml_reason",
@@ -178,9 +178,4 @@ def _number_text(raw: str) -> str:
 
 def read_bytes(path: str | Path) -> bytes:
     """The bytes of an annotation file; a missing file or a folder is an :class:`InputError`."""
-    p = Path(path)
-    if p.is_dir():
-        raise InputError(f"{location(p)}: is a folder, not an annotation file")
-    if not p.is_file():
-        raise InputError(f"annotation file not found: {location(p)}")
-    return p.read_bytes()
+    return require_file(path, "annotation file").read_bytes()
