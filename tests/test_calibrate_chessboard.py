@@ -147,3 +147,32 @@ def test_malformed_yaml(tmp_path, text, message):
     p.write_text(text)
     with pytest.raises(InputError, match=message):
         load_camera(p)
+
+
+@pytest.mark.data
+def test_photo_of_another_size_is_skipped_with_a_warning(data, caplog):
+    # a glob such as right*.jpg also matches a stray right.jpg; it sorts first, so the size the
+    # calibration keeps is the one most photos share, not the first photo's
+    paths = sorted(data("chessboard-left").glob("left*.jpg"))[:4]
+    images = [cv2.imread(str(p)) for p in paths]
+    names = [p.name for p in paths]
+    stray = cv2.resize(images[0], (320, 240), interpolation=cv2.INTER_AREA)
+    alone = calibrate_chessboard(images, (9, 6), 0.025, names)
+    with caplog.at_level("WARNING", logger="motiontrack"):
+        res = calibrate_chessboard([stray, *images], (9, 6), 0.025, ["left.jpg", *names])
+    warned = [r.getMessage() for r in caplog.records if r.levelname == "WARNING"]
+    assert warned == ["left.jpg: image size 320x240 differs from 640x480 (most of the photos), "
+                      "skipped"]
+    assert res.other_size == ("left.jpg",) and res.skipped == () and res.used == tuple(names)
+    assert res.camera.size == (640, 480)
+    # equal up to OpenCV's multithreaded summation order (~1e-9 relative between runs)
+    np.testing.assert_allclose(res.camera.K, alone.camera.K, rtol=1e-7)
+    np.testing.assert_allclose(res.camera.dist, alone.camera.dist, rtol=1e-6, atol=1e-9)
+    assert res.rms == pytest.approx(alone.rms, rel=1e-7)
+
+
+def test_no_board_in_any_photo_of_the_common_size_is_input_error():
+    blank = [np.full((120, 160), 255, np.uint8)] * 2 + [np.full((60, 80), 255, np.uint8)]
+    with pytest.raises(InputError, match=r"no 9x6 chessboard found in any of the 3 image\(s\) "
+                                         r"\(1 of another size than 160x120 skipped\)"):
+        calibrate_chessboard(blank, (9, 6), 0.025)

@@ -126,6 +126,29 @@ def test_chessboard_command(data, tmp_path, capsys):
     fs.release()
 
 
+@pytest.mark.data
+def test_chessboard_command_skips_a_photo_of_another_size(data, tmp_path, capsys):
+    folder = tmp_path / "photos"
+    folder.mkdir()
+    for p in sorted(data("chessboard-left").glob("left*.jpg"))[:4]:
+        (folder / p.name).write_bytes(p.read_bytes())
+    img = cv2.imread(str(folder / "left01.jpg"))
+    cv2.imwrite(str(folder / "left.jpg"), cv2.resize(img, (800, 600)))
+    code, out, err = run(capsys, "calibrate", "chessboard", *sorted(folder.glob("left*.jpg")),
+                         "-o", tmp_path / "with.yml")
+    assert code == 0, err
+    assert "views used: 4 of 5" in out and "left.jpg: not 640x480 like the others (skipped)" in out
+    assert "left.jpg: image size 800x600 differs from 640x480" in err
+    (folder / "left.jpg").unlink()
+    code, _, err = run(capsys, "calibrate", "chessboard", *sorted(folder.glob("left*.jpg")),
+                       "-o", tmp_path / "without.yml")
+    assert code == 0, err
+    with_, without = (load_camera(tmp_path / n) for n in ("with.yml", "without.yml"))
+    assert with_.size == without.size == (640, 480)
+    np.testing.assert_allclose(with_.K, without.K, rtol=1e-7)
+    np.testing.assert_allclose(with_.dist, without.dist, rtol=1e-6, atol=1e-9)
+
+
 def _bad_xml(tmp_path):
     p = tmp_path / "bad.xml"
     p.write_text("<Camera><Geometry width='1'/>")

@@ -17,6 +17,7 @@ import functools
 import logging
 import math
 import re
+from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Sequence
@@ -197,6 +198,8 @@ class ChessboardResult:
         Names of the images in which the board was found (same order as ``per_view``).
     skipped : tuple of str
         Images without a detected board.
+    other_size : tuple of str
+        Images of another size than the calibration's (skipped).
     rvecs, tvecs : (V, 3) float64
         Board pose in each view (metres when ``square`` is in metres).
     """
@@ -211,6 +214,14 @@ class ChessboardResult:
     pattern: tuple[int, int]
     square: float
     flags: int
+    other_size: tuple[str, ...] = ()
+
+
+def _common_size(images: Sequence[np.ndarray]) -> tuple[int, int]:
+    """``(width, height)`` most of ``images`` have; the first such size on a tie."""
+    sizes = [(int(im.shape[1]), int(im.shape[0])) for im in images]
+    counts = Counter(sizes)
+    return max(dict.fromkeys(sizes), key=lambda s: counts[s]) if sizes else (0, 0)
 
 
 def calibrate_chessboard(images: Sequence[np.ndarray], pattern: tuple[int, int], square: float,
@@ -221,7 +232,9 @@ def calibrate_chessboard(images: Sequence[np.ndarray], pattern: tuple[int, int],
     Parameters
     ----------
     images : sequence of (H, W[, 3]) uint8
-        All of the same size.
+        Photos of one camera. The calibration is at the size most of them share (the first such
+        size on a tie); a photo of another size is skipped with a warning (a stray file a glob
+        picked up, e.g. ``right.jpg`` beside ``right01.jpg``).
     pattern : (cols, rows)
         Inner corners per row and per column, e.g. ``(9, 6)``.
     square : float
@@ -233,20 +246,24 @@ def calibrate_chessboard(images: Sequence[np.ndarray], pattern: tuple[int, int],
     Raises
     ------
     InputError
-        When fewer than one image contains the board, or image sizes differ.
+        When no image of the calibration's size contains the board.
     """
     if square <= 0 or not math.isfinite(square):
         raise ConfigError(f"square size must be > 0, got {square}")
     names = list(names) if names is not None else [f"image{i}" for i in range(len(images))]
     obj = board_points(pattern, square)
-    obj_pts, img_pts, used, skipped = [], [], [], []
-    size = None
+    obj_pts, img_pts, used, skipped, other_size = [], [], [], [], []
+    size = _common_size(images)
     for img, name in zip(images, names):
         gray = to_gray(img)
         s = (gray.shape[1], gray.shape[0])
-        if size is not None and s != size:
-            raise InputError(f"{name}: image size {s[0]}x{s[1]} differs from {size[0]}x{size[1]}")
-        size = s
+        if s != size:
+            # one camera has one image size: a photo of another size is not of this camera (or
+            # was resized) and its corners would not fit the same K
+            log.warning("%s: image size %dx%d differs from %dx%d (most of the photos), skipped",
+                        printable(name), *s, *size)
+            other_size.append(name)
+            continue
         c = find_corners(gray, pattern)
         if c is None:
             log.warning("%s: no %dx%d chessboard found, skipped", name, *pattern)
@@ -256,8 +273,10 @@ def calibrate_chessboard(images: Sequence[np.ndarray], pattern: tuple[int, int],
         img_pts.append(c.reshape(-1, 1, 2).astype(np.float32))
         used.append(name)
     if not used:
+        other = (f" ({len(other_size)} of another size than {size[0]}x{size[1]} skipped)"
+                 if other_size else "")
         raise InputError(f"no {pattern[0]}x{pattern[1]} chessboard found in any of the "
-                         f"{len(names)} image(s); check --pattern (inner corners, e.g. 9x6)")
+                         f"{len(names)} image(s){other}; check --pattern (inner corners, e.g. 9x6)")
     K0 = np.eye(3)
     rms, K, dist, rvecs, tvecs = cv2.calibrateCamera(obj_pts, img_pts, size, K0, None, flags=flags)
     per_view = []
@@ -270,7 +289,7 @@ def calibrate_chessboard(images: Sequence[np.ndarray], pattern: tuple[int, int],
         camera=cam, rms=float(rms), per_view=np.asarray(per_view), used=tuple(used),
         skipped=tuple(skipped), rvecs=np.asarray(rvecs, dtype=np.float64).reshape(-1, 3),
         tvecs=np.asarray(tvecs, dtype=np.float64).reshape(-1, 3), pattern=pattern,
-        square=float(square), flags=int(flags),
+        square=float(square), flags=int(flags), other_size=tuple(other_size),
     )
 
 

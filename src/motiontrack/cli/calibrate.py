@@ -142,6 +142,9 @@ def cmd_chessboard(args: argparse.Namespace) -> int:
         print(f"  {name}: {e:.4f} px", file=_messages(args))
     for name in res.skipped:
         print(f"  {name}: board not found (skipped)", file=_messages(args))
+    w, h = res.camera.size
+    for name in res.other_size:
+        print(f"  {name}: not {w}x{h} like the others (skipped)", file=_messages(args))
     print(f"wrote {args.output}", file=_messages(args))
     return 0
 
