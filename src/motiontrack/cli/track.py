@@ -25,6 +25,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--max-frames", type=int, help="process at most this many frames")
     p.add_argument("--no-video", action="store_true", help="analysis only: no annotated video")
     p.add_argument("--mask-video", action="store_true", help="also write the motion mask video")
+    p.add_argument("--mask-images", metavar="DIR",
+                   help="also write the motion mask of every frame as DIR/bin%%06d.png (0/255, "
+                        "source size, numbered from --start + 1 as CDnet numbers its input) for "
+                        "`motiontrack evaluate-masks --pred DIR`")
     p.add_argument("--save", default="", metavar="STREAMS",
                    help="also write intermediate movies: background,difference,motion,annotated")
     p.add_argument("--codec", help="video codec: vp80 (default, WebM), vp90, mp4v, mjpg, xvid")
@@ -99,7 +103,8 @@ def cmd_track(args) -> int:
         if args.min_score is not None:
             det = det.select(det.scores >= args.min_score)
     job = track_job(args.source, cfg, args.out, force=args.force, gt=gt, detections=det,
-                    show=_viewer() if args.show else None, save=args.save)
+                    show=_viewer() if args.show else None, save=args.save,
+                    mask_images=args.mask_images)
     log.info("source %s", job.info.describe())
     with frame_loop(job.expected_frames()) as loop:
         summary = job.run(progress=loop.update, should_stop=loop.stop)
@@ -115,5 +120,7 @@ def _print_summary(s) -> None:
         from ._common import accuracy_line
 
         lines.append(accuracy_line(s.accuracy))
-    lines.append(f"outputs   {', '.join(s.outputs.values())}")
+    masks = s.extra.get("mask_images")
+    lines.append(f"outputs   {', '.join(s.outputs.values())}"
+                 + (f", {masks['images']} masks in {masks['folder']}" if masks else ""))
     print("\n".join(lines))

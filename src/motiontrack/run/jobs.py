@@ -29,8 +29,8 @@ from ..types import Annotations, Box
 from .job import Job
 from .processors import (DenseFlowProcessor, FollowProcessor, OverlayProcessor,
                          SparseFlowProcessor, TrackProcessor)
-from .writers import (IntermediateWriter, MaskVideoWriter, ScoreWriter, StillsWriter, TracksWriter,
-                      VideoWriter, ViewerWriter)
+from .writers import (IntermediateWriter, MaskImagesWriter, MaskVideoWriter, ScoreWriter,
+                      StillsWriter, TracksWriter, VideoWriter, ViewerWriter)
 
 log = logging.getLogger(__name__)
 
@@ -51,12 +51,15 @@ def _opened(source: Any, sc: SourceConfig, build: Callable[[Source], Job]) -> Jo
 def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: bool = False,
               gt: Annotations | None = None, detections: Annotations | None = None,
               show: Callable[[np.ndarray], bool] | None = None,
-              save: Iterable[str] | str = ()) -> Job:
+              save: Iterable[str] | str = (), mask_images: str | Path | None = None) -> Job:
     """``motiontrack track``: ``tracks.txt``, the annotated video, the mask video and the
-    intermediate movies as ``cfg.output`` and ``save`` ask, the live view with ``show``,
-    ``gt.txt`` and the accuracy with ground truth (given, or the source's own), ``summary.json``
-    and ``config.toml``."""
+    intermediate movies as ``cfg.output`` and ``save`` ask, the mask of every frame as
+    ``bin%06d.png`` in the folder ``mask_images``, the live view with ``show``, ``gt.txt`` and
+    the accuracy with ground truth (given, or the source's own), ``summary.json`` and
+    ``config.toml``."""
     out = Path(out_dir)
+    if mask_images is not None and detections is not None:
+        raise ConfigError("--mask-images needs motion masks; with --detections there are none")
     streams = parse_streams(save)
     codec = cfg.output.codec
     camera = None
@@ -82,6 +85,8 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
             writers.append(MaskVideoWriter(out, codec))
         if streams:
             writers.append(IntermediateWriter(out, streams, codec))
+        if mask_images is not None:
+            writers.append(MaskImagesWriter(Path(mask_images), force))
         if show is not None:
             writers.append(ViewerWriter(show))
         if truth is not None:

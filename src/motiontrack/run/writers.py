@@ -8,6 +8,7 @@ complete. A new output of a command is one new writer here.
 from __future__ import annotations
 
 import logging
+import re
 from pathlib import Path
 from typing import Any, Callable, Iterable
 
@@ -15,9 +16,10 @@ import cv2
 import numpy as np
 
 from ..calibrate import track_measurements, world_positions
-from ..io.atomic import AtomicFile, atomic_write_bytes
+from ..errors import InputError
+from ..io.atomic import AtomicFile, DiskFullError, OutputLock, atomic_write_bytes, free_bytes
 from ..io.mot import format_mot_rows, read_mot, write_mot
-from ..io.video import VideoSink, extension_for
+from ..io.video import DISK_RESERVE, VideoSink, extension_for
 from ..render.streams import parse_streams, stream_image
 from ..tracking.gaps import fill_gaps
 from ..types import Annotations, FrameResult
@@ -26,7 +28,7 @@ from .job import JobContext, JobSummary, Writer
 log = logging.getLogger(__name__)
 
 __all__ = ["TracksWriter", "RegionsWriter", "ScoreWriter", "VideoWriter", "MaskVideoWriter",
-           "IntermediateWriter", "StillsWriter", "ViewerWriter"]
+           "IntermediateWriter", "StillsWriter", "MaskImagesWriter", "ViewerWriter"]
 
 
 class TracksWriter(Writer):
@@ -272,6 +274,92 @@ class StillsWriter(Writer):
         if missing:
             log.warning("--png-frames outside the rendered frames: %s",
                         ", ".join(map(str, missing)))
+
+
+class MaskImagesWriter(Writer):
+    """``--mask-images DIR``: the cleaned motion mask of every frame as ``DIR/bin%06d.png``,
+    0/255 single channel at the source's size (a mask found at a reduced processing scale is
+    enlarged by nearest neighbour), numbered as CDnet numbers its input: frame index + 1, so the
+    first frame of a run started at 0-based ``start`` is ``bin{start + 1:06d}.png``.
+    ``motiontrack evaluate-masks --pred DIR`` reads the folder as it is.
+
+    The folder follows the rules of the job's own: it is refused when it holds mask images
+    already, unless ``force`` (they are then removed when the run starts, so that two runs never
+    mix); a folder other than the job's is locked for the run; each image is written atomically
+    when its frame comes and stays when the run is stopped; a failed run, or a full device (a
+    large output, like the videos), removes the images this run wrote.
+    """
+
+    large = True
+    #: the names written here and the temporary names of :func:`atomic_write_bytes` for them
+    NAME = re.compile(r"bin\d{6}\.png")
+    TEMP = re.compile(r"\.bin\d{6}\.png\.[a-z0-9_]{8}\.part")
+
+    def __init__(self, folder: Path, force: bool = False) -> None:
+        self.folder = Path(folder)
+        self.force = force
+        self.paths = {}   # one file per frame: this writer removes its own (close, not the job)
+        self.written: list[Path] = []
+        self._size: tuple[int, int] = (0, 0)
+        self._lock: OutputLock | None = None
+        self._refuse_existing()   # at once: nothing has been processed yet
+
+    def _existing(self) -> list[Path]:
+        if not self.folder.is_dir():
+            return []
+        return sorted(p for p in self.folder.iterdir() if self.NAME.fullmatch(p.name))
+
+    def _refuse_existing(self) -> None:
+        if self.folder.exists() and not self.folder.is_dir():
+            raise InputError(f"--mask-images {self.folder} is not a folder")
+        old = self._existing()
+        if old and not self.force:
+            raise InputError(f"output exists: {self.folder} holds {len(old)} mask image(s) "
+                             f"({old[0].name} ...) (use --force to overwrite)")
+
+    def start(self, ctx: JobContext) -> None:
+        self._size = (ctx.info.width, ctx.info.height)
+        if self.folder.resolve() != ctx.out.resolve():   # the job's own folder is locked
+            self._lock = OutputLock(self.folder)
+        self._refuse_existing()   # again, now that no other run can write here
+        for p in self.folder.iterdir():   # a killed run's temporary files, the old images
+            if (self.TEMP.fullmatch(p.name) or (self.force and self.NAME.fullmatch(p.name))) \
+                    and p.is_file() and not p.is_symlink():
+                p.unlink(missing_ok=True)
+
+    def write(self, result: FrameResult) -> None:
+        if result.mask is None:
+            return   # external detections: track_job refuses --mask-images with them
+        mask = result.mask if result.mask.dtype == bool else result.mask == 255
+        img = np.where(mask, np.uint8(255), np.uint8(0))
+        if img.shape[::-1] != self._size:
+            img = cv2.resize(img, self._size, interpolation=cv2.INTER_NEAREST)
+        path = self.folder / f"bin{result.index + 1:06d}.png"
+        free = free_bytes(self.folder)
+        if free < DISK_RESERVE:   # leave room for the small outputs, as a video does
+            raise DiskFullError(path, f"{free // 1024} KiB left on the device, less than the "
+                                      f"{DISK_RESERVE // 1024} KiB the mask images leave for "
+                                      "the other outputs")
+        ok, buf = cv2.imencode(".png", img)
+        if not ok:  # pragma: no cover - a 2-D uint8 image always encodes
+            raise RuntimeError(f"cannot encode {path.name}")
+        atomic_write_bytes(path, buf.tobytes())
+        self.written.append(path)
+
+    def close(self, keep: bool) -> None:
+        if not keep:   # also after a commit: a later failure removes every output of the run
+            for p in self.written:
+                p.unlink(missing_ok=True)
+            self.written = []
+        if self._lock is not None:
+            self._lock.release()
+            self._lock = None
+
+    def finish(self, summary: JobSummary) -> None:
+        frames = sorted(int(p.stem[3:]) for p in self.written)
+        summary.extra["mask_images"] = {
+            "folder": str(self.folder), "images": len(frames),
+            "first": frames[0] if frames else None, "last": frames[-1] if frames else None}
 
 
 class ViewerWriter(Writer):
