@@ -25,21 +25,46 @@ def build_parser() -> argparse.ArgumentParser:
         description="Find and follow moving objects in video; evaluate trackers against ground truth.",
     )
     parser.add_argument("--version", action="version", version=f"motiontrack {__version__}")
-    parser.add_argument("--debug", action="store_true", help="show tracebacks and debug logging")
-    parser.add_argument("-q", "--quiet", action="store_true", help="only warnings and errors")
-    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    _add_logging_options(parser, default=False)
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND",
+                                help="what to do (motiontrack COMMAND --help for its options)")
     for mod in sorted(pkgutil.iter_modules(__path__), key=lambda m: m.name):
         if mod.name.startswith("_"):
             continue
         module = importlib.import_module(f"{__name__}.{mod.name}")
         if hasattr(module, "register"):
             module.register(sub)
+    for command in _subcommand_parsers(parser):
+        # the logging options also after the command (`motiontrack track X -q`); SUPPRESS keeps
+        # a command's parser from resetting a value given before the command
+        _add_logging_options(command, default=argparse.SUPPRESS)
     return parser
+
+
+def _add_logging_options(parser: argparse.ArgumentParser, default: object) -> None:
+    parser.add_argument("--debug", action="store_true", default=default,
+                        help="show tracebacks and debug logging")
+    parser.add_argument("-q", "--quiet", action="store_true", default=default,
+                        help="only warnings and errors")
+
+
+def _subcommand_parsers(parser: argparse.ArgumentParser) -> list[argparse.ArgumentParser]:
+    """Every command's parser under ``parser``, nested ones (``calibrate lines``) included,
+    each once (an alias names the same parser)."""
+    found: dict[int, argparse.ArgumentParser] = {}
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for child in action.choices.values():
+                if id(child) not in found:
+                    found[id(child)] = child
+                    found.update((id(p), p) for p in _subcommand_parsers(child))
+    # not list(...): importing the command module cli/list.py binds the name `list` here
+    return [p for p in found.values()]
 
 
 def _configure_logging(debug: bool, quiet: bool) -> None:
     level = logging.DEBUG if debug else (logging.WARNING if quiet else logging.INFO)
-    handler = logging.StreamHandler(sys.stderr)
+    handler = _BarAwareHandler(sys.stderr)
     handler.setFormatter(_OneLineFormatter("motiontrack: %(levelname)s: %(message)s"
                                            if not debug else "%(name)s: %(levelname)s: %(message)s"))
     root = logging.getLogger("motiontrack")
@@ -59,6 +84,26 @@ class _OneLineFormatter(logging.Formatter):
 
     def formatMessage(self, record: logging.LogRecord) -> str:  # noqa: N802 (logging API)
         return printable(super().formatMessage(record))
+
+
+class _BarAwareHandler(logging.StreamHandler):
+    """A stream handler that keeps log lines and progress bars apart: while a tqdm bar is shown,
+    a record clears the bar, is written on a line of its own and the bar is drawn again below it
+    (``tqdm.write``); otherwise the record is written as usual. The record is formatted first, so
+    the line keeps :class:`_OneLineFormatter`'s escaping."""
+
+    def emit(self, record: logging.LogRecord) -> None:
+        std = sys.modules.get("tqdm.std")  # not imported: no bar can be on screen
+        if std is None or not getattr(std.tqdm, "_instances", None):
+            super().emit(record)
+            return
+        try:
+            std.tqdm.write(self.format(record), file=self.stream)
+            self.flush()
+        except RecursionError:
+            raise
+        except Exception:  # what logging.StreamHandler does with a failed write
+            self.handleError(record)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -18,7 +18,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("source", help="video, image folder or synth:NAME")
     p.add_argument("--gt", help="ground truth (optional for synth: sources)")
     p.add_argument("--config", help="base TOML config")
-    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="STAGE.PARAM=VALUE")
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="STAGE.PARAM=VALUE",
+                   help="override one base config field, e.g. --set motion.method=knn (repeatable)")
     p.add_argument("--xi", type=float, default=0.75, help="localization threshold (default 0.75)")
     p.add_argument("--rows", help="comma-separated row numbers to run (default all)")
     p.add_argument("-j", "--jobs", type=int, default=1, help="parallel processes")

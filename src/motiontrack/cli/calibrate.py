@@ -20,7 +20,8 @@ log = logging.getLogger(__name__)
 def register(subparsers) -> None:
     p = subparsers.add_parser("calibrate", help="camera calibration (chessboard, lines, ground plane)",
                               description="Calibrate a camera and check the calibration.")
-    sub = p.add_subparsers(dest="calibrate_command", metavar="METHOD")
+    sub = p.add_subparsers(dest="calibrate_command", metavar="METHOD",
+                          help="calibration method, or show to check a calibration")
     p.set_defaults(func=lambda args: (p.print_help(), 2)[1])
 
     c = sub.add_parser("chessboard", help="OpenCV calibration from chessboard photos")
@@ -53,8 +54,11 @@ def register(subparsers) -> None:
                     help="Tsai camera file whose Geometry (dpx, dpy, Cx, Cy, sx) is used")
     ln.add_argument("--pixel-mm", type=float, default=0.01,
                     help="pixel size in mm when no --geometry (0.01)")
-    ln.add_argument("--mode", choices=("ridge", "edge"), default="ridge")
-    ln.add_argument("--polarity", choices=("dark", "bright"), default="dark")
+    ln.add_argument("--mode", choices=("ridge", "edge"), default="ridge",
+                    help="what marks a line: ridge (a thin painted line, the intensity extremum) or "
+                         "edge (a step, the gradient extremum) (ridge)")
+    ln.add_argument("--polarity", choices=("dark", "bright"), default="dark",
+                    help="a ridge darker or brighter than its surroundings (dark; ignored by edge)")
     ln.add_argument("--half-width", type=float, default=6.0, help="normal search distance (px)")
     ln.add_argument("--fit-center", action="store_true", help="also estimate Cx, Cy")
     ln.add_argument("-o", "--output", type=Path, required=True,

@@ -26,7 +26,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("shape", help="active shape model of people: train, info",
                        description="Point-distribution model (PCA of aligned B-spline outlines) for "
                                    "the active shape tracker; see docs/people.md.")
-    ssub = p.add_subparsers(dest="shape_command", metavar="COMMAND")
+    ssub = p.add_subparsers(dest="shape_command", metavar="COMMAND", help="what to do with a shape model")
     ssub.required = True
 
     t = ssub.add_parser("train", help="learn a shape model from synthetic figures or video + gt",

@@ -29,7 +29,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--trials", type=int, default=20, help="number of trials (default 20)")
     p.add_argument("--seed", type=int, default=0, help="sampler seed (default 0)")
     p.add_argument("--config", help="base TOML config")
-    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="STAGE.PARAM=VALUE")
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="STAGE.PARAM=VALUE",
+                   help="override one base config field, e.g. --set motion.method=knn (repeatable)")
     p.add_argument("--xi", type=float, default=0.75, help="localization threshold (default 0.75)")
     p.add_argument("-j", "--jobs", type=int, default=1, help="processes per trial (over sequences)")
     p.add_argument("-o", "--out", required=True, help="output folder")
