@@ -18,15 +18,32 @@ optuna = pytest.importorskip("optuna", reason="optuna not installed (pip install
     ("regions.min_size=0.001:0.01:log", SearchParam("regions.min_size", "float", 0.001, 0.01, log=True)),
     ("cleanup.dilate_iterations=0:4", SearchParam("cleanup.dilate_iterations", "int", 0, 4)),
     ("motion.method=median,mog2", SearchParam("motion.method", "categorical", choices=("median", "mog2"))),
+    # a stepped range: the values of the sweep grid with the same text, the last one as high
+    ("motion.median.threshold=0.02:0.2:0.02",
+     SearchParam("motion.median.threshold", "float", 0.02, 0.2, step=0.02)),
+    ("regions.min_area=1:6:2", SearchParam("regions.min_area", "int", 1, 5, step=2)),
 ])
 def test_parse_space(text, expected):
     assert parse_space(text) == expected
 
 
-@pytest.mark.parametrize("text", ["a.b", "a.b=", "a.b=1:x", "a.b=2:1", "a.b=0:1:log", "a.b=1:2:3"])
+@pytest.mark.parametrize("text", ["a.b", "a.b=", "a.b=1:x", "a.b=2:1", "a.b=0:1:log", "a.b=1:2:3:4",
+                                  "a.b=0:1:0", "a.b=0:1:x", "a.b=2:1:1"])
 def test_parse_space_rejects(text):
     with pytest.raises(ConfigError):
         parse_space(text)
+
+
+@pytest.mark.parametrize("text", ["motion.median.threshold=0.02:0.2:0.02", "regions.min_area=1:6:2"])
+def test_stepped_search_range_proposes_only_the_sweep_grid_values(text):
+    from motiontrack.studies.sweep import parse_param
+
+    grid = set(parse_param(text)[1])
+    dim = parse_space(text)
+    study = optuna.create_study(sampler=optuna.samplers.RandomSampler(seed=0))
+    proposed = []
+    study.optimize(lambda trial: proposed.append(dim.suggest(trial)) or 0.0, n_trials=30)
+    assert set(proposed) <= grid and len(set(proposed)) > 1
 
 
 TRAIN = (SequenceSpec("walker", "synth:walker?n_frames=40"),)

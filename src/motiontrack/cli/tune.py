@@ -21,8 +21,12 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="training sequence: a source (with =GT unless synth:) or a manifest (repeatable)")
     p.add_argument("--val", action="append", default=[], metavar="SOURCE[=GT]|MANIFEST.toml",
                    help="validation sequence(s), never used by the search (repeatable)")
-    p.add_argument("--param", action="append", default=[], metavar="STAGE.NAME=LO:HI[:log]|A,B",
-                   help="search dimension (repeatable)")
+    p.add_argument("--param", action="append", default=[],
+                   metavar="KEY=V1,V2,...|LO:HI:STEP|LO:HI[:log]",
+                   help="values of one config key, searched: a list (choices), the range LO:HI:STEP "
+                        "(the values of the same sweep --param), or a continuous range LO:HI, "
+                        "uniform or on a log scale, e.g. motion.median.threshold=0.02:0.4 "
+                        "(repeatable)")
     p.add_argument("--metric", default="det_object_f1",
                    help="table column to optimise (default det_object_f1; e.g. det_pixel_f1, HOTA)")
     p.add_argument("--minimize", action="store_true", help="minimise the metric instead")

@@ -169,7 +169,11 @@ def parse_param(item: str) -> tuple[str, tuple[Any, ...]]:
     if text.count(":") == 2 and "," not in text and not text.startswith(("'", '"')):
         values = _range_values(*text.split(":"), item=item)
     elif ":" in text and "," not in text and not text.startswith(("'", '"')) and text.count(":") == 1:
-        raise ConfigError(f"--param {item!r}: a range needs a step, a:b:step")
+        raise ConfigError(f"--param {item!r}: a grid needs a step, a:b:step (a:b without a step "
+                          "is a search range of motiontrack tune)")
+        if text.rsplit(":", 1)[1].strip().lower() == "log":
+            raise ConfigError(f"--param {item!r}: a grid needs a step, a:b:step (a:b:log is a "
+                              "search range of motiontrack tune)")
     else:
         parts = [p.strip() for p in text.split(",")]
         if any(not p for p in parts):

@@ -7,11 +7,13 @@ parameter space automatically: a seeded TPE sampler proposes configurations, eac
 *validation* sequences, whose score is the honest estimate, and written as a TOML config usable with
 ``motiontrack track --config``.
 
-Search-space syntax (one ``--param`` per parameter)::
+Search-space syntax (one ``--param`` per parameter; the values syntax of ``sweep --param``,
+plus the ranges a grid cannot enumerate)::
 
     motion.median.threshold=0.02:0.4        float range (uniform)
     regions.min_area=50:2000:log            range sampled on a log scale
     cleanup.dilate_iterations=0:4           integer range (both ends integers)
+    motion.median.threshold=0.02:0.2:0.02   stepped range (the values of the sweep grid 0.02:0.2:0.02)
     motion.method=median,mog2               categorical
 """
 
@@ -21,14 +23,15 @@ import json
 import logging
 import math
 from dataclasses import dataclass, field
+from decimal import Decimal
 from pathlib import Path
 from typing import Any, Callable, Sequence
 
 from ..config import PipelineConfig, apply_overrides, from_dict, save_config, to_dict
 from ..errors import ConfigError
 from ..io.atomic import atomic_write_text
-from .sweep import (RunSpec, SequenceSpec, _parse_literal, check_ground_truth, execute,
-                    format_value, write_table)
+from .sweep import (RunSpec, SequenceSpec, _parse_literal, _range_values, check_ground_truth,
+                    execute, format_value, write_table)
 
 log = logging.getLogger(__name__)
 
@@ -56,6 +59,7 @@ class SearchParam:
     choices: tuple[Any, ...] = ()
 
     def __post_init__(self) -> None:
+    step: float | None = None  # a stepped range: low, low + step, ..., high
         if self.kind not in ("float", "int", "categorical"):
             raise ConfigError(f"search parameter kind must be float, int or categorical, got {self.kind!r}")
         if self.kind == "categorical":
@@ -68,15 +72,35 @@ class SearchParam:
                 raise ConfigError(f"--param {self.key}: a log range needs lo > 0, got {self.low}")
 
     def suggest(self, trial: Any) -> Any:
+            if self.step is not None and (self.log or not self.step > 0):
+                raise ConfigError(f"--param {self.key}: a stepped range needs a step > 0 and no "
+                                  f"log scale, got step {self.step}")
         if self.kind == "float":
-            return trial.suggest_float(self.key, self.low, self.high, log=self.log)
+            return self.value_of(trial.suggest_float(self.key, self.low, self.high, log=self.log,
+                                                     step=self.step))
         if self.kind == "int":
-            return trial.suggest_int(self.key, int(self.low), int(self.high), log=self.log)
+            return trial.suggest_int(self.key, int(self.low), int(self.high), log=self.log,
+                                     step=int(self.step or 1))
         return trial.suggest_categorical(self.key, list(self.choices))
 
 
 def parse_space(item: str) -> SearchParam:
-    """Parse ``key=lo:hi[:log]`` or ``key=a,b,c`` (see the module doc)."""
+    def value_of(self, proposed: Any) -> Any:
+        """The value a proposal of Optuna stands for: on a stepped float range the grid value
+        computed in decimal, as ``sweep`` computes it (Optuna's ``low + k * step`` drifts:
+        0.06000000000000001); otherwise the proposal itself."""
+        if self.kind != "float" or self.step is None:
+            return proposed
+        k = round((proposed - self.low) / self.step)
+        return float(Decimal(repr(self.low)) + k * Decimal(repr(self.step)))
+
+    @property
+    def domain(self) -> tuple[Any, ...]:
+        """Values that stand for the dimension when asking which keys it can switch on: the
+        choices, or a range's two ends."""
+        return self.choices or (self.low, self.high)
+
+    """Parse ``key=lo:hi[:log]``, ``key=lo:hi:step`` or ``key=a,b,c`` (see the module doc)."""
     if "=" not in item:
         raise ConfigError(f"--param expects stage.name=lo:hi or stage.name=a,b,..., got {item!r}")
     key, text = (s.strip() for s in item.split("=", 1))
@@ -85,14 +109,19 @@ def parse_space(item: str) -> SearchParam:
     if ":" in text and "," not in text:
         parts = [p.strip() for p in text.split(":")]
         use_log = len(parts) == 3 and parts[2].lower() == "log"
-        if len(parts) not in (2, 3) or (len(parts) == 3 and not use_log):
-            raise ConfigError(f"--param {item!r}: a range is lo:hi or lo:hi:log")
+        if len(parts) not in (2, 3):
+            raise ConfigError(f"--param {item!r}: a range is lo:hi, lo:hi:log or lo:hi:step")
         try:
             lo, hi = float(parts[0]), float(parts[1])
         except ValueError:
             raise ConfigError(f"--param {item!r}: lo and hi must be numbers") from None
         is_int = all(p.lstrip("+-").isdigit() for p in parts[:2])
         return SearchParam(key, "int" if is_int else "float", lo, hi, log=use_log)
+        if len(parts) == 3 and not use_log:
+            # the values of the sweep grid lo:hi:step (hi is the last of them, as in the grid)
+            values = _range_values(*parts, item=item)
+            kind = "int" if isinstance(values[0], int) else "float"
+            return SearchParam(key, kind, lo, float(values[-1]), step=float(parts[2]))
     choices = tuple(_parse_literal(p.strip()) for p in text.split(",") if p.strip())
     if not all(isinstance(c, (bool, int, float, str)) for c in choices):
         raise ConfigError(f"--param {item!r}: choices must be numbers, booleans or strings")
@@ -213,7 +242,8 @@ def tune(train: Sequence[SequenceSpec], validation: Sequence[SequenceSpec], spac
     study.optimize(objective, n_trials=n_trials)
     if not any(t["state"] == "complete" for t in trials):
         raise ConfigError(f"no trial gave a defined {metric}; widen the search space")
-    best = dict(study.best_params)
+    dims = {p.key: p for p in space}
+    best = {k: dims[k].value_of(v) for k, v in study.best_params.items()}
     # values of the best trial in the original types (Optuna returns the suggested python values)
     best_cfg = apply_overrides(from_dict(PipelineConfig, base),
                                [f"{k}={format_value(v)}" for k, v in best.items()])
