@@ -24,7 +24,7 @@ import pytest
 
 from motiontrack.cli import main
 from motiontrack.config import load_config
-from motiontrack.errors import SourceError
+from motiontrack.errors import ConfigError, SourceError
 from motiontrack.io.sources import LiveSource, open_source
 from motiontrack.run import track_job
 
@@ -155,6 +155,12 @@ def test_a_video_file_over_http_is_read_once_to_its_end(served_clip, tmp_path, c
     summary = json.loads((out / "summary.json").read_text())
     assert (summary["frames"], summary["status"], summary["truncated"]) == (40, "complete", False)
     assert "reconnecting" not in capsys.readouterr().err
+
+
+def test_start_past_the_end_of_a_video_file_over_http_is_refused(served_clip):
+    with pytest.raises(ConfigError, match="start frame 40 .* past the end .* has 40 frames"):
+        open_source(served_clip, start=40)
+    assert [f.index for f in open_source(served_clip, start=39)] == [39]
 
 
 # ------------------------------------------------------------------------ the failure budget

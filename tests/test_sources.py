@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import itertools
+import re
 import threading
 import time
 
@@ -10,7 +11,7 @@ import cv2
 import numpy as np
 import pytest
 
-from motiontrack.errors import SourceError
+from motiontrack.errors import ConfigError, InputError, SourceError
 from motiontrack.io.sources import (ArraySource, ImageSequenceSource, LiveSource, VideoFileSource,
                                     open_source, prefetch)
 from motiontrack.synth import SyntheticSource
@@ -19,7 +20,7 @@ from motiontrack.synth import SyntheticSource
 @pytest.mark.parametrize("content, message", [
     (None, "not found"),
     (b"", "empty"),
-    (b"this is not a video\n" * 50, "cannot open|no frames"),
+    (bytes(range(256)) * 20, "cannot open|no frames"),
 ])
 def test_bad_video_files(tmp_path, content, message):
     p = tmp_path / "v.avi"
@@ -27,6 +28,68 @@ def test_bad_video_files(tmp_path, content, message):
         p.write_bytes(content)
     with pytest.raises(SourceError, match=message):
         open_source(str(p))
+
+
+MOT_ROWS = "1,1,10.5,20,30,90,1,-1,-1,-1\n2,1,11.5,20,30,90,1,-1,-1,-1\n" * 40
+
+
+# .txt and .nfo: FFmpeg's tty demuxer opens them and draws the characters as frames ("ansi");
+# .csv and .avi: FFmpeg cannot open them at all
+@pytest.mark.parametrize("name, content", [
+    ("gt.txt", MOT_ROWS), ("notes.nfo", "readme\n" * 50), ("gt.csv", MOT_ROWS),
+    ("notes.avi", "this is not a video\n" * 50), ("café.txt", "naïve, ünïcode text\n" * 300),
+])
+def test_a_text_file_is_not_a_video(tmp_path, name, content):
+    p = tmp_path / name
+    p.write_text(content, encoding="utf-8")
+    with pytest.raises(InputError, match=f"{re.escape(str(p))} is a text file, not a video"):
+        open_source(str(p))
+
+
+def _write_raw_mjpeg(path, n):
+    """Concatenated JPEGs: a video whose length FFmpeg learns only by reading it."""
+    with open(path, "wb") as f:
+        for i in range(n):
+            f.write(cv2.imencode(".jpg", np.full((48, 64, 3), i * 30, np.uint8))[1].tobytes())
+
+
+def test_start_past_the_end_of_a_source_of_known_length_is_refused_at_open(tmp_path):
+    p = tmp_path / "v.avi"
+    _write_video(p)   # 12 frames
+    for spec in (str(p), "synth:walker?n_frames=12"):
+        with pytest.raises(ConfigError, match="start frame 12 .* past the end .* has 12 frames"):
+            open_source(spec, start=12)
+        assert [f.index for f in open_source(spec, start=11)] == [11]
+    for i in range(3):
+        cv2.imwrite(str(tmp_path / f"in{i}.png"), np.zeros((8, 8, 3), np.uint8))
+    with pytest.raises(ConfigError, match="start frame 7 .* has 3 frames"):
+        open_source(str(tmp_path / "in*.png"), start=7)
+
+
+@pytest.mark.parametrize("start", [6, 9])
+def test_start_past_the_end_of_a_video_of_unknown_length_fails_at_the_first_read(tmp_path, start):
+    p = tmp_path / "v.mjpeg"
+    _write_raw_mjpeg(p, 6)
+    src = open_source(str(p), start=start)
+    assert src.info.frame_count is None
+    with pytest.raises(ConfigError, match=f"start frame {start} .* past the end .* has 6 frames"):
+        list(src)
+    assert [f.index for f in open_source(str(p), start=5)] == [5]
+
+
+def test_set_fps_replaces_the_stored_rate_in_info_and_timestamps(tmp_path):
+    p = tmp_path / "v.avi"
+    _write_video(p)   # stored at 10 fps
+    src = open_source(str(p), start=2, max_frames=2)
+    src.set_fps(7.0)
+    assert (src.info.fps, src.info.stored_fps) == (7.0, 10.0)
+    assert "7 fps (source.fps; stored 10 fps)" in src.info.describe()
+    assert [f.timestamp for f in src] == pytest.approx([2 / 7, 3 / 7])
+    synth = open_source("synth:walker?n_frames=3")
+    synth.set_fps(5.0)
+    assert [f.timestamp for f in synth] == pytest.approx([0.0, 0.2, 0.4])
+    with pytest.raises(ConfigError, match="source.fps"):
+        synth.set_fps(0.0)
 
 
 def _write_video(path, n=12, size=(64, 48)):

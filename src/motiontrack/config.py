@@ -381,7 +381,7 @@ class TrackerConfig(_Section):
 @dataclass(frozen=True)
 class OutputConfig(_Section):
     video: bool = param(True, doc="write the annotated video")
-    codec: str = param("vp80", choices=("vp80", "vp90", "mp4v", "avc1", "mjpg", "xvid"))
+    codec: str = param("vp80", choices=("vp80", "vp90", "h264", "mp4v", "avc1", "mjpg", "xvid"))
     mask_video: bool = param(False, doc="also write the motion mask as a video")
     mask_inset: bool = param(True, doc="draw a small mask inset in the annotated video")
     trail: int = param(32, lo=0, hi=10000, doc="trail length drawn per track (points)")

@@ -392,13 +392,15 @@ def run(source: Any, config: PipelineConfig | str | Path | None = None,
 
 
 def open_configured_source(source: Any, sc: SourceConfig) -> Source:
-    """Open ``source`` with the start/length and live-reconnection settings ``sc``
-    (``PipelineConfig.source``); a :class:`Source` is returned as it is. Frames far larger than
-    the defaults are sized for get a warning with the memory to expect."""
+    """Open ``source`` with the start/length, frame rate (``source.fps``) and live-reconnection
+    settings ``sc`` (``PipelineConfig.source``); a :class:`Source` is returned as it is. Frames
+    far larger than the defaults are sized for get a warning with the memory to expect."""
     if isinstance(source, Source):
         return source
     src = open_source(source, sc.start, sc.max_frames, reconnect_attempts=sc.reconnect_attempts,
                       backoff=sc.reconnect_backoff, backoff_max=sc.reconnect_backoff_max,
                       reset_frames=sc.reconnect_reset_frames, read_timeout=sc.read_timeout_s)
+    if sc.fps > 0:
+        src.set_fps(sc.fps)
     warn_if_oversized(src.info.width, src.info.height, src.info.name)
     return src

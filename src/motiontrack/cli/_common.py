@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import argparse
 import atexit
 import logging
 import os
@@ -135,8 +136,35 @@ def run_overrides(args) -> list[str]:
     if args.max_frames is not None:
         overrides.append(f"source.max_frames={args.max_frames}")
     if args.codec:
+        from ..io.video import check_codec
+
+        check_codec(args.codec)   # one message naming the codecs this installation encodes
         overrides.append(f'output.codec="{args.codec}"')
     return overrides
+
+
+class CodecOption(argparse.Action):
+    """``--codec NAME``: its help lists the codecs this installation can encode, probed only
+    when the help is shown (``p.add_argument("--codec", action=CodecOption)``)."""
+
+    def __init__(self, option_strings, dest, default=None, **kwargs) -> None:
+        kwargs.pop("help", None)
+        super().__init__(option_strings, dest, default=default, metavar="NAME", **kwargs)
+
+    @property
+    def help(self) -> str:
+        from ..io.video import encodable_codecs
+
+        return (f"video codec, one this installation can encode: "
+                f"{', '.join(encodable_codecs())} (default {self.default or 'vp80'}; "
+                "`motiontrack list` says what each is)")
+
+    @help.setter
+    def help(self, value) -> None:   # argparse sets it; the text is made when shown
+        pass
+
+    def __call__(self, parser, namespace, values, option_string=None) -> None:
+        setattr(namespace, self.dest, values)
 
 
 def read_gt(path: str):

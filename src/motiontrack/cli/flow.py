@@ -17,6 +17,8 @@ log = logging.getLogger("motiontrack")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
+    from ._common import CodecOption
+
     p = sub.add_parser(
         "flow", help="follow motion with sparse (Lucas-Kanade) or dense (Farneback) optical flow",
         description="Sparse mode tracks feature points inside moving regions and groups them into "
@@ -40,7 +42,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--max-frames", type=int, help="process at most this many frames")
     p.add_argument("--no-video", action="store_true", help="sparse: no annotated video")
     p.add_argument("--mask-video", action="store_true", help="also write the motion mask video")
-    p.add_argument("--codec", help="video codec: vp80 (default, WebM), vp90, mp4v, mjpg, xvid")
+    p.add_argument("--codec", action=CodecOption)
     p.add_argument("--gt", help="sparse: ground truth to score against (synth: sources bring "
                                 "their own)")
     p.add_argument("--force", action="store_true", help="overwrite existing outputs")

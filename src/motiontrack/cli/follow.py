@@ -103,7 +103,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--start", type=int, default=0, help="first frame index (0-based)")
     p.add_argument("--max-frames", type=int, default=0, help="process at most this many frames")
     p.add_argument("--no-video", action="store_true", help="no annotated video")
-    p.add_argument("--codec", default="vp80", help="video codec: vp80 (default), vp90, mp4v, mjpg")
+    p.add_argument("--codec", default="vp80", action=CodecOption)
     p.add_argument("--gt", help="ground truth to score against (synth: sources bring their own)")
     p.add_argument("--gt-id", type=int, help="ground-truth id of the object (default: the one the "
                                              "box overlaps most)")
@@ -116,7 +116,7 @@ def cmd_follow(args) -> int:
 
     from ..config import load_config
     from ..errors import ConfigError, SourceError, check_output_path
-    from ..io.video import CODECS
+    from ..io.video import check_codec
     from ..run import follow_job
     from ..tracking.single import create_single_tracker, parse_box
     from ._common import frame_loop, read_gt
@@ -126,8 +126,7 @@ def cmd_follow(args) -> int:
     tracker = create_single_tracker(args.tracker, **params)
     models = check_model_files(params, "--param")
     check_output_path(args.out, "-o", folder=True)
-    if args.codec not in CODECS:
-        raise ConfigError(f"unknown codec {args.codec!r}; valid: {', '.join(CODECS)}")
+    check_codec(args.codec)
     if args.start < 0 or args.max_frames < 0:
         raise ConfigError("--start and --max-frames must be >= 0")
     cfg = load_config(None, [f"source.start={args.start}", f"source.max_frames={args.max_frames}",

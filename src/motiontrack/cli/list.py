@@ -1,4 +1,5 @@
-"""``motiontrack list``: every plug-in by stage, and the synthetic scenes."""
+"""``motiontrack list``: every plug-in by stage, the video codecs this installation can encode,
+and the synthetic scenes."""
 
 from __future__ import annotations
 
@@ -6,7 +7,8 @@ import argparse
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("list", help="list motion detectors, trackers and synthetic scenes")
+    p = sub.add_parser("list", help="list presets, motion detectors, trackers, the video codecs "
+                                    "this installation encodes and synthetic scenes")
     p.set_defaults(func=cmd_list)
 
 
@@ -16,12 +18,14 @@ def cmd_list(args) -> int:
     from ..tracking.tracker import TRACKERS
 
     from ..config import presets
+    from ..io.video import encodable_codecs
 
     groups = [("presets (motiontrack track --preset NAME)", presets()),
               ("motion detectors (--set motion.method=NAME)", DETECTORS.describe()),
               ("trackers (--set tracker.method=NAME)", TRACKERS.describe()),
               ("single-object trackers (motiontrack follow --tracker NAME)",
-               SINGLE_TRACKERS.describe())]
+               SINGLE_TRACKERS.describe()),
+              ("video codecs this installation encodes (--codec NAME)", encodable_codecs())]
     try:
         from ..synth import scene_summaries
 

@@ -22,7 +22,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="also write these 1-based frames as PNG (frame_%%06d.png next to -o)")
     p.add_argument("--png-dir", help="folder for the PNG stills")
     p.add_argument("--codec", default=None, help="video codec (default from the -o extension: vp80 "
-                                                 "for .webm, mp4v for .mp4, mjpg for .avi)")
+                                                 "for .webm, h264 for .mp4 when this installation "
+                                                 "encodes it, else mp4v, mjpg for .avi; "
+                                                 "`motiontrack list` shows the codecs)")
     p.set_defaults(func=cmd_overlay)
 
 
@@ -56,7 +58,10 @@ def cmd_overlay(args) -> int:
         raise ConfigError(f"--png-frames expects comma-separated frame numbers, got {args.png_frames!r}") from None
     codec = args.codec
     if codec is None and args.out:
-        codec = {".mp4": "mp4v", ".avi": "mjpg"}.get(Path(args.out).suffix.lower(), "vp80")
+        from ..io.video import encodable_codecs
+
+        mp4 = "h264" if "h264" in encodable_codecs() else "mp4v"   # h264 plays in browsers
+        codec = {".mp4": mp4, ".avi": "mjpg"}.get(Path(args.out).suffix.lower(), "vp80")
     first, last = frame_range(args.frames) if args.frames else (1, None)
     job = overlay_job(args.source, args.out, runs, gt, first=first, last=last, png_frames=pngs,
                       png_dir=args.png_dir, codec=codec or "vp80", force=args.force)

@@ -10,6 +10,8 @@ log = logging.getLogger("motiontrack")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
+    from ._common import CodecOption
+
     p = sub.add_parser(
         "track", help="track moving objects in a video, camera, stream, image folder or synth: scene",
         description="Run the pipeline on SOURCE and write annotated video, tracks.txt (MOTChallenge), "
@@ -31,7 +33,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "`motiontrack evaluate-masks --pred DIR`")
     p.add_argument("--save", default="", metavar="STREAMS",
                    help="also write intermediate movies: background,difference,motion,annotated")
-    p.add_argument("--codec", help="video codec: vp80 (default, WebM), vp90, mp4v, mjpg, xvid")
+    p.add_argument("--codec", action=CodecOption)
     p.add_argument("--gt", help="ground truth to score the run against (any supported format)")
     p.add_argument("--detections", help="MOTChallenge det.txt: track these detections instead of "
                                         "detecting motion")

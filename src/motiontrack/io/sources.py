@@ -19,14 +19,14 @@ import queue
 import re
 import threading
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, Callable, Iterator
 
 import cv2
 import numpy as np
 
-from ..errors import SourceError
+from ..errors import ConfigError, InputError, SourceError
 from ..registry import Registry
 from ..types import Annotations, Frame
 
@@ -54,9 +54,15 @@ class SourceInfo:
     fps: float | None
     frame_count: int | None
     live: bool = False
+    #: when ``fps`` was set instead of the source's own rate (``source.fps``): the rate the
+    #: source states (0.0 = it states none); None = ``fps`` is the source's own
+    stored_fps: float | None = None
 
     def describe(self) -> str:
         fps = f"{self.fps:g} fps" if self.fps else "fps unknown"
+        if self.stored_fps is not None:
+            stored = f"{self.stored_fps:g} fps" if self.stored_fps else "none"
+            fps += f" (source.fps; stored {stored})"
         n = f"{self.frame_count} frames" if self.frame_count is not None else "length unknown"
         return f"{self.name}: {self.width}x{self.height}, {fps}, {n}"
 
@@ -97,6 +103,15 @@ class Source:
     def ground_truth(self) -> Annotations | None:
         """The exact ground truth of a source that knows it (synthetic scenes), else None."""
         return None
+
+    def set_fps(self, fps: float) -> None:
+        """Take ``fps`` as the frame rate instead of the one the source states (``source.fps``):
+        for footage stored at another rate than it was recorded at. Frame timestamps, and
+        everything a run derives from the rate, follow it. Call it before iterating."""
+        if not (fps > 0 and math.isfinite(fps)):
+            raise ConfigError(f"source.fps must be a finite number > 0, got {fps!r}")
+        stored = self.info.fps if self.info.stored_fps is None else self.info.stored_fps
+        self.info = replace(self.info, fps=float(fps), stored_fps=float(stored or 0.0))
 
     def expected_frames(self) -> int | None:
         """Frames this iteration should yield, when known (for progress bars)."""
@@ -182,8 +197,56 @@ class _DecodedAhead(Source):
         raise NotImplementedError
 
 
+#: bytes of a file's start that :func:`_is_text` looks at
+_SNIFF_BYTES = 4096
+#: codecs FFmpeg reads text files with: its ``tty`` demuxer draws the characters of a ``.txt``,
+#: ``.asc`` or ``.nfo`` file as a picture (``ansi``), so a MOT CSV would "play" as a video
+_TEXT_CODECS = frozenset({"ansi"})
+
+
+def _is_text(path: Path) -> bool:
+    """Whether the start of ``path`` is text (UTF-8, no control characters but white space):
+    an annotation, config or camera file given where a video belongs. Every video container and
+    image format starts with binary bytes (a text-headed one, such as Y4M or PGM, has binary
+    pixel data right after its header line)."""
+    try:
+        with open(path, "rb") as f:
+            head = f.read(_SNIFF_BYTES)
+    except OSError:
+        return False
+    if not head or b"\0" in head:
+        return False
+    try:
+        text = head.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        if exc.start < len(head) - 3:   # not a character cut by the sample's end
+            return False
+        text = head[:exc.start].decode("utf-8")
+    return all(ch.isprintable() or ch in "\t\n\r\f\v" for ch in text)
+
+
+def _fourcc(cap: cv2.VideoCapture) -> str:
+    code = int(cap.get(cv2.CAP_PROP_FOURCC) or 0)
+    if code <= 0:
+        return ""
+    return code.to_bytes(4, "little").decode("latin-1").strip("\0 ").lower()
+
+
+def _not_media(path: Path) -> InputError:
+    return InputError(f"{path} is a text file, not a video or image (give a video file, an image "
+                      "folder or glob, a camera index, a stream URL or synth:NAME)")
+
+
+def _start_past_end(start: int, name: str, frames: int) -> ConfigError:
+    last = f" (0-{frames - 1})" if frames > 0 else ""
+    return ConfigError(f"start frame {start} (0-based; {start + 1} counting from 1) is past the "
+                       f"end of {name}: it has {frames} frames{last}")
+
+
 class VideoFileSource(_DecodedAhead):
-    """A video file decoded with OpenCV (FFmpeg backend)."""
+    """A video file decoded with OpenCV (FFmpeg backend). A text file (an annotation or config
+    file given by mistake) is an :class:`~motiontrack.errors.InputError`, also when FFmpeg
+    would render its characters as a picture."""
 
     def __init__(self, path: str | Path, start: int = 0, max_frames: int = 0) -> None:
         super().__init__(start, max_frames)
@@ -194,11 +257,20 @@ class VideoFileSource(_DecodedAhead):
             raise SourceError(f"{self.path} is a folder with no images")
         if self.path.stat().st_size == 0:
             raise SourceError(f"video file is empty: {self.path}")
-        cap = _open_capture(str(self.path), f"{self.path} as a video (not a video file, or an "
-                            "unsupported codec)")
+        cap = cv2.VideoCapture(str(self.path))
+        opened = cap.isOpened()
+        text_codec = opened and _fourcc(cap) in _TEXT_CODECS
+        if not opened or text_codec:
+            cap.release()
+            if text_codec or _is_text(self.path):
+                raise _not_media(self.path)
+            raise SourceError(f"cannot open {self.path} as a video (not a video file, or an "
+                              "unsupported codec)")
         ok, first = cap.read()
         if not ok or first is None:
             cap.release()
+            if _is_text(self.path):
+                raise _not_media(self.path)
             raise SourceError(f"no frames could be decoded from {self.path} (not a video, or corrupt)")
         count = int(cap.get(cv2.CAP_PROP_FRAME_COUNT) or 0)
         fps = float(cap.get(cv2.CAP_PROP_FPS) or 0.0)
@@ -217,14 +289,14 @@ class VideoFileSource(_DecodedAhead):
             # is keyframe-approximate for many codecs.
             while index < self.start:
                 if not cap.grab():
-                    log.warning("%s has only %d frames; --start %d is past the end",
-                                self.path, index, self.start)
-                    return
+                    raise _start_past_end(self.start, str(self.path), index)
                 index += 1
             produced = 0
             while not self.max_frames or produced < self.max_frames:
                 ok, img = cap.read()
                 if not ok or img is None:
+                    if produced == 0 and self.start > 0:   # the file's length was not known
+                        raise _start_past_end(self.start, str(self.path), index)
                     break
                 yield Frame(index=index, image=img, timestamp=index / fps)
                 index += 1
@@ -392,6 +464,9 @@ class LiveSource(Source):
             while not self.max_frames or produced < self.max_frames:
                 img = self._next_image()
                 if img is None:
+                    if (produced == 0 and self.start > 0 and self.length is not None
+                            and not self._stopping()):
+                        raise _start_past_end(self.start, self._what, index)
                     return
                 if index >= self.start:
                     stamp = self._clock() if self.info.live else index / fps
@@ -640,9 +715,23 @@ def open_source(spec: Any, start: int = 0, max_frames: int = 0, **live_options: 
     """Open ``spec``: a :class:`Source` (returned as is), a registered scheme (:data:`SCHEMES`,
     e.g. ``synth:NAME``), a camera index (``0`` or ``"0"``), a URL (``rtsp://``, ``http://``...),
     an image folder or glob, or a video file. An existing file is always the video file, even
-    when its name holds glob characters (``*?[``)."""
+    when its name holds glob characters (``*?[``).
+
+    A ``start`` at or past the end of a source of known length is a
+    :class:`~motiontrack.errors.ConfigError` here; a source whose length is found only by
+    reading (a video file without a frame count, a stream of known length) raises it when the
+    first read past ``start`` yields nothing."""
     if isinstance(spec, Source):
         return spec
+    src = _open(spec, start, max_frames, **live_options)
+    n = src.info.frame_count
+    if n is not None and start >= n and not src.info.live:
+        src.close()
+        raise _start_past_end(start, src.info.name, n)
+    return src
+
+
+def _open(spec: Any, start: int, max_frames: int, **live_options: Any) -> Source:
     if isinstance(spec, int) or (isinstance(spec, str) and spec.isdigit()):
         return LiveSource(int(spec), start, max_frames, **live_options)
     spec = os.fspath(spec)

@@ -1,4 +1,4 @@
-"""Video sinks: browser-playable WebM (VP8/VP9) by default, other codecs on request.
+"""Video sinks: browser-playable WebM (VP8/VP9) by default, H.264 MP4 and other codecs on request.
 
 Files are written under a temporary name and renamed on :meth:`VideoSink.close`, so an interrupted
 run leaves either a complete, playable video of everything processed so far or nothing. A video
@@ -9,14 +9,23 @@ file), so the small outputs of the run still fit.
 WebM is encoded with PyAV (the ``video`` extra, ``pip install motiontrack[video]``) when it is
 installed: it lets libvpx run in its real-time mode (``deadline=realtime``, ``cpu-used=8``,
 constant quality ``crf``), about 4–8 ms per 768x576 frame against 32 ms (VP8) and 175 ms (VP9)
-through ``cv2.VideoWriter``, which gives no access to the encoder's speed settings. Without PyAV,
-and for the other codecs, OpenCV writes the file.
+through ``cv2.VideoWriter``, which gives no access to the encoder's speed settings. H.264
+(``h264``) is written by PyAV too, with libx264 (or OpenH264) as yuv420p MP4 whose index comes
+first (``movflags=+faststart``), so that browsers play it while it loads. Without PyAV, and for
+the other codecs, OpenCV writes the file.
+
+Which codecs this installation can encode is probed once per process
+(:func:`encodable_codecs`: PyAV opens each encoder, OpenCV writes one tiny frame); a codec it
+cannot encode is refused before the run with the list of those it can (:func:`check_codec`).
 """
 
 from __future__ import annotations
 
+import contextlib
+import functools
 import logging
 import os
+import tempfile
 from fractions import Fraction
 from pathlib import Path
 
@@ -29,22 +38,36 @@ from .atomic import (DiskFullError, commit_temp, free_bytes, is_disk_full, outpu
 
 log = logging.getLogger(__name__)
 
-#: codec name → (fourcc, file extension)
+#: codec name → (OpenCV fourcc, file extension, what it is)
 CODECS = {
-    "vp80": ("VP80", ".webm"),
-    "vp90": ("VP90", ".webm"),
-    "mp4v": ("mp4v", ".mp4"),
-    "avc1": ("avc1", ".mp4"),
-    "mjpg": ("MJPG", ".avi"),
-    "xvid": ("XVID", ".avi"),
+    "vp80": ("VP80", ".webm", "VP8 WebM, plays in browsers (the default)"),
+    "vp90": ("VP90", ".webm", "VP9 WebM, plays in browsers"),
+    "h264": ("avc1", ".mp4", "H.264 MP4 (yuv420p, faststart), plays in browsers"),
+    "mp4v": ("mp4v", ".mp4", "MPEG-4 part 2 MP4 (browsers do not play it)"),
+    "avc1": ("avc1", ".mp4", "H.264 MP4 through OpenCV's FFmpeg"),
+    "mjpg": ("MJPG", ".avi", "Motion JPEG AVI"),
+    "xvid": ("XVID", ".avi", "Xvid AVI"),
 }
 
 
-#: codec name → libvpx encoder used through PyAV
-PYAV_ENCODERS = {"vp80": "libvpx", "vp90": "libvpx-vp9"}
+#: codec name → (container format, muxer options, PyAV encoders to try in turn)
+PYAV_CODECS = {
+    "vp80": ("webm", {}, ("libvpx",)),
+    "vp90": ("webm", {}, ("libvpx-vp9",)),
+    # the index (moov) first: a browser starts playing before the whole file has arrived
+    "h264": ("mp4", {"movflags": "+faststart"}, ("libx264", "libopenh264", "h264")),
+}
 #: libvpx settings: real-time speed, constant quality (crf, lower = better; the bit rate is a cap)
 PYAV_OPTIONS = {"deadline": "realtime", "cpu-used": "8", "crf": "10"}
 PYAV_MAX_BITRATE = 20_000_000
+#: PyAV encoder → (its options, bit rate; 0 = the encoder's own rate control)
+PYAV_ENCODER_OPTIONS = {
+    "libvpx": (PYAV_OPTIONS, PYAV_MAX_BITRATE),
+    "libvpx-vp9": ({**PYAV_OPTIONS, "row-mt": "1"}, PYAV_MAX_BITRATE),
+    # about as fast per frame as real-time libvpx; crf 23 is libx264's own default quality
+    "libx264": ({"preset": "veryfast", "crf": "23"}, 0),
+    "libopenh264": ({}, 8_000_000),
+}
 
 #: bytes a video leaves free on its device for the other outputs of the run (tracks, summary)
 DISK_RESERVE = 1 << 20
@@ -62,8 +85,92 @@ def pyav_available() -> bool:
     return True
 
 
+@functools.lru_cache(maxsize=None)
+def pyav_encoder(codec: str) -> str | None:
+    """The PyAV encoder that writes ``codec`` here (the first of :data:`PYAV_CODECS` that opens),
+    or None: no PyAV, or none of its encoders."""
+    if codec not in PYAV_CODECS or not pyav_available():
+        return None
+    import av
+
+    available = av.codecs_available
+    for name in PYAV_CODECS[codec][2]:
+        if name not in available:
+            continue
+        try:
+            ctx = av.CodecContext.create(name, "w")
+            ctx.width, ctx.height, ctx.pix_fmt = 64, 48, "yuv420p"
+            ctx.time_base = Fraction(1, 25)
+            ctx.open()
+            return ctx.codec.name
+        except Exception as exc:   # e.g. a hardware encoder without its device
+            log.debug("PyAV encoder %s does not open: %s", name, exc)
+    return None
+
+
+@contextlib.contextmanager
+def _quiet_stderr():
+    """Standard error closed at the file-descriptor level: FFmpeg inside OpenCV prints each
+    encoder it fails to open there, which a probe is expected to do."""
+    try:
+        saved = os.dup(2)
+    except OSError:  # pragma: no cover - no standard error at all
+        yield
+        return
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    try:
+        os.dup2(devnull, 2)
+        yield
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
+        os.close(devnull)
+
+
+@functools.lru_cache(maxsize=None)
+def opencv_encodes(codec: str) -> bool:
+    """Whether ``cv2.VideoWriter`` writes ``codec`` here: one 64x48 frame into a temporary file."""
+    fourcc, ext = CODECS[codec][:2]
+    with tempfile.TemporaryDirectory(prefix="motiontrack-codec-") as folder:
+        path = os.path.join(folder, f"probe{ext}")
+        with _quiet_stderr():
+            writer = cv2.VideoWriter(path, cv2.VideoWriter_fourcc(*fourcc), 25.0, (64, 48))
+            ok = writer.isOpened()
+            if ok:
+                writer.write(np.zeros((48, 64, 3), np.uint8))
+            writer.release()
+        return ok and os.path.isfile(path) and os.path.getsize(path) > 0
+
+
+def encodable_codecs() -> dict[str, str]:
+    """The codecs this installation can encode, in :data:`CODECS` order: name → what it is and
+    what writes it (PyAV's encoder, else OpenCV)."""
+    found = {}
+    for name, (_, _, what) in CODECS.items():
+        encoder = pyav_encoder(name)
+        if encoder is not None:
+            found[name] = f"{what}; PyAV {encoder}"
+        elif opencv_encodes(name):
+            found[name] = f"{what}; OpenCV"
+    return found
+
+
+def check_codec(codec: str) -> None:
+    """Refuse a codec that is unknown or that this installation cannot encode, naming those it
+    can (:class:`InputError`)."""
+    if codec in CODECS and (pyav_encoder(codec) is not None or opencv_encodes(codec)):
+        return
+    can = ", ".join(encodable_codecs()) or "none"
+    if codec not in CODECS:
+        raise InputError(f"unknown codec {codec!r}; this installation can encode: {can}")
+    hint = (" (it needs PyAV with libx264 or OpenH264: pip install motiontrack[video])"
+            if codec in PYAV_CODECS else "")
+    raise InputError(f"this installation cannot encode {codec} video{hint}; it can encode: {can}")
+
+
 class _PyAVWriter:
-    """libvpx through PyAV; the ``write``/``release`` subset of ``cv2.VideoWriter`` used here.
+    """libvpx or an H.264 encoder through PyAV; the ``write``/``release`` subset of
+    ``cv2.VideoWriter`` used here.
 
     Frames of odd width or height are padded by one replicated pixel (4:2:0 needs even sizes).
     """
@@ -73,14 +180,18 @@ class _PyAVWriter:
 
         w, h = size
         self._pad = (h % 2, w % 2)
-        self._out = av.open(str(path), "w", format="webm")
+        container, muxer_options, _ = PYAV_CODECS[codec]
+        encoder = pyav_encoder(codec)
+        options, bit_rate = PYAV_ENCODER_OPTIONS.get(encoder, ({}, 0))
+        self._out = av.open(str(path), "w", format=container, options=muxer_options)
         try:
-            self._stream = self._out.add_stream(PYAV_ENCODERS[codec],
+            self._stream = self._out.add_stream(encoder,
                                                 rate=Fraction(fps).limit_denominator(1001))
             self._stream.width, self._stream.height = w + self._pad[1], h + self._pad[0]
             self._stream.pix_fmt = "yuv420p"
-            self._stream.bit_rate = PYAV_MAX_BITRATE
-            self._stream.options = dict(PYAV_OPTIONS, **({"row-mt": "1"} if codec == "vp90" else {}))
+            if bit_rate:
+                self._stream.bit_rate = bit_rate
+            self._stream.options = dict(options)
             self._stream.thread_count = max(1, min(8, os.cpu_count() or 1))
         except BaseException:
             self._out.close()
@@ -106,8 +217,8 @@ class _PyAVWriter:
 class VideoSink:
     """Write frames to ``path`` with ``codec``; opened lazily at the first frame (size from it).
 
-    ``backend``: ``"auto"`` (PyAV for WebM when installed, else OpenCV), ``"pyav"`` or
-    ``"opencv"``; :attr:`backend` tells which one is used.
+    ``backend``: ``"auto"`` (PyAV for WebM and H.264 when it has the encoder, else OpenCV),
+    ``"pyav"`` or ``"opencv"``; :attr:`backend` tells which one is used.
     """
 
     def __init__(self, path: str | Path, fps: float, codec: str = "vp80", backend: str = "auto") -> None:
@@ -115,11 +226,11 @@ class VideoSink:
             raise InputError(f"unknown codec {codec!r}; valid: {', '.join(CODECS)}")
         if backend not in ("auto", "pyav", "opencv"):
             raise InputError(f"unknown video backend {backend!r}; valid: auto, pyav, opencv")
-        if backend == "pyav" and (codec not in PYAV_ENCODERS or not pyav_available()):
-            raise InputError(f"the pyav backend needs PyAV (pip install av) and a WebM codec "
-                             f"({', '.join(PYAV_ENCODERS)}), got {codec!r}")
+        if backend == "pyav" and pyav_encoder(codec) is None:
+            raise InputError(f"the pyav backend needs PyAV (pip install av) with an encoder of "
+                             f"{', '.join(PYAV_CODECS)}, got {codec!r}")
         if backend == "auto":
-            backend = "pyav" if codec in PYAV_ENCODERS and pyav_available() else "opencv"
+            backend = "pyav" if pyav_encoder(codec) is not None else "opencv"
         self.backend = backend
         self.path = Path(path)
         self.fps = float(fps) if fps and fps > 0 else 25.0
@@ -164,7 +275,7 @@ class VideoSink:
         if not writer.isOpened():
             self._tmp.unlink(missing_ok=True)
             raise InputError(f"this OpenCV build cannot encode {self.codec} video to {self.path}; "
-                             f"try --set output.codec=mjpg")
+                             f"this installation can encode: {', '.join(encodable_codecs())}")
         return writer
 
     def close(self) -> None:

@@ -271,6 +271,8 @@ class Job:
         ctx = JobContext(self.out, info, self.processor, self.source)
         summary = JobSummary(source=info.name, width=info.width, height=info.height,
                              source_fps=info.fps)
+        if info.stored_fps is not None:   # source.fps set: the rate the file states, for the record
+            summary.extra["source_stored_fps"] = info.stored_fps
         t0 = time.perf_counter()
         if should_stop is not None:
             self.source.stop_requested = should_stop

@@ -165,10 +165,11 @@ def dense_flow_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *,
 def overlay_job(source: Any, out: str | Path | None, runs: Sequence[tuple[str, Annotations]],
                 gt: Annotations | None = None, *, first: int = 1, last: int | None = None,
                 png_frames: Iterable[int] = (), png_dir: str | Path | None = None,
-                codec: str = "vp80", force: bool = False) -> Job:
+                codec: str = "vp80", force: bool = False, fps: float = 0.0) -> Job:
     """``motiontrack overlay``: ground truth (given, or the source's own) and runs drawn over
-    frames ``first`` to ``last`` (1-based, inclusive) as the video ``out`` and PNG stills of
-    ``png_frames`` in ``png_dir`` (default: beside ``out``); no summary file."""
+    frames ``first`` to ``last`` (1-based, inclusive) as the video ``out`` (at ``fps``, 0 = the
+    source's rate) and PNG stills of ``png_frames`` in ``png_dir`` (default: beside ``out``);
+    no summary file."""
     png_frames = list(png_frames)
     if out is None and not png_frames:
         raise ConfigError("nothing to write: give an output video or --png-frames")
@@ -176,7 +177,8 @@ def overlay_job(source: Any, out: str | Path | None, runs: Sequence[tuple[str, A
         raise ConfigError(f"frame range must satisfy 1 <= first <= last, got {first}:{last}")
     video = Path(out) if out is not None else None
     stills = Path(png_dir) if png_dir is not None else (video.parent if video else Path("."))
-    sc = SourceConfig(start=first - 1, max_frames=0 if last is None else last - first + 1)
+    sc = SourceConfig(start=first - 1, max_frames=0 if last is None else last - first + 1,
+                      fps=fps)
 
     def build(src: Source) -> Job:
         truth = gt if gt is not None else src.ground_truth()

@@ -19,7 +19,7 @@ from ..calibrate import track_measurements, world_positions
 from ..errors import InputError
 from ..io.atomic import AtomicFile, DiskFullError, OutputLock, atomic_write_bytes, free_bytes
 from ..io.mot import format_mot_rows, read_mot, write_mot
-from ..io.video import DISK_RESERVE, VideoSink, extension_for
+from ..io.video import DISK_RESERVE, VideoSink, check_codec, extension_for
 from ..render.streams import parse_streams, stream_image
 from ..tracking.gaps import fill_gaps
 from ..types import Annotations, FrameResult
@@ -177,6 +177,7 @@ class VideoWriter(Writer):
 
     def __init__(self, key: str, path: Path, codec: str,
                  picture: Callable[[FrameResult], np.ndarray | None] | None = None) -> None:
+        check_codec(codec)   # before the run: an encoder this installation lacks
         self.paths = {key: Path(path)}
         self.codec = codec
         self.picture = picture
@@ -214,6 +215,7 @@ class IntermediateWriter(Writer):
     def __init__(self, out: Path, streams: Iterable[str] | str, codec: str) -> None:
         self.streams = parse_streams(streams)
         self.paths = {s: Path(out) / f"{s}{extension_for(codec)}" for s in self.streams}
+        check_codec(codec)
         self.codec = codec
         self._sinks: dict[str, VideoSink] = {}
         self._ctx: JobContext | None = None

@@ -32,4 +32,4 @@ class SyntheticSource(Source):
         end = self.scene.n_frames if not self.max_frames else min(self.scene.n_frames,
                                                                   self.start + self.max_frames)
         for i in range(self.start, end):
-            yield Frame(index=i, image=self.scene.frame(i), timestamp=i / self.scene.fps)
+            yield Frame(index=i, image=self.scene.frame(i), timestamp=i / self.info.fps)
