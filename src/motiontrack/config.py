@@ -124,6 +124,12 @@ def _shown(v: Any) -> str:
 class SourceConfig(_Section):
     start: int = param(0, lo=0, doc="first frame index to process (0-based)")
     max_frames: int = param(0, lo=0, doc="stop after this many frames (0 = all)")
+    fps: float = param(
+        0.0, lo=0.0, hi=1000.0,
+        doc="frame rate (frames per second) to use instead of the source's own, for footage "
+            "stored at another rate than it was recorded at; every duration in seconds "
+            "(tracker.max_lost_s, tracker.fill_gaps_s), the speeds in summary.json and the "
+            "output videos follow it; 0 = the source's own (25 when it states none)")
     reconnect_attempts: int = param(
         5, lo=0, hi=1000,
         doc="live sources: reconnect tries before the run fails, counted until a reconnected "

@@ -127,14 +127,22 @@ def accuracy_line(a: Mapping[str, float],
             + (f"  IDSW {int(a['IDSW'])}" if "IDSW" in a else ""))
 
 
+#: help of ``--fps``, the option of every command that reads video
+FPS_HELP = ("frame rate to use instead of the source's own (source.fps), for footage stored at "
+            "another rate than it was recorded at: durations in seconds, speeds and the output "
+            "video follow it")
+
+
 def run_overrides(args) -> list[str]:
-    """``--set`` overrides plus those implied by ``--start``, ``--max-frames`` and ``--codec``
-    (the options ``track`` and ``flow`` share), in that order."""
+    """``--set`` overrides plus those implied by ``--start``, ``--max-frames``, ``--fps`` and
+    ``--codec`` (the options ``track`` and ``flow`` share), in that order."""
     overrides = list(args.overrides)
     if args.start is not None:
         overrides.append(f"source.start={args.start}")
     if args.max_frames is not None:
         overrides.append(f"source.max_frames={args.max_frames}")
+    if getattr(args, "fps", None) is not None:
+        overrides.append(f"source.fps={float(args.fps)!r}")
     if args.codec:
         from ..io.video import check_codec
 

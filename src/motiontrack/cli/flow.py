@@ -17,6 +17,8 @@ log = logging.getLogger("motiontrack")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
+    from ._common import FPS_HELP
+
     from ._common import CodecOption
 
     p = sub.add_parser(
@@ -40,6 +42,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "frame's maximum)")
     p.add_argument("--start", type=int, help="first frame index (0-based)")
     p.add_argument("--max-frames", type=int, help="process at most this many frames")
+    p.add_argument("--fps", type=float, help=FPS_HELP)
     p.add_argument("--no-video", action="store_true", help="sparse: no annotated video")
     p.add_argument("--mask-video", action="store_true", help="also write the motion mask video")
     p.add_argument("--codec", action=CodecOption)

@@ -85,6 +85,7 @@ def _opencv_reason(exc: Exception) -> str:
 
 def register(sub: argparse._SubParsersAction) -> None:
     from ..tracking.single import SINGLE_TRACKERS
+    from ._common import FPS_HELP
 
     names = "|".join(SINGLE_TRACKERS.names())
     p = sub.add_parser(
@@ -102,6 +103,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("-o", "--out", default="out", help="output folder (default: out)")
     p.add_argument("--start", type=int, default=0, help="first frame index (0-based)")
     p.add_argument("--max-frames", type=int, default=0, help="process at most this many frames")
+    p.add_argument("--fps", type=float, help=FPS_HELP)
     p.add_argument("--no-video", action="store_true", help="no annotated video")
     p.add_argument("--codec", default="vp80", action=CodecOption)
     p.add_argument("--gt", help="ground truth to score against (synth: sources bring their own)")
@@ -129,8 +131,11 @@ def cmd_follow(args) -> int:
     check_codec(args.codec)
     if args.start < 0 or args.max_frames < 0:
         raise ConfigError("--start and --max-frames must be >= 0")
-    cfg = load_config(None, [f"source.start={args.start}", f"source.max_frames={args.max_frames}",
-                             f'output.codec="{args.codec}"'])
+    overrides = [f"source.start={args.start}", f"source.max_frames={args.max_frames}",
+                 f'output.codec="{args.codec}"']
+    if args.fps is not None:
+        overrides.append(f"source.fps={args.fps!r}")
+    cfg = load_config(None, overrides)
     gt = read_gt(args.gt) if args.gt else None
     job = follow_job(args.source, cfg, args.out, tracker, box, args.tracker, params=params,
                      video=not args.no_video, force=args.force, gt=gt, gt_id=args.gt_id)

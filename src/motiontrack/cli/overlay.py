@@ -6,6 +6,8 @@ import argparse
 
 
 def register(sub: argparse._SubParsersAction) -> None:
+    from ._common import FPS_HELP
+
     p = sub.add_parser(
         "overlay", help="draw ground truth and several runs on the video (distinct colours, legend)",
         description="Render SOURCE with the ground truth (green) and each --pred run in its own "
@@ -17,6 +19,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "repeatable; NAME is the legend text (default: the file's folder name)")
     p.add_argument("-o", "--out", help="output video (e.g. overlay.webm)")
     p.add_argument("--frames", metavar="A:B", help="1-based inclusive frame range")
+    p.add_argument("--fps", type=float, help=FPS_HELP)
     p.add_argument("--force", action="store_true", help="overwrite an existing output video")
     p.add_argument("--png-frames", default="", metavar="F1,F2",
                    help="also write these 1-based frames as PNG (frame_%%06d.png next to -o)")
@@ -64,7 +67,8 @@ def cmd_overlay(args) -> int:
         codec = {".mp4": mp4, ".avi": "mjpg"}.get(Path(args.out).suffix.lower(), "vp80")
     first, last = frame_range(args.frames) if args.frames else (1, None)
     job = overlay_job(args.source, args.out, runs, gt, first=first, last=last, png_frames=pngs,
-                      png_dir=args.png_dir, codec=codec or "vp80", force=args.force)
+                      png_dir=args.png_dir, codec=codec or "vp80", force=args.force,
+                      fps=args.fps or 0.0)
     with frame_loop(job.expected_frames()) as loop:
         s = job.run(progress=loop.update, should_stop=loop.stop)
     print(f"frames    {s.frames}")

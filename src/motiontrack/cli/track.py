@@ -10,6 +10,8 @@ log = logging.getLogger("motiontrack")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
+    from ._common import FPS_HELP
+
     from ._common import CodecOption
 
     p = sub.add_parser(
@@ -25,6 +27,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="override one config field, e.g. --set motion.method=knn (repeatable)")
     p.add_argument("--start", type=int, help="first frame index (0-based)")
     p.add_argument("--max-frames", type=int, help="process at most this many frames")
+    p.add_argument("--fps", type=float, help=FPS_HELP)
     p.add_argument("--no-video", action="store_true", help="analysis only: no annotated video")
     p.add_argument("--mask-video", action="store_true", help="also write the motion mask video")
     p.add_argument("--mask-images", metavar="DIR",
