@@ -85,7 +85,7 @@ def _opencv_reason(exc: Exception) -> str:
 
 def register(sub: argparse._SubParsersAction) -> None:
     from ..tracking.single import SINGLE_TRACKERS
-    from ._common import FPS_HELP
+    from ._common import FPS_HELP, CodecOption
 
     names = "|".join(SINGLE_TRACKERS.names())
     p = sub.add_parser(
