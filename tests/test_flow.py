@@ -15,8 +15,9 @@ from motiontrack.config import FarnebackParams, load_config
 from motiontrack.errors import ConfigError
 from motiontrack.io.sources import ArraySource
 from motiontrack.motion.dense_flow import DenseFlow
-from motiontrack.render.flow import flow_to_bgr, flow_to_hsv, hue_to_angle
+from motiontrack.render.flow import flow_to_bgr, flow_to_hsv, flow_wheel, hue_to_angle
 from motiontrack.run import dense_flow_job
+from motiontrack.run.processors import DenseFlowProcessor
 from motiontrack.synth import make_scene
 from motiontrack.tracking.association import iou_matrix
 from motiontrack.tracking.flow import SparseFlowParams, SparseFlowTracker, forward_backward_lk
@@ -125,6 +126,39 @@ def test_dense_flow_of_shifted_pair(dx, dy):
     assert mask[30:-30, 30:-30].mean() > 0.9 * 255
 
 
+@pytest.mark.parametrize("dx, dy, angle", [(40, 0, 0.0), (0, 40, 90.0), (-40, 0, 180.0),
+                                           (0, -40, 270.0), (28, -28, 315.0)])
+def test_flow_wheel_shows_at_each_offset_the_colour_of_that_flow(dx, dy, angle):
+    wheel, disc = flow_wheel(101)           # centre (50, 50), rim radius 50
+    hsv = cv2.cvtColor(wheel, cv2.COLOR_BGR2HSV)
+    h, s, v = (int(c) for c in hsv[50 + dy, 50 + dx])
+    assert min(abs(hue_to_angle(h) - angle), 360 - abs(hue_to_angle(h) - angle)) <= 4
+    assert v == pytest.approx(255 * np.hypot(dx, dy) / 50, abs=4)   # brightness = magnitude
+    assert disc[50 + dy, 50 + dx] and not disc[0, 0] and not disc[100, 100]
+
+
+def test_dense_flow_frames_carry_the_colour_wheel_and_the_frame_number():
+    a = _texture(h=240, w=320, seed=5)
+    frames = [cv2.cvtColor(_shift(a, 2 * i, 0), cv2.COLOR_GRAY2BGR) for i in range(3)]
+    proc = DenseFlowProcessor(max_magnitude=4.0)
+    pictures = []
+    for result in proc.results(ArraySource(frames)):
+        plain = flow_to_bgr(proc._last, 4.0)
+        pictures.append((plain, proc.annotate(result)))
+    plain, img = pictures[2]
+    # the wheel, 240 / 5 = 48 px across, in the top-right corner, exactly flow_wheel's colours
+    wheel, disc = flow_wheel(48)
+    ys, xs = np.nonzero(disc)
+    found = [(y0, x0) for y0 in range(0, 20) for x0 in range(320 - 48 - 20, 320 - 48 + 1)
+             if np.array_equal(img[ys + y0, xs + x0], wheel[ys, xs])]
+    assert found
+    # the frame number at the bottom-left, on a dark label that differs from frame to frame
+    assert tuple(img[-5, 4]) == (40, 40, 40) and not np.array_equal(img[-5, 4], plain[-5, 4])
+    assert not np.array_equal(pictures[1][1][-30:, :80], img[-30:, :80])
+    # the middle of the picture is the flow picture itself
+    np.testing.assert_array_equal(img[100:140, 100:200], plain[100:140, 100:200])
+
+
 def _dense(frames, out, stop=False, **kw):
     """The dense flow job's summary; ``stop``: a stop request after the first frame."""
     cfg = load_config(None, ['output.codec="mjpg"', "output.mask_video=true"])
@@ -228,10 +262,14 @@ def test_flow_cli_sparse(tmp_path):
         assert (out / name).stat().st_size > 0
 
 
-def test_flow_cli_dense(tmp_path):
+def test_flow_cli_dense(tmp_path, capsys):
     out = tmp_path / "d"
     assert main(["flow", "synth:runner", "--mode", "dense", "--start", "20", "--max-frames", "8",
                  "--codec", "mjpg", "--mask-video", "--max-magnitude", "8", "-o", str(out)]) == 0
+    # frames, time and speed, and how the run ended, as track reports them
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0].startswith("frames    8 in ") and lines[0].endswith(" fps)")
+    assert lines[1] == "status    complete"
     summary = json.loads((out / "summary.json").read_text())
     assert summary["frames"] == 8 and summary["peak_magnitude"] > 0
     assert 0 < summary["moving_fraction"] < 0.2  # one runner moves, the floor does not
@@ -243,6 +281,7 @@ def test_flow_cli_dense(tmp_path):
     (["synth:walker", "--param", "fb_threshold=abc"], "must be a number"),
     (["synth:walker", "--param", "per_object=0"], "per_object"),
     (["synth:walker", "--mode", "dense", "--param", "trail=3"], "--param applies"),
+    (["synth:walker", "--mode", "dense", "--gt", "gt.txt"], "--gt applies to --mode sparse"),
     (["synth:walker", "--max-magnitude", "0"], "max-magnitude"),
     (["synth:walker", "--set", "motion.method=nope"], "nope"),
     (["MISSING.avi"], "not found"),
@@ -254,3 +293,19 @@ def test_flow_cli_errors(argv, needle, tmp_path, capsys, monkeypatch):
     errors = [ln for ln in err.splitlines() if ln.startswith("motiontrack: error:")]
     assert code != 0 and "Traceback" not in err
     assert len(errors) == 1 and needle in errors[0]
+
+
+def test_flow_cli_sparse_scores_against_the_given_gt(tmp_path, capsys):
+    # the walker's own ground truth moved 300 px down: nothing the tracker finds overlaps it, so
+    # an accuracy of zero shows the given file, not the scene's own truth, was scored
+    gt = make_scene("walker").ground_truth()
+    rows = [f"{f},{i},{x:.1f},{y + 300:.1f},{w:.1f},{h:.1f},1,1,1"
+            for f, i, (x, y, w, h) in zip(gt.frames, gt.ids, gt.boxes)]
+    (tmp_path / "gt.txt").write_text("\n".join(rows) + "\n")
+    out = tmp_path / "s"
+    assert main(["flow", "synth:walker", "--max-frames", "40", "--no-video",
+                 "--gt", str(tmp_path / "gt.txt"), "-o", str(out)]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["tracks"] >= 1 and summary["accuracy"]["TP"] == 0
+    assert summary["accuracy"]["FN"] > 0
+    assert "accuracy  HOTA 0.000" in capsys.readouterr().out

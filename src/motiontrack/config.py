@@ -389,7 +389,13 @@ class OutputConfig(_Section):
     video: bool = param(True, doc="write the annotated video")
     codec: str = param("vp80", choices=("vp80", "vp90", "h264", "mp4v", "avc1", "mjpg", "xvid"))
     mask_video: bool = param(False, doc="also write the motion mask as a video")
-    mask_inset: bool = param(True, doc="draw a small mask inset in the annotated video")
+    inset: str = param("none", choices=("none", "top-left", "top-right", "bottom-left", "bottom-right"),
+                       doc="corner of the annotated video that shows the motion mask (none = no "
+                           "inset: any corner hides where people enter; --mask-video writes the "
+                           "mask in full)")
+    inset_scale: float = param(0.2, lo=0.05, hi=0.5,
+                               doc="width of the mask inset, as a fraction of the frame width")
+    legend: bool = param(True, doc="draw a legend of the kinds of boxes in the annotated video")
     trail: int = param(32, lo=0, hi=10000, doc="trail length drawn per track (points)")
 
 

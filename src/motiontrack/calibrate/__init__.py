@@ -4,11 +4,12 @@
 * :mod:`.chessboard` — OpenCV chessboard calibration and OpenCV-compatible YAML;
 * :mod:`.lines` — the thesis' method: κ1 by straight lines, sub-pixel lines, coplanar Tsai fit;
 * :mod:`.ground` — ground-plane homography from point pairs;
-* :mod:`.camera` — :func:`load_camera` for any of these files;
+* :mod:`.camera` — :func:`load_camera` for any of these files, :func:`fit_to_image` for the
+  video's size;
 * :mod:`.measure` — world positions, speeds, path lengths and heights of tracks.
 """
 
-from .camera import load_camera
+from .camera import fit_to_image, load_camera
 from .measure import track_measurements, world_positions
 
-__all__ = ["load_camera", "track_measurements", "world_positions"]
+__all__ = ["fit_to_image", "load_camera", "track_measurements", "world_positions"]

@@ -13,6 +13,7 @@ and our TOML (``model = "tsai"`` or ``model = "homography"``).
 
 from __future__ import annotations
 
+import logging
 from pathlib import Path
 from typing import Protocol, Union
 
@@ -25,7 +26,9 @@ from .chessboard import OpenCVCamera, read_opencv_yaml
 from .ground import GroundHomography, ground_from_toml_doc
 from .tsai import TsaiCamera, _kind, read_tsai_xml, tsai_from_toml_doc
 
-__all__ = ["Camera", "load_camera", "AnyCamera"]
+__all__ = ["Camera", "load_camera", "AnyCamera", "fit_to_image"]
+
+log = logging.getLogger(__name__)
 
 AnyCamera = Union[TsaiCamera, OpenCVCamera, GroundHomography]
 
@@ -57,3 +60,32 @@ def load_camera(path: str | Path) -> AnyCamera:
         raise InputError(f"{location(p)}: model must be 'tsai' or 'homography', got {shown}")
     raise InputError(f"{location(p)}: unknown camera file type {excerpt(suffix)} (expected .xml, "
                      ".yml/.yaml or .toml)")
+
+
+def fit_to_image(camera: AnyCamera, width: int, height: int, name: str) -> AnyCamera:
+    """``camera`` (read from the file ``name``) for a video of ``width`` x ``height`` pixels.
+
+    A camera is calibrated on images of one size, which its file states (Tsai XML and TOML:
+    ``width``/``height``; OpenCV YAML: ``image_width``/``image_height``; a homography TOML: the
+    optional ``width``/``height``). A video of that size uses it as it is. A scaled copy of the
+    video (the same aspect ratio, within a pixel of rounding) gets the camera scaled to it
+    (:meth:`~.tsai.TsaiCamera.resized`), with a warning; any other size is an
+    :class:`InputError` naming both, since a cropped or padded picture has no such map. A
+    homography that states no size is used as it is (nothing to check it against).
+    """
+    size = camera.image_size
+    if size is None:
+        log.info("camera %s states no image size: taken to be calibrated on %dx%d frames",
+                 name, width, height)
+        return camera
+    cw, ch = size
+    if (cw, ch) == (width, height):
+        return camera
+    # the same picture scaled: each side within a pixel of the other side's scale
+    if not (abs(width - cw * height / ch) <= 1.0 or abs(height - ch * width / cw) <= 1.0):
+        raise InputError(f"camera {location(name)} is calibrated on {cw}x{ch} images but the "
+                         f"video is {width}x{height}, another aspect ratio (cropped or padded); "
+                         "calibrate the camera on this video's frames")
+    log.warning("camera %s is calibrated on %dx%d images; the video is %dx%d: scaling the "
+                "camera by %.4g x %.4g", name, cw, ch, width, height, width / cw, height / ch)
+    return camera.resized(width, height)

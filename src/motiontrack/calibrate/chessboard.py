@@ -29,7 +29,7 @@ from ..errors import ConfigError, InputError, location, printable
 from ..io.atomic import commit_temp, temp_path_for
 from ..io.textfile import read_text
 from ..imaging import to_gray
-from .tsai import MAX_IMAGE_SIDE, _as_pixels, _as_world, _intersect_plane
+from .tsai import MAX_IMAGE_SIDE, _as_pixels, _as_world, _intersect_plane, pixel_scaling
 
 log = logging.getLogger(__name__)
 
@@ -138,6 +138,14 @@ class OpenCVCamera:
         """Undistorted image with the same camera matrix ``K``."""
         m1, m2 = _undistort_maps(self, image.shape[0], image.shape[1])
         return cv2.remap(image, m1, m2, cv2.INTER_LINEAR)
+
+    def resized(self, width: int, height: int) -> "OpenCVCamera":
+        """The same camera for its video scaled to ``width`` x ``height`` pixels: ``K`` follows
+        the pixel grid (:func:`~motiontrack.calibrate.tsai.pixel_scaling`); the distortion
+        coefficients (of normalised coordinates) and the ground pose stay."""
+        K = pixel_scaling(self.image_size, (width, height)) @ self.K
+        return OpenCVCamera(K=K, dist=self.dist.copy(), size=(int(width), int(height)),
+                            rvec=self.rvec, tvec=self.tvec, meta=dict(self.meta))
 
 
 @functools.lru_cache(maxsize=8)

@@ -24,7 +24,7 @@ from ..io.atomic import atomic_write_text
 from ..io.textfile import read_text
 from ..io.tomlfile import read_toml
 from .chessboard import OpenCVCamera
-from .tsai import MAX_IMAGE_SIDE, _as_pixels, _as_world, _kind
+from .tsai import MAX_IMAGE_SIDE, _as_pixels, _as_world, _kind, pixel_scaling
 
 log = logging.getLogger(__name__)
 
@@ -74,6 +74,16 @@ class GroundHomography:
     def undistort(self, image: np.ndarray) -> np.ndarray:
         """No lens model: the image is returned unchanged (a copy)."""
         return image.copy()
+
+    def resized(self, width: int, height: int) -> "GroundHomography":
+        """The same map for its video scaled to ``width`` x ``height`` pixels (needs
+        :attr:`size`): new pixels go back to the calibration's
+        (:func:`~motiontrack.calibrate.tsai.pixel_scaling`) before ``H``."""
+        if self.size is None:
+            raise ConfigError("a ground homography without its image size cannot be resized")
+        A = pixel_scaling(self.size, (width, height))
+        return GroundHomography(H=self.H @ np.linalg.inv(A), size=(int(width), int(height)),
+                                rms=self.rms)
 
 
 def _apply(H: np.ndarray, pts: np.ndarray) -> np.ndarray:

@@ -27,7 +27,7 @@ from __future__ import annotations
 import functools
 import logging
 import math
-from dataclasses import asdict, dataclass, fields
+from dataclasses import asdict, dataclass, fields, replace
 from pathlib import Path
 from xml.etree.ElementTree import ParseError
 
@@ -54,6 +54,7 @@ __all__ = [
     "write_tsai_xml",
     "read_tsai_toml",
     "write_tsai_toml",
+    "pixel_scaling",
 ]
 
 
@@ -291,8 +292,29 @@ class TsaiCamera:
         return cv2.remap(image, mx, my, interpolation=cv2.INTER_LINEAR,
                          borderMode=cv2.BORDER_CONSTANT)
 
+    def resized(self, width: int, height: int) -> "TsaiCamera":
+        """The same camera for its video scaled to ``width`` x ``height`` pixels (a resized
+        copy): the frame grabber samples ``width / self.width`` as many pixels per line
+        (``nfx``), so the effective pixel size ``dpx = dx ncx / nfx`` grows by the inverse, as
+        does ``dpy``, and the principal point moves with the pixel grid (:func:`pixel_scaling`).
+        The sensor (``ncx``, ``dx``, ``dy``), the lens (``focal``, ``kappa1``), ``sx`` and the
+        pose are the same camera's."""
+        kx, ky = width / self.width, height / self.height
+        A = pixel_scaling((self.width, self.height), (width, height))
+        return replace(self, width=int(width), height=int(height), nfx=self.nfx * kx,
+                       dpx=self.dpx / kx, dpy=self.dpy / ky, cx=A[0, 0] * self.cx + A[0, 2],
+                       cy=A[1, 1] * self.cy + A[1, 2])
+
     def to_dict(self) -> dict[str, float]:
         return asdict(self)
+
+
+def pixel_scaling(size: tuple[int, int], new_size: tuple[int, int]) -> np.ndarray:
+    """(3, 3) map of pixel coordinates of an image of ``size`` (width, height) to those of the
+    same image resized to ``new_size``, pixel centres at whole numbers (OpenCV's convention,
+    and ``cv2.resize``'s): ``x' = (x + 0.5) kx - 0.5`` with ``kx = new width / width``."""
+    kx, ky = new_size[0] / size[0], new_size[1] / size[1]
+    return np.array([[kx, 0.0, 0.5 * kx - 0.5], [0.0, ky, 0.5 * ky - 0.5], [0.0, 0.0, 1.0]])
 
 
 @functools.lru_cache(maxsize=8)

@@ -110,11 +110,16 @@ def cmd_flow(args) -> int:
     print("\n".join(_report(s)))
     return 0
 
+        if args.gt:
+            # dense flow makes no tracks, so there is nothing to score against ground truth
+            raise ConfigError("--gt applies to --mode sparse (its tracks are scored); dense flow "
+                              "makes no tracks to score")
 
 def _report(s) -> list[str]:
     from ._common import accuracy_line
 
-    lines = [f"frames    {s.frames} in {s.seconds:.2f} s ({s.fps:.1f} fps)"]
+    lines = [f"frames    {s.frames} in {s.seconds:.2f} s ({s.fps:.1f} fps)",
+             f"status    {s.status}" + (" (input truncated)" if s.truncated else "")]
     if s.extra["mode"] == "sparse":
         lines.append(f"tracks    {s.tracks}")
         if s.accuracy:

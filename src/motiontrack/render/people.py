@@ -1,19 +1,19 @@
 """Drawing for the people modules: spline outlines, control points, heads, search normals.
 
 Every function draws on a *copy* unless ``inplace=True`` and returns the image; coordinates are
-original-frame pixels; colours are BGR. Track colours come from
-:func:`motiontrack.render.annotate.color_for` so an outline has the same colour as its track's box.
+original-frame pixels; colours are BGR. :func:`draw_people` takes the track colours of the
+annotated frame (:class:`~motiontrack.render.colors.TrackColors`), so an outline has the colour of
+its track's box.
 """
 
 from __future__ import annotations
 
-from typing import Iterable
+from typing import Iterable, Mapping
 
 import cv2
 import numpy as np
 
 from ..types import PeopleFrame
-from .annotate import color_for
 
 __all__ = ["draw_outline", "draw_control_points", "draw_heads", "draw_normals", "draw_people"]
 
@@ -32,12 +32,12 @@ def _target(img: np.ndarray, inplace: bool) -> np.ndarray:
     return out
 
 
-def _color(track_id: int | None, color) -> tuple[int, int, int]:
-    if color is not None:
-        return tuple(int(c) for c in color)
-    if track_id is None:
+def _color(track_id: int | None, colors: Mapping[int, tuple[int, int, int]] | None
+           ) -> tuple[int, int, int]:
+    """The track's colour in ``colors``; yellow for an outline of no track or unknown colour."""
+    if colors is None or track_id is None or track_id not in colors:
         return (0, 255, 255)
-    return tuple(int(c) for c in color_for(track_id))
+    return tuple(int(c) for c in colors[track_id])
 
 
 def draw_outline(img: np.ndarray, outline: np.ndarray, color=(0, 255, 255), thickness: int = 1,
@@ -87,16 +87,18 @@ def draw_normals(img: np.ndarray, points: np.ndarray, normals: np.ndarray, half:
 
 def draw_people(img: np.ndarray, people: PeopleFrame, *, outlines: bool = True,
                 control_points: bool = False, heads: bool = True, normals: bool = False,
-                hypotheses: bool = True, inplace: bool = False) -> np.ndarray:
+                hypotheses: bool = True, inplace: bool = False,
+                colors: Mapping[int, tuple[int, int, int]] | None = None) -> np.ndarray:
     """Draw what the people stage found in a frame (:class:`~motiontrack.types.PeopleFrame`) on
     ``img``.
 
-    Outlines use the track colour; hypotheses (boxes offered for lost people) are dashed-looking
+    Outlines use the track colour in ``colors`` (track id → BGR, as the boxes are drawn;
+    yellow without it); hypotheses (boxes offered for lost people) are dashed-looking
     thin white boxes; search normals are the debug view.
     """
     out = _target(img, inplace)
     for s in people.shapes:
-        col = _color(getattr(s, "track_id", None), None)
+        col = _color(getattr(s, "track_id", None), colors)
         if normals and getattr(s, "normals", None) is not None:
             draw_normals(out, s.outline, s.normals, s.search, inplace=True)
         if outlines:

@@ -14,7 +14,7 @@ written as its own video by :class:`~motiontrack.run.writers.IntermediateWriter`
 
 from __future__ import annotations
 
-from typing import Iterable
+from typing import Iterable, Mapping
 
 import numpy as np
 
@@ -39,10 +39,12 @@ def parse_streams(text: str | Iterable[str]) -> tuple[str, ...]:
 
 
 def stream_image(name: str, result: FrameResult, background: np.ndarray | None = None,
-                 trail: int = 32) -> np.ndarray | None:
+                 trail: int = 32, colors: Mapping[int, tuple[int, int, int]] | None = None
+                 ) -> np.ndarray | None:
     """The image of stream ``name`` for one frame result (None when the frame has none, e.g. with
     external detections there is no mask); ``background`` is the motion detector's background
-    image after this frame, when it has one.
+    image after this frame, when it has one; ``colors`` the track colours of the ``annotated``
+    stream (:meth:`~motiontrack.render.colors.TrackColors.assign`).
 
     Returns
     -------
@@ -62,5 +64,5 @@ def stream_image(name: str, result: FrameResult, background: np.ndarray | None =
         return None if result.mask is None else np.asarray(result.mask, dtype=np.uint8)
     if name == "annotated":
         return annotate_frame(result.frame, result.tracks, result.regions, result.mask, trail,
-                              False, text=f"frame {result.index}")
+                              "none", text=f"frame {result.index}", colors=colors)
     raise ConfigError(f"unknown stream {name!r}; valid: {', '.join(STREAMS)}")

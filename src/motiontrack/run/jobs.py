@@ -14,7 +14,7 @@ from typing import Any, Callable, Iterable, Sequence
 
 import numpy as np
 
-from ..calibrate import load_camera
+from ..calibrate import fit_to_image, load_camera
 from ..config import PipelineConfig, SourceConfig, save_config
 from ..errors import ConfigError
 from ..evaluate.score import score_run
@@ -77,7 +77,9 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
                      *scaled_size(info.width, info.height, scale))
         fill = (fill_gap_frames(cfg, src.info.fps, external) if completes_tracks(cfg, external)
                 else None)
-        tracks = TracksWriter(out, camera, fill)
+        fitted = (fit_to_image(camera, src.info.width, src.info.height, cfg.measure.camera)
+                  if camera is not None else None)
+        tracks = TracksWriter(out, fitted, fill)
         writers = [tracks]
         if cfg.output.video:
             writers.append(VideoWriter("video", out / f"annotated{extension_for(codec)}", codec))

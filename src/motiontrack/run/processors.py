@@ -23,7 +23,8 @@ from ..io.sources import Source, SourceInfo
 from ..motion.dense_flow import DenseFlow
 from ..pipeline import Pipeline
 from ..render.annotate import annotate_frame, draw_label
-from ..render.flow import draw_feature_trails, flow_to_bgr
+from ..render.colors import TrackColors
+from ..render.flow import draw_feature_trails, draw_flow_legend, flow_to_bgr
 from ..render.overlay import draw_overlay, layers_at, overlay_layers
 from ..render.people import draw_people
 from ..tracking.flow import SparseFlowParams, SparseFlowTracker
@@ -35,6 +36,20 @@ __all__ = ["TrackProcessor", "FollowProcessor", "SparseFlowProcessor", "DenseFlo
 
 #: centre points kept for a followed object's trail
 _FOLLOW_TRAIL = 64
+
+
+def track_legend(cfg: PipelineConfig, external: bool = False) -> tuple[tuple[str, str], ...]:
+    """The legend of ``track``'s annotated video: the kinds of boxes the run can draw."""
+    entries = [("track", "track (id, trail)")]
+    if cfg.tracker.output_lost:
+        entries.append(("predicted", "track, not seen (predicted)"))
+    entries.append(("region", "detection" if external else "motion region"))
+    if cfg.people.enabled and not external:
+        if cfg.people.heads:
+            entries.append(("head", "head"))
+        if cfg.people.hypotheses:
+            entries.append(("hypothesis", "shape hypothesis"))
+    return tuple(entries)
 
 
 class TrackProcessor:
@@ -51,16 +66,20 @@ class TrackProcessor:
         # every stage is built now: a bad plug-in name or ROI fails before anything is written
         self.pipe = Pipeline(cfg, (info.width, info.height), detections, info.fps)
         self.pipe.sequential = self.pipe.sequential or needs_background
+        self.colors = TrackColors()
+        self.legend = track_legend(cfg, self.external) if cfg.output.legend else ()
 
     def results(self, source: Source) -> Iterator[FrameResult]:
         return self.pipe.results(source)
 
     def annotate(self, result: FrameResult) -> np.ndarray:
         out = self.cfg.output
+        colors = self.colors.assign(t.id for t in result.tracks)
         img = annotate_frame(result.frame, result.tracks, result.regions, result.mask, out.trail,
-                             out.mask_inset, text=f"frame {result.index}")
+                             out.inset, inset_scale=out.inset_scale,
+                             text=f"frame {result.index}", colors=colors, legend=self.legend)
         if self.pipe.people is not None and result.people is not None:
-            draw_people(img, result.people, inplace=True)
+            draw_people(img, result.people, inplace=True, colors=colors)
         return img
 
     def background(self) -> np.ndarray | None:
@@ -83,6 +102,7 @@ class FollowProcessor:
         self.tracked = 0
         self._history: list[tuple[float, float]] = []
         self._label = ""
+        self._colors = TrackColors()
 
     def results(self, source: Source) -> Iterator[FrameResult]:
         for index, image, ok, box, score in follow(source, self.tracker, self.box):
@@ -98,8 +118,10 @@ class FollowProcessor:
                               tracks=tracks)
 
     def annotate(self, result: FrameResult) -> np.ndarray:
-        img = annotate_frame(result.frame, result.tracks, text=f"frame {result.index}")
-        draw_label(img, self._label, (4, 20), (40, 40, 40) if result.tracks else (0, 0, 200))
+        img = annotate_frame(result.frame, result.tracks, text=f"frame {result.index}",
+                             colors=self._colors.assign(t.id for t in result.tracks))
+        draw_label(img, self._label, (4, 4), (40, 40, 40) if result.tracks else (0, 0, 200),
+                   scale=None)
         return img
 
     def background(self) -> np.ndarray | None:
@@ -121,6 +143,9 @@ class SparseFlowProcessor:
         self.params = params or SparseFlowParams()
         self.tracker = SparseFlowTracker((info.width, info.height), self.params, cfg.motion,
                                          cfg.cleanup, cfg.regions, cfg.preprocess)
+        self.colors = TrackColors()
+        self.legend = ((("track", "object (id, trail)"), ("predicted", "object, not seen"),
+                        ("points", "feature points")) if cfg.output.legend else ())
 
     def results(self, source: Source) -> Iterator[FrameResult]:
         for frame in source:
@@ -130,10 +155,11 @@ class SparseFlowProcessor:
 
     def annotate(self, result: FrameResult) -> np.ndarray:
         out = self.cfg.output
-        img = annotate_frame(result.frame, result.tracks, (), result.mask, out.trail,
-                             out.mask_inset, text=f"frame {result.index}")
-        shown = {t.id for t in result.tracks}
-        draw_feature_trails(img, [tr for tr in self.tracker.trails() if tr[0] in shown])
+        colors = self.colors.assign(t.id for t in result.tracks)
+        img = annotate_frame(result.frame, result.tracks, (), result.mask, out.trail, out.inset,
+                             inset_scale=out.inset_scale, text=f"frame {result.index}",
+                             colors=colors, legend=self.legend)
+        draw_feature_trails(img, [tr for tr in self.tracker.trails() if tr[0] in colors], colors)
         return img
 
     def background(self) -> np.ndarray | None:
@@ -179,7 +205,13 @@ class DenseFlowProcessor:
         self._moving += int(np.count_nonzero(mask))
 
     def annotate(self, result: FrameResult) -> np.ndarray:
-        return flow_to_bgr(self._last, self.max_magnitude)
+        img = flow_to_bgr(self._last, self.max_magnitude)
+        top = self.max_magnitude
+        if top is None:   # each frame at its own largest magnitude: the wheel's rim says which
+            top = float(cv2.magnitude(self._last[..., 0], self._last[..., 1]).max())
+        draw_flow_legend(img, top)
+        draw_label(img, f"frame {result.index}", (4, img.shape[0] - 4), (40, 40, 40), scale=None)
+        return img
 
     def background(self) -> np.ndarray | None:
         return None

@@ -20,6 +20,7 @@ from ..errors import InputError
 from ..io.atomic import AtomicFile, DiskFullError, OutputLock, atomic_write_bytes, free_bytes
 from ..io.mot import format_mot_rows, read_mot, write_mot
 from ..io.video import DISK_RESERVE, VideoSink, check_codec, extension_for
+from ..render.colors import TrackColors
 from ..render.streams import parse_streams, stream_image
 from ..tracking.gaps import fill_gaps
 from ..types import Annotations, FrameResult
@@ -223,10 +224,13 @@ class IntermediateWriter(Writer):
     def start(self, ctx: JobContext) -> None:
         self._ctx = ctx
         self._sinks = {s: VideoSink(p, ctx.fps, self.codec) for s, p in self.paths.items()}
+        # fed the same tracks frame by frame, it gives them the colours of the annotated video
+        self._colors = TrackColors()
 
     def write(self, result: FrameResult) -> None:
+        colors = self._colors.assign(t.id for t in result.tracks)
         for s, sink in self._sinks.items():
-            img = stream_image(s, result, self._ctx.processor.background())
+            img = stream_image(s, result, self._ctx.processor.background(), colors=colors)
             if img is not None:
                 sink.write(img)
 
