@@ -120,11 +120,22 @@ def _exit_now_if_still_reading(sources: list, code: int) -> None:
     os._exit(code)
 
 
-def accuracy_line(a: Mapping[str, float],
+def accuracy_line(a: Mapping[str, Any],
                   keys: tuple[str, ...] = ("HOTA", "MOTA", "IDF1", "recall", "precision")) -> str:
-    """The ``accuracy`` line of a command's printed summary."""
+    """The ``accuracy`` line of a command's printed summary, ending with the scoring
+    convention when ``a`` names one (``(scoring trackeval)``)."""
     return ("accuracy  " + "  ".join(f"{k} {a[k]:.3f}" for k in keys if k in a)
-            + (f"  IDSW {int(a['IDSW'])}" if "IDSW" in a else ""))
+            + (f"  IDSW {int(a['IDSW'])}" if "IDSW" in a else "")
+            + (f"  (scoring {a['scoring']})" if "scoring" in a else ""))
+
+
+def add_scoring_option(parser) -> None:
+    """``--scoring``: how zero-marked ground truth counts (the same option on every command
+    that scores tracks)."""
+    from ..evaluate.scoring import DEFAULT_SCORING, SCORING, SCORING_HELP
+
+    parser.add_argument("--scoring", choices=tuple(SCORING), default=DEFAULT_SCORING,
+                        help=SCORING_HELP)
 
 
 #: help of ``--fps``, the option of every command that reads video

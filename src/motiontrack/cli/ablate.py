@@ -13,6 +13,8 @@ import sys
 
 
 def register(sub: argparse._SubParsersAction) -> None:
+    from ._common import add_scoring_option
+
     p = sub.add_parser("ablate", help="switch the people modules on one by one and compare",
                        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("source", help="video, image folder or synth:NAME")
@@ -21,6 +23,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--set", dest="overrides", action="append", default=[], metavar="STAGE.PARAM=VALUE",
                    help="override one base config field, e.g. --set motion.method=knn (repeatable)")
     p.add_argument("--xi", type=float, default=0.75, help="localization threshold (default 0.75)")
+    add_scoring_option(p)
     p.add_argument("--rows", help="comma-separated row numbers to run (default all)")
     p.add_argument("-j", "--jobs", type=int, default=1, help="parallel processes")
     p.add_argument("--json", help="also write the table as JSON (- for standard output; the "
@@ -40,7 +43,7 @@ def cmd_ablate(args) -> int:
         check_writable([Path(args.json)], args.force)
     rows = select_rows(args.rows)
     table = run_ablation(args.source, args.gt, load_config(args.config, args.overrides), rows,
-                         xi=args.xi, jobs=args.jobs)
+                         xi=args.xi, jobs=args.jobs, scoring=args.scoring)
     (sys.stderr if is_stdout(args.json) else sys.stdout).write(format_table(table))
     if args.json:
         atomic_write_text(args.json, json.dumps(table, indent=2) + "\n")

@@ -20,8 +20,9 @@ import numpy as np
 
 from ..errors import ConfigError, InputError
 from ..io.atomic import atomic_write_text, check_writable, is_stdout
+from ..evaluate.scoring import DEFAULT_SCORING, SCORING_SUMMARY, ignores_zero_marked
 from ..types import Annotations
-from ._common import frame_range
+from ._common import add_scoring_option, frame_range
 
 log = logging.getLogger(__name__)
 
@@ -32,6 +33,8 @@ TABLE_KEYS = ("HOTA", "DetA", "AssA", "LocA", "MOTA", "MOTP", "IDF1", "IDP", "ID
               "MT", "PT", "ML", "TP", "FP", "FN", "pixel_precision", "pixel_recall",
               "object_area_precision", "object_area_recall", "fragmentation",
               "localized_object_precision", "localized_object_recall")
+#: columns that are counts, printed as integers; every other column is a ratio, printed in percent
+COUNT_KEYS = frozenset({"IDSW", "Frag", "MT", "PT", "ML", "TP", "FP", "FN"})
 _SHORT = {"pixel_precision": "pixP", "pixel_recall": "pixR", "object_area_precision": "objAP",
           "object_area_recall": "objAR", "fragmentation": "frag",
           "localized_object_precision": "locP", "localized_object_recall": "locR"}
@@ -43,8 +46,10 @@ def register(subparsers) -> None:
         "evaluate",
         help="score tracker output against ground truth (CLEAR-MOT, Identity, HOTA, framewise)",
         description="Score tracker output against ground truth. CLEAR-MOT, Identity and HOTA follow "
-                    "TrackEval and the MOTChallenge conventions (IoU >= 0.5; distractor classes and "
-                    "zero-marked gt rows are ignored); framewise metrics follow ViPER-PE.",
+                    "TrackEval and the MOTChallenge conventions (IoU >= 0.5; tracker boxes on "
+                    "distractor classes are removed, zero-marked gt rows are dropped; --scoring "
+                    "ignore-regions drops the tracker boxes on them too); framewise metrics follow "
+                    "ViPER-PE. The table prints ratios in percent and counts as integers.",
     )
     p.add_argument("--gt", required=True, help="ground-truth file (MOT CSV, ViPER, CVML, CVAT, JSON)")
     p.add_argument("--pred", required=True, action="append",
@@ -58,10 +63,7 @@ def register(subparsers) -> None:
                         "(default: all that are available)")
     p.add_argument("--xi", type=float, default=0.75,
                    help="localization threshold of the framewise metrics (default 0.75)")
-    p.add_argument("--ignore-zero-marked", action="store_true",
-                   help="treat gt rows with consider = 0 as ignore regions: boxes on them are not "
-                        "false positives (PETS/MOT15 convention; TrackEval's default only drops the "
-                        "gt rows)")
+    add_scoring_option(p)
     p.add_argument("--json", type=Path, metavar="OUT.json",
                    help="write the metrics as JSON (one flat object; a folder --pred gives "
                         "{tracker: object}); - writes them to standard output and the table to "
@@ -139,8 +141,11 @@ def _clip_frames(ann: Annotations, frames: tuple[int, int | None] | None) -> Ann
 
 def evaluate_one(gt: Annotations, pred: Annotations, metrics: tuple[str, ...], xi: float,
                  frames: tuple[int, int | None] | None = None,
-                 ignore_zero_marked: bool = False) -> tuple[dict, list[dict]]:
-    """Flat metrics and per-frame rows for one tracker (the command's work, without I/O)."""
+                 scoring: str = DEFAULT_SCORING) -> tuple[dict, list[dict]]:
+    """Flat metrics and per-frame rows for one tracker (the command's work, without I/O).
+
+    ``scoring`` names how zero-marked gt rows count (:data:`~motiontrack.evaluate.scoring.SCORING`);
+    with tracking metrics the flat dict names it under ``"scoring"``."""
     from ..evaluate import mot
 
     gt, pred = _clip_frames(gt, frames), _clip_frames(pred, frames)
@@ -148,7 +153,7 @@ def evaluate_one(gt: Annotations, pred: Annotations, metrics: tuple[str, ...], x
     rows: dict[int, dict] = {}
     tracking = tuple(m for m in metrics if m in TRACKING)
     if tracking:
-        data = mot.preprocess(gt, pred, ignore_zero_marked=ignore_zero_marked)
+        data = mot.preprocess(gt, pred, ignore_zero_marked=ignores_zero_marked(scoring))
         res = {}
         if "clear" in tracking:
             per: list[dict] = []
@@ -160,6 +165,7 @@ def evaluate_one(gt: Annotations, pred: Annotations, metrics: tuple[str, ...], x
         if "hota" in tracking:
             res["hota"] = mot.hota_metrics(data)
         flat.update(mot.flatten(res))
+        flat["scoring"] = scoring
     if "framewise" in metrics:
         from ..evaluate.framewise import evaluate_framewise
 
@@ -175,23 +181,31 @@ def evaluate_one(gt: Annotations, pred: Annotations, metrics: tuple[str, ...], x
     return flat, [rows[f] for f in sorted(rows)]
 
 
-def _fmt(v) -> str:
-    if isinstance(v, (int, np.integer)):
-        return str(int(v))
+def _fmt(key: str, v) -> str:
+    """One cell: a count as an integer, a ratio in percent with two decimals, whatever its value
+    (MOTA has no lower bound: -250.00 is MOTA -2.5), so a column has one format."""
     if v is None or (isinstance(v, float) and math.isnan(v)):
         return "-"
-    return f"{100 * v:.2f}" if abs(v) <= 1.5 else f"{v:.4g}"
+    if key in COUNT_KEYS:
+        return str(int(round(float(v))))
+    return f"{100 * float(v):.2f}"
 
 
 def format_table(results: dict[str, dict]) -> str:
-    """A plain-text table: one row per tracker, one column per metric (ratios in percent)."""
+    """A plain-text table: one row per tracker, one column per metric (counts as integers,
+    ratios in percent), and a last line naming the scoring convention of the tracking metrics."""
     keys = [k for k in TABLE_KEYS if any(k in r for r in results.values())]
     head = ["tracker"] + [_SHORT.get(k, k) for k in keys]
-    body = [[name] + [_fmt(r.get(k)) for k in keys] for name, r in results.items()]
+    body = [[name] + [_fmt(k, r.get(k)) for k in keys] for name, r in results.items()]
     widths = [max(len(row[i]) for row in [head] + body) for i in range(len(head))]
     lines = ["  ".join(c.rjust(w) if i else c.ljust(w) for i, (c, w) in enumerate(zip(row, widths)))
              for row in [head] + body]
-    return "\n".join(lines[:1] + ["-" * len(lines[0])] + lines[1:]) + "\n"
+    lines = lines[:1] + ["-" * len(lines[0])] + lines[1:]
+    scorings = list(dict.fromkeys(r["scoring"] for r in results.values() if "scoring" in r))
+    if scorings:
+        lines.append("ratios in percent; " + "; ".join(f"scoring {s}: {SCORING_SUMMARY[s]}"
+                                                      for s in scorings))
+    return "\n".join(lines) + "\n"
 
 
 def _jsonable(v):
@@ -223,12 +237,13 @@ def run(args: argparse.Namespace) -> int:
         pred = _read(path, "result")
         log.info("evaluating %s (%d boxes) against %s (%d boxes)", path, len(pred), args.gt, len(gt))
         try:
-            flat, rows = evaluate_one(gt, pred, metrics, args.xi, args.frames,
-                                      args.ignore_zero_marked)
+            flat, rows = evaluate_one(gt, pred, metrics, args.xi, args.frames, args.scoring)
         except InputError as exc:  # name the file: a folder may hold many
             raise InputError(f"{path}: {exc}") from None
         results[name] = flat
-        per_rows += [{"tracker": name, **r} for r in rows]
+        # the per-frame counts depend on the convention too: each row names it
+        tag = {"scoring": flat["scoring"]} if "scoring" in flat else {}
+        per_rows += [{"tracker": name, **tag, **r} for r in rows]
     # the table goes to standard error when standard output carries a file
     (sys.stderr if any(map(is_stdout, outputs)) else sys.stdout).write(format_table(results))
     if args.json:

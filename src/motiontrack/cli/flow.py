@@ -20,6 +20,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     from ._common import FPS_HELP
 
     from ._common import CodecOption
+    from ._common import add_scoring_option
 
     p = sub.add_parser(
         "flow", help="follow motion with sparse (Lucas-Kanade) or dense (Farneback) optical flow",
@@ -48,6 +49,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--codec", action=CodecOption)
     p.add_argument("--gt", help="sparse: ground truth to score against (synth: sources bring "
                                 "their own)")
+    add_scoring_option(p)
     p.add_argument("--force", action="store_true", help="overwrite existing outputs")
     p.set_defaults(func=cmd_flow)
 
@@ -97,15 +99,11 @@ def cmd_flow(args) -> int:
     if args.mode == "sparse":
         gt = read_gt(args.gt) if args.gt else None
         job = sparse_flow_job(args.source, cfg, args.out, sparse_params(args.params),
-                              force=args.force, gt=gt)
+                              force=args.force, gt=gt, scoring=args.scoring)
     else:
         if args.params:
             raise ConfigError("--param applies to --mode sparse; dense flow takes "
                               "--set motion.farneback.NAME=VALUE")
-        if args.gt:
-            # dense flow makes no tracks, so there is nothing to score against ground truth
-            raise ConfigError("--gt applies to --mode sparse (its tracks are scored); dense flow "
-                              "makes no tracks to score")
         job = dense_flow_job(args.source, cfg, args.out, max_magnitude=args.max_magnitude,
                              force=args.force)
     log.info("source %s", job.info.describe())
@@ -114,6 +112,10 @@ def cmd_flow(args) -> int:
     print("\n".join(_report(s)))
     return 0
 
+        if args.gt:
+            # dense flow makes no tracks, so there is nothing to score against ground truth
+            raise ConfigError("--gt applies to --mode sparse (its tracks are scored); dense flow "
+                              "makes no tracks to score")
 
 def _report(s) -> list[str]:
     from ._common import accuracy_line

@@ -10,6 +10,8 @@ log = logging.getLogger("motiontrack")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
+    from ._common import add_scoring_option
+
     p = sub.add_parser(
         "sweep", help="parameter study: run the pipeline over a grid, score it, plot PR curves",
         description="Run the pipeline once per point of the --param grid on SOURCE (or every "
@@ -30,6 +32,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="override one base config field (repeatable)")
     p.add_argument("--xi", type=float, default=0.75,
                    help="localization threshold of the localized object metrics (default 0.75)")
+    add_scoring_option(p)
     p.add_argument("--save", default="", metavar="STREAMS",
                    help="also write per-run videos: background,difference,motion,annotated")
     p.add_argument("-j", "--jobs", type=int, default=1, help="parallel worker processes (default 1)")
@@ -73,7 +76,7 @@ def cmd_sweep(args) -> int:
             raise ConfigError("give at least one --param stage.name=v1,v2,... (or --replay DIR)")
         cfg = load_config(args.config, args.overrides)
         study = study_from_args(args.source, args.gt, args.param, cfg, args.sequences, args.xi,
-                                parse_streams(args.save))
+                                parse_streams(args.save), scoring=args.scoring)
     n = study.n_runs
     log.info("%d runs (%d grid points x %d sequences)%s", n, n // len(study.sequences), len(study.sequences),
              f" on {args.cluster}" if args.cluster else (f" with {args.jobs} processes" if args.jobs > 1 else ""))
@@ -82,6 +85,7 @@ def cmd_sweep(args) -> int:
         res = run_sweep(study, args.out, jobs=args.jobs, cluster=args.cluster, progress=bar.update,
                         figures=not args.no_figures, force=args.force, resume=args.resume)
     _print_best(res.rows, study.keys)
+    print(f"scoring   {study.scoring} (HOTA, MOTA and the other tracking metrics)")
     if args.replay:
         from pathlib import Path
 

@@ -13,6 +13,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     from ._common import FPS_HELP
 
     from ._common import CodecOption
+    from ._common import add_scoring_option
 
     p = sub.add_parser(
         "track", help="track moving objects in a video, camera, stream, image folder or synth: scene",
@@ -38,6 +39,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="also write intermediate movies: background,difference,motion,annotated")
     p.add_argument("--codec", action=CodecOption)
     p.add_argument("--gt", help="ground truth to score the run against (any supported format)")
+    add_scoring_option(p)
     p.add_argument("--detections", help="MOTChallenge det.txt: track these detections instead of "
                                         "detecting motion")
     p.add_argument("--min-score", type=float, default=None,
@@ -109,7 +111,7 @@ def cmd_track(args) -> int:
             det = det.select(det.scores >= args.min_score)
     job = track_job(args.source, cfg, args.out, force=args.force, gt=gt, detections=det,
                     show=_viewer() if args.show else None, save=args.save,
-                    mask_images=args.mask_images)
+                    mask_images=args.mask_images, scoring=args.scoring)
     log.info("source %s", job.info.describe())
     with frame_loop(job.expected_frames()) as loop:
         summary = job.run(progress=loop.update, should_stop=loop.stop)

@@ -11,6 +11,8 @@ log = logging.getLogger("motiontrack")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
+    from ._common import add_scoring_option
+
     p = sub.add_parser(
         "tune", help="search parameters that maximise a metric (needs optuna)",
         description="Search the --param space with Optuna (seeded TPE) for the best mean --metric on "
@@ -36,6 +38,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--set", dest="overrides", action="append", default=[], metavar="STAGE.PARAM=VALUE",
                    help="override one base config field, e.g. --set motion.method=knn (repeatable)")
     p.add_argument("--xi", type=float, default=0.75, help="localization threshold (default 0.75)")
+    add_scoring_option(p)
     p.add_argument("-j", "--jobs", type=int, default=1, help="processes per trial (over sequences)")
     p.add_argument("-o", "--out", required=True, help="output folder")
     p.add_argument("--force", action="store_true", help="overwrite an earlier tuning in --out")
@@ -101,6 +104,7 @@ def cmd_tune(args) -> int:
 
     from ..config import load_config
     from ..errors import ConfigError, printable
+    from ..studies.sweep import TRACKING_KEYS
     from ..studies.tune import parse_space, require_optuna, tune, write_tune_outputs
 
     from pathlib import Path
@@ -125,12 +129,15 @@ def cmd_tune(args) -> int:
     with tqdm(total=args.trials, unit="trial", disable=None, file=sys.stderr, dynamic_ncols=True) as bar:
         res = tune(train, val, space, cfg, metric=args.metric,
                    direction="minimize" if args.minimize else "maximize", n_trials=args.trials,
-                   seed=args.seed, xi=args.xi, jobs=args.jobs, progress=bar.update)
+                   seed=args.seed, xi=args.xi, jobs=args.jobs, progress=bar.update,
+                   scoring=args.scoring)
     paths = write_tune_outputs(res, args.out)
     print("best      " + "  ".join(f"{k}={v:.6g}" if isinstance(v, float) else printable(f"{k}={v}")
                                    for k, v in res.best_params.items()))
     print(f"train     {args.metric} {res.train_score:.4f} (mean over {len(train)} sequence(s))")
     if res.validation_score is not None:
         print(f"validate  {args.metric} {res.validation_score:.4f} (mean over {len(val)} sequence(s))")
+    if args.metric in TRACKING_KEYS:
+        print(f"scoring   {res.scoring}")
     print(f"outputs   {printable(', '.join(paths.values()))}")
     return 0

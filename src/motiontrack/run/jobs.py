@@ -7,6 +7,7 @@
 
 from __future__ import annotations
 
+import functools
 import logging
 from dataclasses import replace
 from pathlib import Path
@@ -18,6 +19,7 @@ from ..calibrate import fit_to_image, load_camera
 from ..config import PipelineConfig, SourceConfig, save_config
 from ..errors import ConfigError
 from ..evaluate.score import score_run
+from ..evaluate.scoring import DEFAULT_SCORING, ignores_zero_marked
 from ..io.sources import Source
 from ..imaging import scaled_size
 from ..io.video import extension_for
@@ -51,13 +53,16 @@ def _opened(source: Any, sc: SourceConfig, build: Callable[[Source], Job]) -> Jo
 def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: bool = False,
               gt: Annotations | None = None, detections: Annotations | None = None,
               show: Callable[[np.ndarray], bool] | None = None,
-              save: Iterable[str] | str = (), mask_images: str | Path | None = None) -> Job:
+              save: Iterable[str] | str = (), mask_images: str | Path | None = None,
+              scoring: str = DEFAULT_SCORING) -> Job:
     """``motiontrack track``: ``tracks.txt``, the annotated video, the mask video and the
     intermediate movies as ``cfg.output`` and ``save`` ask, the mask of every frame as
     ``bin%06d.png`` in the folder ``mask_images``, the live view with ``show``, ``gt.txt`` and
     the accuracy with ground truth (given, or the source's own), ``summary.json`` and
-    ``config.toml``."""
+    ``config.toml``. ``scoring`` names how zero-marked ground truth counts
+    (:data:`~motiontrack.evaluate.scoring.SCORING`)."""
     out = Path(out_dir)
+    ignores_zero_marked(scoring)   # an unknown name fails before the source opens
     if mask_images is not None and detections is not None:
         raise ConfigError("--mask-images needs motion masks; with --detections there are none")
     streams = parse_streams(save)
@@ -92,7 +97,8 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
         if show is not None:
             writers.append(ViewerWriter(show))
         if truth is not None:
-            writers.append(ScoreWriter(out, truth, tracks, score_run))
+            writers.append(ScoreWriter(out, truth, tracks,
+                                       functools.partial(score_run, scoring=scoring)))
         return Job(src, proc, writers, out, force=force, config=(save_config, cfg))
 
     return _opened(source, cfg.source, build)
@@ -125,10 +131,12 @@ def follow_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, tracker: S
 
 def sparse_flow_job(source: Any, cfg: PipelineConfig, out_dir: str | Path,
                     params: SparseFlowParams, *, force: bool = False,
-                    gt: Annotations | None = None) -> Job:
+                    gt: Annotations | None = None, scoring: str = DEFAULT_SCORING) -> Job:
     """``motiontrack flow --mode sparse``: ``tracks.txt``, the annotated video with feature
-    trails, the mask video, ``summary.json`` (accuracy with ground truth) and ``config.toml``."""
+    trails, the mask video, ``summary.json`` (accuracy with ground truth, zero-marked rows
+    counted as ``scoring`` names) and ``config.toml``."""
     out = Path(out_dir)
+    ignores_zero_marked(scoring)
     codec = cfg.output.codec
 
     def build(src: Source) -> Job:
@@ -140,7 +148,9 @@ def sparse_flow_job(source: Any, cfg: PipelineConfig, out_dir: str | Path,
         if cfg.output.mask_video:
             writers.append(MaskVideoWriter(out, codec))
         if truth is not None:
-            writers.append(ScoreWriter(out, truth, tracks, score_run, write_gt=False))
+            writers.append(ScoreWriter(out, truth, tracks,
+                                       functools.partial(score_run, scoring=scoring),
+                                       write_gt=False))
         return Job(src, SparseFlowProcessor(cfg, src.info, params), writers, out, force=force,
                    config=(save_config, cfg))
 

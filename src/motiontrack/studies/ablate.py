@@ -11,6 +11,7 @@ from typing import Any, Mapping, Sequence
 
 from ..config import PipelineConfig, load_config, to_dict
 from ..errors import ConfigError
+from ..evaluate.scoring import DEFAULT_SCORING, ignores_zero_marked
 from .sweep import RunSpec, SequenceSpec, execute, parse_param
 
 __all__ = ["ROWS", "COLUMNS", "select_rows", "run_ablation", "format_table"]
@@ -55,21 +56,25 @@ def select_rows(text: str | None) -> list[tuple[str, tuple[str, ...]]]:
 
 def run_ablation(source: str, gt: str | None, base: PipelineConfig,
                  rows: Sequence[tuple[str, tuple[str, ...]]] = ROWS, xi: float = 0.75,
-                 jobs: int = 1) -> list[dict[str, Any]]:
-    """Run every row on ``source`` and score it; one dict per row with ``configuration`` and the
-    :data:`COLUMNS`."""
+                 jobs: int = 1, scoring: str = DEFAULT_SCORING) -> list[dict[str, Any]]:
+    """Run every row on ``source`` and score it; one dict per row with ``configuration``, the
+    :data:`COLUMNS` and ``scoring``, how zero-marked ground truth counted in the tracking metrics
+    (:data:`~motiontrack.evaluate.scoring.SCORING`)."""
     if not 0.0 <= xi <= 1.0:
         raise ConfigError(f"--xi must be in [0, 1], got {xi}")
+    ignores_zero_marked(scoring)
     seq = SequenceSpec("seq", source, gt)
     specs = []
     for k, (_label, overrides) in enumerate(rows):
         load_config(None, overrides)  # validate before any run
         params = tuple((key, values[0]) for key, values in map(parse_param, overrides))
-        specs.append(RunSpec(run=k, params=params, sequence=seq, base_config=to_dict(base), xi=xi))
-    return [_row(label, res["row"]) for (label, _), res in zip(rows, execute(specs, jobs=jobs))]
+        specs.append(RunSpec(run=k, params=params, sequence=seq, base_config=to_dict(base), xi=xi,
+                             scoring=scoring))
+    return [_row(label, res["row"], scoring)
+            for (label, _), res in zip(rows, execute(specs, jobs=jobs))]
 
 
-def _row(label: str, r: Mapping[str, Any]) -> dict[str, Any]:
+def _row(label: str, r: Mapping[str, Any], scoring: str) -> dict[str, Any]:
     tp, fp, fn = r["TP"], r["FP"], r["FN"]
     return {
         "configuration": label,
@@ -78,13 +83,18 @@ def _row(label: str, r: Mapping[str, Any]) -> dict[str, Any]:
         "recall": tp / (tp + fn) if tp + fn else 0.0,
         "precision": tp / (tp + fp) if tp + fp else 0.0,
         "MOTA": r["MOTA"], "IDF1": r["IDF1"], "HOTA": r["HOTA"],
+        "scoring": scoring,
     }
 
 
 def format_table(table: Sequence[Mapping[str, Any]]) -> str:
-    """The rows as a fixed-width text table, one line per configuration."""
+    """The rows as a fixed-width text table, one line per configuration, then the scoring
+    convention of the tracking metrics."""
     w = max([len("configuration")] + [len(t["configuration"]) for t in table])
     out = [f"{'configuration':<{w}}  " + " ".join(f"{h:>7}" for h in COLUMNS.values())]
     for t in table:
         out.append(f"{t['configuration']:<{w}}  " + " ".join(f"{t[c]:>7.3f}" for c in COLUMNS))
+    scorings = list(dict.fromkeys(t["scoring"] for t in table if "scoring" in t))
+    if scorings:
+        out.append(f"scoring {', '.join(scorings)}")
     return "\n".join(out) + "\n"

@@ -5,7 +5,8 @@ one point of the grid applied to a base configuration, on one or more sequences;
 detector's regions (the *detections*) are scored with the framewise metrics of §4.1
 (:func:`~motiontrack.evaluate.framewise.evaluate_framewise`: pixel, object-area and localized
 object precision/recall) and the confirmed tracks with the same framewise metrics plus
-CLEAR-MOT / Identity / HOTA (:func:`~motiontrack.evaluate.mot.evaluate_tracking`).
+CLEAR-MOT / Identity / HOTA (:func:`~motiontrack.evaluate.mot.evaluate_tracking`, zero-marked
+ground truth counted as the study's ``scoring`` names, :mod:`motiontrack.evaluate.scoring`).
 
 Grid syntax (one ``--param`` per parameter, the grid is their Cartesian product)::
 
@@ -54,6 +55,7 @@ from ..config import PipelineConfig, apply_overrides, from_dict, save_config, to
 from ..errors import ConfigError, InputError, printable
 from ..evaluate.framewise import evaluate_framewise
 from ..evaluate.mot import evaluate_tracking
+from ..evaluate.scoring import DEFAULT_SCORING, ignores_zero_marked
 from ..io.annotations import read_annotations
 from ..io.atomic import (OutputLock, atomic_write_bytes, atomic_write_text, check_writable,
                          remove_leftover_temps, remove_outputs)
@@ -305,6 +307,7 @@ class RunSpec:
     xi: float = 0.75
     save: tuple[str, ...] = ()
     out_dir: str | None = None
+    scoring: str = DEFAULT_SCORING
 
     def overrides(self) -> list[str]:
         return [f"{k}={format_value(v)}" for k, v in self.params]
@@ -329,6 +332,9 @@ class Study:
     save : tuple of str
         Intermediate streams written per run (``background``, ``difference``, ``motion``,
         ``annotated``).
+    scoring : str
+        How zero-marked ground truth counts in the tracking metrics
+        (:data:`~motiontrack.evaluate.scoring.SCORING`).
     """
 
     sequences: tuple[SequenceSpec, ...]
@@ -336,6 +342,7 @@ class Study:
     base_config: Mapping[str, Any] = field(repr=False)
     xi: float = 0.75
     save: tuple[str, ...] = ()
+    scoring: str = DEFAULT_SCORING
 
     def __post_init__(self) -> None:
         if not self.sequences:
@@ -359,6 +366,7 @@ class Study:
             raise ConfigError(f"--param keys must be distinct, got {keys}")
         if not (0.0 <= float(self.xi) <= 1.0):
             raise ConfigError(f"xi must be in [0, 1], got {self.xi}")
+        ignores_zero_marked(self.scoring)
         bad = sorted(set(self.save) - set(SAVE_STREAMS))
         if bad:
             raise ConfigError(f"unknown --save stream(s) {', '.join(bad)}; valid: {', '.join(SAVE_STREAMS)}")
@@ -388,7 +396,7 @@ class Study:
         """One :class:`RunSpec` per grid point × sequence (run numbers start at 1)."""
         od = str(Path(out_dir).resolve()) if out_dir is not None else None
         return [RunSpec(run=i, params=pt, sequence=seq, base_config=self.base_config, xi=self.xi,
-                        save=self.save, out_dir=od)
+                        save=self.save, out_dir=od, scoring=self.scoring)
                 for i, pt in enumerate(self.points(), 1) for seq in self.sequences]
 
     def as_dict(self) -> dict[str, Any]:
@@ -397,7 +405,8 @@ class Study:
             "sequences": [s.as_dict() for s in self.sequences],
             "grid": [{"key": k, "values": list(v)} for k, v in self.grid],
             "base_config": self.base_config,
-            "evaluation": {"xi": self.xi, "detections": "motion regions (framewise, thesis §4.1)",
+            "evaluation": {"xi": self.xi, "scoring": self.scoring,
+                           "detections": "motion regions (framewise, thesis §4.1)",
                            "tracks": "confirmed tracks (framewise + CLEAR-MOT/Identity/HOTA, IoU 0.5)"},
             "save": list(self.save),
         }
@@ -417,6 +426,8 @@ class Study:
             base_config=d["base_config"],
             xi=float(d["evaluation"]["xi"]),
             save=tuple(d.get("save", ())),
+            # a study.json without "scoring" had its tracks scored with ignore regions
+            scoring=d["evaluation"].get("scoring", "ignore-regions"),
         )
 
 
@@ -440,7 +451,8 @@ def study_meta_problem(meta: Any) -> str | None:
 
     Checked: the object, ``sequences`` (objects with string ``name`` and ``source``, string or
     null ``gt``, string ``group``), ``grid`` (``{"key": string, "values": [number | boolean |
-    string, ...]}``), ``base_config`` and ``evaluation`` objects with a number ``xi``, and when
+    string, ...]}``), ``base_config`` and ``evaluation`` objects with a number ``xi`` (and a
+    string ``scoring`` when present), and when
     present ``save`` (strings), ``versions`` (an object) and ``runs`` (a number). The values
     themselves are checked by :class:`Study`.
     """
@@ -478,6 +490,9 @@ def study_meta_problem(meta: Any) -> str | None:
             return f'"{key}" must be an object, got {_json_type(meta[key])}'
     if not _is_number(meta["evaluation"].get("xi")):
         return f'"evaluation" needs a number "xi", got {_json_type(meta["evaluation"].get("xi"))}'
+    if not isinstance(meta["evaluation"].get("scoring", ""), str):
+        got = _json_type(meta["evaluation"]["scoring"])
+        return f'"evaluation": "scoring" must be a string, got {got}'
     save = meta.get("save", [])
     if not isinstance(save, list) or not all(isinstance(x, str) for x in save):
         return '"save" must be a list of strings'
@@ -566,8 +581,8 @@ def execute_run(spec: RunSpec) -> dict[str, Any]:
         row.update({prefix + k: float(v) for k, v in res.items()})
         for label, (pk, rk) in FRAMEWISE_PAIRS.items():
             row[f"{prefix}{label.replace(' ', '_')}_f1"] = _f1(res[pk], res[rk])
-    # consider = 0 rows are ignore regions, as when `motiontrack track --gt` scores a run
-    mot = evaluate_tracking(gt, tracks, ignore_zero_marked=True)
+    # zero-marked rows count as `motiontrack track --gt --scoring` counts them
+    mot = evaluate_tracking(gt, tracks, ignore_zero_marked=ignores_zero_marked(spec.scoring))
     row.update({k: float(mot[k]) for k in TRACKING_KEYS if k in mot})
     return {"row": row, "files": files}
 
@@ -1037,7 +1052,7 @@ def check_ground_truth(sequences: Iterable[SequenceSpec]) -> None:
 
 def study_from_args(sources: Sequence[str], gt: Sequence[str] | None, params: Iterable[str],
                     base_config: Any, manifest: str | Path | None = None, xi: float = 0.75,
-                    save: Iterable[str] = ()) -> Study:
+                    save: Iterable[str] = (), scoring: str = DEFAULT_SCORING) -> Study:
     """Build a :class:`Study` from command-line style inputs (``SOURCE``, ``--gt``, ``--param``,
     ``--sequences``)."""
     seqs: list[SequenceSpec] = []
@@ -1065,4 +1080,4 @@ def study_from_args(sources: Sequence[str], gt: Sequence[str] | None, params: It
     check_ground_truth(seqs)
     grid = tuple(parse_param(p) for p in params)
     return Study(sequences=tuple(seqs), grid=grid, base_config=to_dict(base_config), xi=xi,
-                 save=tuple(save))
+                 save=tuple(save), scoring=scoring)

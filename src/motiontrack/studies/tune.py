@@ -29,6 +29,7 @@ from typing import Any, Callable, Sequence
 
 from ..config import PipelineConfig, apply_overrides, from_dict, save_config, to_dict
 from ..errors import ConfigError
+from ..evaluate.scoring import DEFAULT_SCORING, ignores_zero_marked
 from ..io.atomic import atomic_write_text
 from .sweep import (RunSpec, SequenceSpec, _parse_literal, _range_values, check_ground_truth,
                     execute, format_value, write_table)
@@ -142,11 +143,12 @@ class TuneResult:
     trials: list[dict[str, Any]] = field(repr=False)
     validation_rows: list[dict[str, Any]] = field(repr=False)
     best_config: Any = field(repr=False, default=None)
+    scoring: str = DEFAULT_SCORING
 
     def as_dict(self) -> dict[str, Any]:
         return {"metric": self.metric, "direction": self.direction, "best_params": self.best_params,
                 "train_score": self.train_score, "validation_score": self.validation_score,
-                "n_trials": len(self.trials)}
+                "n_trials": len(self.trials), "scoring": self.scoring}
 
 
 def _check_key(base: dict[str, Any], key: str) -> None:
@@ -176,7 +178,8 @@ def _score(rows: Sequence[dict[str, Any]], metric: str) -> float:
 def tune(train: Sequence[SequenceSpec], validation: Sequence[SequenceSpec], space: Sequence[SearchParam],
          base_config: Any, *, metric: str = "det_object_f1", direction: str = "maximize",
          n_trials: int = 20, seed: int = 0, xi: float = 0.75, jobs: int = 1,
-         progress: Callable[[int], None] | None = None) -> TuneResult:
+         progress: Callable[[int], None] | None = None,
+         scoring: str = DEFAULT_SCORING) -> TuneResult:
     """Search ``space`` for the configuration with the best mean ``metric`` on ``train``.
 
     Parameters
@@ -190,6 +193,8 @@ def tune(train: Sequence[SequenceSpec], validation: Sequence[SequenceSpec], spac
     seed : seed of the TPE sampler (same seed, same trials).
     jobs : processes used to run the training sequences of one trial in parallel.
     progress : called with 1 after each trial.
+    scoring : how zero-marked ground truth counts in the tracking metrics
+        (:data:`~motiontrack.evaluate.scoring.SCORING`).
     """
     optuna = require_optuna()
     if not train:
@@ -205,6 +210,7 @@ def tune(train: Sequence[SequenceSpec], validation: Sequence[SequenceSpec], spac
         raise ConfigError(f"-j must be >= 1, got {jobs}")
     if not 0.0 <= xi <= 1.0:
         raise ConfigError(f"--xi must be in [0, 1], got {xi}")
+    ignores_zero_marked(scoring)
     keys = [p.key for p in space]
     if len(set(keys)) != len(keys):
         raise ConfigError(f"--param keys must be distinct, got {keys}")
@@ -214,7 +220,8 @@ def tune(train: Sequence[SequenceSpec], validation: Sequence[SequenceSpec], spac
     check_ground_truth([*train, *validation])
 
     def specs(params: dict[str, Any], seqs: Sequence[SequenceSpec], run: int) -> list[RunSpec]:
-        return [RunSpec(run=run, params=tuple(params.items()), sequence=s, base_config=base, xi=xi)
+        return [RunSpec(run=run, params=tuple(params.items()), sequence=s, base_config=base, xi=xi,
+                        scoring=scoring)
                 for s in seqs]
 
     trials: list[dict[str, Any]] = []
@@ -251,7 +258,8 @@ def tune(train: Sequence[SequenceSpec], validation: Sequence[SequenceSpec], spac
     val_score = _score(val_rows, metric) if validation else None
     return TuneResult(metric=metric, direction=direction, best_params=best,
                       train_score=float(study.best_value), validation_score=val_score,
-                      trials=trials, validation_rows=val_rows, best_config=best_cfg)
+                      trials=trials, validation_rows=val_rows, best_config=best_cfg,
+                      scoring=scoring)
 
 
 def write_tune_outputs(res: TuneResult, out_dir: str | Path) -> dict[str, str]:
