@@ -46,8 +46,8 @@ from dataclasses import dataclass
 from typing import Iterable, Mapping, Sequence
 
 import numpy as np
-from scipy.optimize import linear_sum_assignment
 
+from ..assignment import linear_sum_assignment
 from ..errors import ConfigError, InputError
 from ..types import Annotations
 from .framewise import evaluate_framewise
