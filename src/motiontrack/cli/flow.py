@@ -104,6 +104,10 @@ def cmd_flow(args) -> int:
         if args.params:
             raise ConfigError("--param applies to --mode sparse; dense flow takes "
                               "--set motion.farneback.NAME=VALUE")
+        if args.gt:
+            # dense flow makes no tracks, so there is nothing to score against ground truth
+            raise ConfigError("--gt applies to --mode sparse (its tracks are scored); dense flow "
+                              "makes no tracks to score")
         job = dense_flow_job(args.source, cfg, args.out, max_magnitude=args.max_magnitude,
                              force=args.force)
     log.info("source %s", job.info.describe())
@@ -112,10 +116,6 @@ def cmd_flow(args) -> int:
     print("\n".join(_report(s)))
     return 0
 
-        if args.gt:
-            # dense flow makes no tracks, so there is nothing to score against ground truth
-            raise ConfigError("--gt applies to --mode sparse (its tracks are scored); dense flow "
-                              "makes no tracks to score")
 
 def _report(s) -> list[str]:
     from ._common import accuracy_line
