@@ -71,7 +71,7 @@ def test_missing_file(tmp_path):
 
 
 def test_sections_validate_directly():
-    with pytest.raises(ConfigError, match="RegionsConfig.max_size"):
+    with pytest.raises(ConfigError, match="regions.max_size must be in"):
         RegionsConfig(max_size=2.0)
     assert MotionConfig().params_for("mog2")["history"] == 500
     assert to_dict(PipelineConfig())["motion"]["method"] == "knn"

@@ -339,7 +339,8 @@ def test_a_failed_run_leaves_no_folder_it_created(tmp_path):
 
 def _sweep(out, values, force=False, **kw):
     study = study_from_args(["synth:walker?n_frames=4"], None,
-                            [f"motion.median.threshold={values}"], load_config(None, []))
+                            [f"motion.median.threshold={values}"],
+                            load_config(None, ["motion.method=median"]))
     return run_sweep(study, out, figures=False, force=force, **kw)
 
 

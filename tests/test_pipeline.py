@@ -402,7 +402,7 @@ def test_knn_model_size_reaches_opencv_and_the_fast_preset_keeps_identities():
     pred, _ = run_scene(spec, ["motion.knn.n_samples=3", "motion.knn.knn_samples=1"])
     res = evaluate_tracking(parse_synth_spec(spec).ground_truth(), pred, ignore_zero_marked=True)
     assert res["IDSW"] == 0 and res["MOTA"] >= 0.9
-    with pytest.raises(ConfigError, match="knn_samples must be at most n_samples"):
+    with pytest.raises(ConfigError, match="motion.knn.knn_samples must be at most motion.knn.n_samples"):
         load_config(None, ["motion.knn.n_samples=3", "motion.knn.knn_samples=4"])
     with pytest.raises(ConfigError, match="knn_samples"):
         DETECTORS.create("knn", n_samples=3, knn_samples=5)

@@ -187,7 +187,8 @@ def test_resumed_real_sweep_equals_an_uninterrupted_one(tmp_path, monkeypatch):
 # ------------------------------------------------------------------------------- report
 def make_study(folder, figures=()):
     """A study folder as a sweep leaves it, without running anything."""
-    st = study_from_args([WALKER], None, ["motion.median.threshold=0.1,0.2"], load_config(None))
+    st = study_from_args([WALKER], None, ["motion.median.threshold=0.1,0.2"],
+                         load_config(None, ["motion.method=median"]))
     folder.mkdir(parents=True)
     (folder / "study.json").write_text(json.dumps({**st.as_dict(), "versions": versions(), "runs": 2}))
     write_table([{"run": r, "sequence": "walker", "group": "", "motion.median.threshold": t,
@@ -242,7 +243,8 @@ def test_report_leaves_out_figures_outside_the_study_or_unreadable(tmp_path, cap
 
 
 def study_json(**change):
-    st = study_from_args([WALKER], None, ["motion.median.threshold=0.1,0.2"], load_config(None))
+    st = study_from_args([WALKER], None, ["motion.median.threshold=0.1,0.2"],
+                         load_config(None, ["motion.method=median"]))
     meta = {**st.as_dict(), "versions": versions(), "runs": 2}
     for k, v in change.items():
         if v is None:
@@ -369,7 +371,7 @@ def test_param_range_beyond_decimal_is_refused(capsys, tmp_path):
 @pytest.mark.parametrize("argv", [
     ["sweep", WALKER, "--param", "motion.median.threshold=0.1", "-j", "0", "-o", "{out}"],
     ["sweep", "--replay", "{study}", "-j", "0", "-o", "{out}"],
-    ["tune", "--train", WALKER, "--param", "motion.median.threshold=0.1:0.2", "-j", "0",
+    ["tune", "--train", WALKER, "--param", "motion.knn.dist2_threshold=100:400", "-j", "0",
      "-o", "{out}"],
     ["ablate", WALKER, "-j", "0", "--json", "{out}"],
 ])
@@ -401,10 +403,10 @@ def test_manifest_values_that_cannot_name_a_run_folder(tmp_path, capsys, manifes
     (["--param", "motion.nope=0.1:0.2"], "unknown config key 'motion.nope'"),
     (["--param", "motion.method=[1]"], "choices must be numbers, booleans or strings"),
     (["--param", "motion.method=median,median"], "repeats a choice"),
-    (["--param", "motion.median.threshold=0.1:0.2", "--xi", "5"], "--xi must be in [0, 1]"),
-    (["--param", "motion.median.threshold=0.1:0.2", "--val", "v.avi=/nonexistent/gt.txt"],
+    (["--param", "motion.knn.dist2_threshold=100:400", "--xi", "5"], "--xi must be in [0, 1]"),
+    (["--param", "motion.knn.dist2_threshold=100:400", "--val", "v.avi=/nonexistent/gt.txt"],
      "ground truth of sequence v not found"),
-    (["--param", "motion.median.threshold=0.1:0.2", "--trials", "0"], "--trials must be >= 1"),
+    (["--param", "motion.knn.dist2_threshold=100:400", "--trials", "0"], "--trials must be >= 1"),
 ])
 def test_tune_refuses_bad_options_before_the_first_trial(tmp_path, capsys, monkeypatch, argv, message):
     pytest.importorskip("optuna", reason="optuna not installed")
@@ -422,6 +424,6 @@ def test_tune_refuses_an_output_that_is_a_file(tmp_path, capsys, monkeypatch):
 
     monkeypatch.setattr(tu, "execute", lambda *a, **k: pytest.fail("a trial ran"))
     (tmp_path / "t").write_text("")
-    assert main(["tune", "--train", WALKER, "--param", "motion.median.threshold=0.1:0.2",
+    assert main(["tune", "--train", WALKER, "--param", "motion.knn.dist2_threshold=100:400",
                  "-o", str(tmp_path / "t")]) == 2
     assert "is a file, not a folder" in one_error_line(capsys)

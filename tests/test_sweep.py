@@ -69,7 +69,7 @@ def test_sequence_needs_gt_unless_synthetic():
 
 def test_grid_order_first_parameter_slowest():
     st = study_from_args([SCENE], None, ["regions.min_area=10,20", "motion.median.threshold=0.1,0.2,0.3"],
-                         load_config(None))
+                         load_config(None, ["motion.method=median"]))
     pts = st.points()
     assert len(pts) == 2 * 3
     assert pts[0] == (("regions.min_area", 10), ("motion.median.threshold", 0.1))

@@ -9,6 +9,7 @@ are errors. ``--set stage.param=value`` on the command line maps onto the same f
 from __future__ import annotations
 
 import dataclasses
+import functools
 import logging
 import math
 import sys
@@ -33,6 +34,7 @@ else:  # pragma: no cover
 
 __all__ = [
     "param",
+    "Not",
     "SourceConfig",
     "PreprocessConfig",
     "FrameDiffParams",
@@ -63,20 +65,38 @@ __all__ = [
 INT_MIN, INT_MAX = -(2**31), 2**31 - 1
 
 
+@dataclass(frozen=True)
+class Not:
+    """A ``when`` condition of :func:`param`: the switch differs from ``value``; ``example`` is
+    a value that meets it (named in the hint that says how to make the key take effect)."""
+
+    value: Any
+    example: Any
+
+
 def param(default: Any, *, lo: float | None = None, hi: float | None = None,
-          choices: Iterable[Any] | None = None, odd: bool = False, doc: str = "") -> Any:
+          choices: Iterable[Any] | None = None, odd: bool = False, doc: str = "",
+          when: Any = None) -> Any:
     """A config field with its allowed range: ``lo <= value <= hi``, one of ``choices``,
     and for kernel sizes ``odd`` (0 means "off" and is always allowed for odd fields).
 
     Every number must be finite. An integer field without ``lo``/``hi`` is bounded by
     :data:`INT_MIN`/:data:`INT_MAX`, so that no value reaches OpenCV (or a loop or an allocation)
     that a C ``int`` cannot hold.
+
+    ``when`` names the switches of the same section that the field needs to take effect:
+    ``{"name": value}`` (all must hold; ``Not(value, example)`` for "anything but value"), or a
+    tuple of such tables (any one must hold). :mod:`motiontrack.config_activity` follows them,
+    together with the per-method sections (``motion.<method>.*`` take effect only while
+    ``motion.method`` names them).
     """
     if isinstance(default, int) and not isinstance(default, bool) and choices is None:
         lo = INT_MIN if lo is None else lo
         hi = INT_MAX if hi is None else hi
+    if isinstance(when, dict):
+        when = (when,)
     meta = {"lo": lo, "hi": hi, "choices": tuple(choices) if choices is not None else None,
-            "odd": odd, "doc": doc}
+            "odd": odd, "doc": doc, "when": tuple(when or ())}
     return field(default=default, metadata=meta)
 
 
@@ -84,7 +104,7 @@ class _Section:
     """Mixin: validate every field against its :func:`param` metadata after construction."""
 
     def __post_init__(self) -> None:
-        name = type(self).__name__
+        name = section_path(type(self))
         for f in fields(self):  # type: ignore[arg-type]
             v = getattr(self, f.name)
             m = f.metadata
@@ -105,6 +125,27 @@ class _Section:
                 if m.get("odd") and v != 0 and int(v) % 2 == 0:
                     raise ConfigError(f"{name}.{f.name} must be 0 (off) or an odd kernel size, "
                                       f"got {_shown(v)}")
+
+
+def section_path(cls: type) -> str:
+    """A section's key path as users write it (``KNNParams`` → ``"motion.knn"``), so that a
+    message names the key rather than the class, however the section was built; the class name
+    for a class outside :class:`PipelineConfig`."""
+    return _section_paths().get(cls, cls.__name__)
+
+
+@functools.cache
+def _section_paths() -> dict[type, str]:
+    paths: dict[type, str] = {}
+
+    def walk(cls: type, prefix: str) -> None:
+        for name, typ in typing.get_type_hints(cls).items():
+            if is_dataclass(typ):
+                paths.setdefault(typ, prefix + name)
+                walk(typ, f"{prefix}{name}.")
+
+    walk(PipelineConfig, "")
+    return paths
 
 
 def _shown(v: Any) -> str:
@@ -155,8 +196,10 @@ MIN_SCALE = 0.05
 @dataclass(frozen=True)
 class PreprocessConfig(_Section):
     grayscale: bool = param(False, doc="detect motion on the gray image (colour keeps clothing contrast)")
-    blur: str = param("gaussian", choices=("none", "gaussian", "median"))
-    blur_kernel: int = param(3, lo=0, hi=51, odd=True)
+    blur: str = param("gaussian", choices=("none", "gaussian", "median"),
+                      doc="smoothing of each frame before motion detection")
+    blur_kernel: int = param(3, lo=0, hi=51, odd=True, when={"blur": Not("none", "gaussian")},
+                             doc="blur kernel size (px at processing scale; 0 or 1 = no blur)")
     scale: float = param(0.0, lo=0.0, hi=1.0,
                          doc="processing scale: detect on a smaller image, boxes reported in original "
                              "pixels; 0 = automatic: 0.5 for frames of 768x576 and larger, up to 1 for "
@@ -166,7 +209,7 @@ class PreprocessConfig(_Section):
     def __post_init__(self) -> None:
         super().__post_init__()
         if 0 < self.scale < MIN_SCALE:
-            raise ConfigError(f"PreprocessConfig.scale must be 0 (automatic) or in [{MIN_SCALE}, 1.0], "
+            raise ConfigError(f"preprocess.scale must be 0 (automatic) or in [{MIN_SCALE}, 1.0], "
                               f"got {self.scale!r}")
 
 
@@ -185,14 +228,17 @@ def _protect(default: bool):
 def _protect_threshold():
     """The ``protect_threshold`` field that goes with :func:`_protect` (MOG2, KNN)."""
     return param(30, lo=1, hi=255, doc="inside tracked objects (not learnt): difference from the "
-                                       "background that counts as foreground")
+                                       "background that counts as foreground",
+                     when={"protect": True})
 
 
 @dataclass(frozen=True)
 class MOG2Params(_Section):
-    history: int = param(500, lo=1)
-    var_threshold: float = param(16.0, lo=0.0)
-    detect_shadows: bool = param(True)
+    history: int = param(500, lo=1, doc="frames the background model remembers (OpenCV history)")
+    var_threshold: float = param(16.0, lo=0.0,
+                                 doc="squared Mahalanobis distance from the background model above "
+                                     "which a pixel is foreground (OpenCV varThreshold)")
+    detect_shadows: bool = param(True, doc="detect shadows and leave them out of the mask (slower)")
     learning_rate: float = param(-1.0, lo=-1.0, hi=1.0, doc="-1 = automatic (1/history)")
     protect: bool = _protect(False)
     protect_threshold: int = _protect_threshold()
@@ -200,10 +246,12 @@ class MOG2Params(_Section):
 
 @dataclass(frozen=True)
 class KNNParams(_Section):
-    history: int = param(500, lo=1)
-    dist2_threshold: float = param(300.0, lo=0.0)
-    detect_shadows: bool = param(True)
-    learning_rate: float = param(-1.0, lo=-1.0, hi=1.0)
+    history: int = param(500, lo=1, doc="frames the background model remembers (OpenCV history)")
+    dist2_threshold: float = param(300.0, lo=0.0,
+                                   doc="squared colour distance within which a pixel matches a "
+                                       "background sample (OpenCV dist2Threshold)")
+    detect_shadows: bool = param(True, doc="detect shadows and leave them out of the mask (slower)")
+    learning_rate: float = param(-1.0, lo=-1.0, hi=1.0, doc="-1 = automatic (1/history)")
     n_samples: int = param(7, lo=1, hi=50,
                            doc="samples kept per pixel in each of the model's three time scales "
                                "(fewer is faster: see docs/pipeline.md)")
@@ -225,8 +273,8 @@ def check_knn_samples(n_samples: int, knn_samples: int) -> None:
     """KNN's background vote needs ``1 <= knn_samples <= n_samples`` (the config and the
     detector, which can be built without a config, both check it here)."""
     if not 1 <= knn_samples <= n_samples:
-        raise ConfigError(f"KNN: knn_samples must be at most n_samples ({n_samples}) and at least "
-                          f"1, got {knn_samples}")
+        raise ConfigError(f"motion.knn.knn_samples must be at most motion.knn.n_samples "
+                          f"({n_samples}) and at least 1, got {knn_samples}")
 
 
 @dataclass(frozen=True)
@@ -242,10 +290,12 @@ class MedianParams(_Section):
 
 @dataclass(frozen=True)
 class CNTParams(_Section):
-    min_pixel_stability: int = param(15, lo=1)
-    max_pixel_stability: int = param(15 * 60, lo=1)
-    use_history: bool = param(True)
-    is_parallel: bool = param(True)
+    min_pixel_stability: int = param(15, lo=1, doc="frames a pixel must stay unchanged to count "
+                                                   "as background")
+    max_pixel_stability: int = param(15 * 60, lo=1, doc="most frames of stability credited to a "
+                                                        "pixel (with use_history)")
+    use_history: bool = param(True, doc="credit a pixel for staying stable a long time")
+    is_parallel: bool = param(True, doc="update the model on several threads")
 
 
 @dataclass(frozen=True)
@@ -253,15 +303,19 @@ class GSOCParams(_Section):
     n_samples: int = param(20, lo=1, hi=50,
                            doc="samples kept per pixel; each takes about 60 bytes per processed "
                                "pixel")
-    replace_rate: float = param(0.003, lo=0.0, hi=1.0)
-    propagation_rate: float = param(0.01, lo=0.0, hi=1.0)
-    hits_threshold: int = param(32, lo=1)
+    replace_rate: float = param(0.003, lo=0.0, hi=1.0, doc="probability of replacing an old "
+                                                          "sample: how fast the model adapts")
+    propagation_rate: float = param(0.01, lo=0.0, hi=1.0, doc="probability of propagating a "
+                                                             "sample to a neighbouring pixel")
+    hits_threshold: int = param(32, lo=1, doc="hits a sample needs before it may replace a "
+                                              "background sample")
 
 
 @dataclass(frozen=True)
 class GMGParams(_Section):
-    initialization_frames: int = param(20, lo=1)
-    decision_threshold: float = param(0.8, lo=0.0, hi=1.0)
+    initialization_frames: int = param(20, lo=1, doc="frames that build the first background model")
+    decision_threshold: float = param(0.8, lo=0.0, hi=1.0,
+                                      doc="probability of foreground above which a pixel is motion")
 
 
 @dataclass(frozen=True)
@@ -269,12 +323,16 @@ class FarnebackParams(_Section):
     """Dense optical flow (Farnebäck); flow magnitude above ``threshold`` px/frame is motion."""
 
     threshold: float = param(0.7, lo=0.0, doc="flow magnitude (px/frame at processing scale)")
-    pyr_scale: float = param(0.5, lo=0.1, hi=0.9)
-    levels: int = param(3, lo=1, hi=10)
-    winsize: int = param(15, lo=3, hi=101)
-    iterations: int = param(3, lo=1, hi=50)
-    poly_n: int = param(5, choices=(5, 7))
-    poly_sigma: float = param(1.1, lo=0.1, hi=3.0)
+    pyr_scale: float = param(0.5, lo=0.1, hi=0.9, doc="image scale from one pyramid level to the "
+                                                      "next (0.5 = half size)")
+    levels: int = param(3, lo=1, hi=10, doc="pyramid levels, the full-size image included")
+    winsize: int = param(15, lo=3, hi=101, doc="averaging window (px): larger is steadier and "
+                                               "blurs the edges of motion")
+    iterations: int = param(3, lo=1, hi=50, doc="iterations at each pyramid level")
+    poly_n: int = param(5, choices=(5, 7), doc="neighbourhood (px) of each pixel's polynomial "
+                                               "expansion")
+    poly_sigma: float = param(1.1, lo=0.1, hi=3.0, doc="Gaussian std smoothing that neighbourhood "
+                                                       "(1.1 for poly_n 5, 1.5 for 7)")
 
 
 @dataclass(frozen=True)
@@ -287,7 +345,7 @@ class MotionConfig(_Section):
                                    "background below this (0 = off)")
     ghost_pixels: bool = param(True, doc="with the ghost filter on, also take a ghost apart pixel by "
                                          "pixel from its border (a ghost still joined to the person "
-                                         "who left it)")
+                                         "who left it)", when={"ghost_ratio": Not(0.0, 0.7)})
     frame_diff: FrameDiffParams = field(default_factory=FrameDiffParams)
     mog2: MOG2Params = field(default_factory=MOG2Params)
     knn: KNNParams = field(default_factory=KNNParams)
@@ -309,9 +367,11 @@ class CleanupConfig(_Section):
 
     median_kernel: int = param(3, lo=0, hi=31, odd=True, doc="median filter on the mask (0 = off)")
     erode_kernel: int = param(3, lo=0, hi=31, doc="square erosion kernel (0 = off)")
-    erode_iterations: int = param(1, lo=0, hi=20)
+    erode_iterations: int = param(1, lo=0, hi=20, doc="erosions in a row (0 = off)",
+                                  when={"erode_kernel": Not(0, 3)})
     dilate_kernel: int = param(3, lo=0, hi=31, doc="square dilation kernel (0 = off)")
-    dilate_iterations: int = param(2, lo=0, hi=20, doc="fills gaps of about kernel*iterations px")
+    dilate_iterations: int = param(2, lo=0, hi=20, doc="fills gaps of about kernel*iterations px",
+                                   when={"dilate_kernel": Not(0, 3)})
 
 
 @dataclass(frozen=True)
@@ -322,7 +382,8 @@ class RegionsConfig(_Section):
     image area); ``min_area``/``max_area`` the same in pixels. All four apply (0 = no limit).
     """
 
-    connectivity: int = param(8, choices=(4, 8))
+    connectivity: int = param(8, choices=(4, 8), doc="pixels of a region touch by their 4 edges, "
+                                                     "or by their 8 edges and corners")
     min_area: float = param(100.0, lo=0.0, doc="minimum region area in pixels")
     max_area: float = param(0.0, lo=0.0, doc="maximum region area in pixels (0 = none)")
     min_size: float = param(0.001, lo=0.0, hi=1.0, doc="MIN_REGION_SIZE, fraction of image area")
@@ -337,7 +398,8 @@ class RegionsConfig(_Section):
 class TrackerConfig(_Section):
     method: str = param("kalman", doc="multi-object tracker: see `motiontrack list`")
     cost: str = param("iou", choices=("iou", "center"), doc="association cost")
-    min_iou: float = param(0.1, lo=0.0, hi=1.0, doc="gate: IoU below this never matches (cost=iou)")
+    min_iou: float = param(0.1, lo=0.0, hi=1.0, doc="gate: IoU below this never matches (cost=iou)",
+                           when={"cost": "iou"})
     max_distance: float = param(1.0, lo=0.0,
                                 doc="gate: centre distance / predicted box diagonal above this never matches")
     confirm_hits: int = param(5, lo=1, hi=100, doc="hits needed to turn tentative into confirmed")
@@ -366,10 +428,12 @@ class TrackerConfig(_Section):
                                      doc="weight of the colour-histogram (Bhattacharyya) distance in the "
                                          "association cost (0 = no appearance model)")
     appearance_gate: float = param(0.6, lo=0.0, hi=1.0,
-                                   doc="an unseen track is re-identified only below this appearance distance")
+                                   doc="an unseen track is re-identified only below this appearance distance",
+                                   when={"appearance_weight": Not(0.0, 0.5)})
     bridge: str = param("none", doc="single-object tracker (kcf, csrt, mil, mosse, medianflow, ...) "
                                     "that carries a confirmed track through motion-detection misses; none = off")
-    bridge_frames: int = param(50, lo=1, hi=100000, doc="longest bridge, frames")
+    bridge_frames: int = param(50, lo=1, hi=100000, doc="longest bridge, frames",
+                               when={"bridge": Not("none", "kcf")})
     history: int = param(64, lo=0, hi=100000, doc="trajectory points kept per track (bounded)")
     output_lost: bool = param(False, doc="report coasting (lost) tracks in tracks.txt")
     fill_gaps_s: float = param(1.0, lo=0.0, hi=3600.0,
@@ -387,7 +451,10 @@ class TrackerConfig(_Section):
 @dataclass(frozen=True)
 class OutputConfig(_Section):
     video: bool = param(True, doc="write the annotated video")
-    codec: str = param("vp80", choices=("vp80", "vp90", "h264", "mp4v", "avc1", "mjpg", "xvid"))
+    codec: str = param("vp80", choices=("vp80", "vp90", "h264", "mp4v", "avc1", "mjpg", "xvid"),
+                       doc="codec of the videos written: vp80/vp90 WebM, h264 (plays in browsers)/"
+                           "mp4v/avc1 MP4, mjpg/xvid AVI; `motiontrack list` shows those this "
+                           "installation encodes (`--codec`)")
     mask_video: bool = param(False, doc="also write the motion mask as a video")
     inset: str = param("none", choices=("none", "top-left", "top-right", "bottom-left", "bottom-right"),
                        doc="corner of the annotated video that shows the motion mask (none = no "
@@ -410,51 +477,79 @@ class PeopleConfig(_Section):
     auto_split: bool = param(True, doc="with the stage off: still split merged motion regions between "
                                        "adjacent heads while the scene's regions are upright (people, "
                                        "not cars), searching only regions a third wider than the scene's "
-                                       "typical one")
+                                       "typical one", when={"enabled": False})
     upright_ratio: float = param(1.5, lo=0.0, hi=100.0,
                                  doc="auto_split: height/width from which a region counts as upright "
-                                     "(scene: running mean of each frame's median region)")
-    heads: bool = param(True, doc="detect heads in motion regions (thesis 4.3)")
-    split: bool = param(True, doc="split merged regions between adjacent heads (needs heads)")
-    head_min_width: float = param(6.0, lo=1.0, hi=500.0, doc="narrowest head interval (px)")
-    head_max_width: float = param(40.0, lo=1.0, hi=1000.0, doc="widest head interval (px)")
-    head_tolerance: float = param(3.0, lo=0.0, hi=100.0, doc="'similar height' tolerance (px)")
-    head_min_drop: float = param(4.0, lo=0.0, hi=200.0, doc="neighbours must be this much lower (px)")
-    shapes: bool = param(True, doc="active shape tracker on confirmed tracks")
-    shape_model: str = param("", doc="shape model .npz (empty = the shipped default)")
+                                     "(scene: running mean of each frame's median region)",
+                                 when={"auto_split": True, "split": True})
+    heads: bool = param(True, doc="detect heads in motion regions (thesis 4.3)",
+                        when=({"enabled": True}, {"auto_split": True}))
+    split: bool = param(True, doc="split merged regions between adjacent heads (needs heads)",
+                        when={"heads": True})
+    head_min_width: float = param(6.0, lo=1.0, hi=500.0, doc="narrowest head interval (px)",
+                                  when={"heads": True})
+    head_max_width: float = param(40.0, lo=1.0, hi=1000.0, doc="widest head interval (px)",
+                                  when={"heads": True})
+    head_tolerance: float = param(3.0, lo=0.0, hi=100.0, doc="'similar height' tolerance (px)",
+                                  when={"heads": True})
+    head_min_drop: float = param(4.0, lo=0.0, hi=200.0, doc="neighbours must be this much lower (px)",
+                                 when={"heads": True})
+    shapes: bool = param(True, doc="active shape tracker on confirmed tracks",
+                         when={"enabled": True})
+    shape_model: str = param("", doc="shape model .npz (empty = the shipped default)",
+                             when={"shapes": True})
     shape_split: bool = param(True, doc="split a merged region between the people in it along their "
-                                        "fitted outlines rather than their predicted boxes (needs shapes)")
+                                        "fitted outlines rather than their predicted boxes (needs shapes)",
+                              when={"shapes": True})
     hypotheses: bool = param(False, doc="offer the fitted shape's box of a person the motion detector "
-                                        "lost to that lost track only (never starts a track)")
-    hypothesis_score: float = param(0.5, lo=0.0, hi=1.0, doc="score of shape hypotheses")
+                                        "lost to that lost track only (never starts a track)",
+                             when={"shapes": True})
+    hypothesis_score: float = param(0.5, lo=0.0, hi=1.0, doc="score of shape hypotheses",
+                                    when={"hypotheses": True})
     hypothesis_iou: float = param(0.3, lo=0.0, hi=1.0,
-                                  doc="a shape box matched to a region at this IoU counts as covered")
+                                  doc="a shape box matched to a region at this IoU counts as covered",
+                                  when=({"hypotheses": True}, {"refine": True}))
     hypothesis_coast: int = param(2, lo=0, hi=1000,
                                   doc="offer a hypothesis only while the shape found edges within "
-                                      "this many frames (a pure prediction is not evidence)")
+                                      "this many frames (a pure prediction is not evidence)",
+                                  when={"hypotheses": True})
     hypothesis_agreement: float = param(0.5, lo=0.0, hi=1.0,
                                         doc="offer a hypothesis only for a shape whose box agreed "
-                                            "(IoU) this much with its track when last measured")
+                                            "(IoU) this much with its track when last measured",
+                                        when={"hypotheses": True})
     border_extend: bool = param(True, doc="a region cut off by the image border is extended past it "
-                                          "to its person's fitted outline (needs shapes)")
+                                          "to its person's fitted outline (needs shapes)",
+                                when={"shapes": True})
     border_support: float = param(0.7, lo=0.0, hi=1.0,
                                    doc="fraction of an outline's visible sample points that must find "
-                                       "an edge for it to extend a region past the border")
+                                       "an edge for it to extend a region past the border",
+                                  when={"border_extend": True})
     refine: bool = param(False, doc="replace a region's box by the outline box of the well-fitted "
-                                   "shape matched to it (tighter boxes)")
+                                   "shape matched to it (tighter boxes)", when={"shapes": True})
     refine_support: float = param(0.7, lo=0.0, hi=1.0,
-                                  doc="support a shape needs to refine its region's box")
-    samples: int = param(48, lo=8, hi=512, doc="shape sample points along the outline")
-    search: float = param(0.12, lo=0.0, hi=1.0, doc="normal search half-length, fraction of height")
-    edge_threshold: float = param(8.0, lo=0.0, hi=255.0, doc="weakest difference-image edge (grey levels)")
-    iterations: int = param(2, lo=1, hi=20, doc="measure/solve rounds per frame")
-    min_support: float = param(0.35, lo=0.0, hi=1.0, doc="fraction of samples with an edge for a fit")
-    max_coast: int = param(25, lo=0, hi=1000, doc="frames a shape may coast without edges")
+                                  doc="support a shape needs to refine its region's box",
+                                  when={"refine": True})
+    samples: int = param(48, lo=8, hi=512, doc="shape sample points along the outline",
+                         when={"shapes": True})
+    search: float = param(0.12, lo=0.0, hi=1.0, doc="normal search half-length, fraction of height",
+                          when={"shapes": True})
+    edge_threshold: float = param(8.0, lo=0.0, hi=255.0, doc="weakest difference-image edge (grey levels)",
+                                  when={"shapes": True})
+    iterations: int = param(2, lo=1, hi=20, doc="measure/solve rounds per frame",
+                            when={"shapes": True})
+    min_support: float = param(0.35, lo=0.0, hi=1.0, doc="fraction of samples with an edge for a fit",
+                               when={"shapes": True})
+    max_coast: int = param(25, lo=0, hi=1000, doc="frames a shape may coast without edges",
+                           when={"shapes": True})
     hog: str = param("off", choices=("off", "alone", "regions"),
-                     doc="HOG people detector: off, whole frame alone, or inside motion regions")
-    hog_upscale: float = param(2.0, lo=0.1, hi=8.0, doc="magnification before HOG (people ~96 px)")
-    hog_threshold: float = param(0.0, lo=-10.0, hi=10.0, doc="SVM hit threshold")
-    hog_every: int = param(1, lo=1, hi=1000, doc="run HOG every N frames (speed)")
+                     doc="HOG people detector: off, whole frame alone, or inside motion regions",
+                     when={"enabled": True})
+    hog_upscale: float = param(2.0, lo=0.1, hi=8.0, doc="magnification before HOG (people ~96 px)",
+                               when={"hog": Not("off", "regions")})
+    hog_threshold: float = param(0.0, lo=-10.0, hi=10.0, doc="SVM hit threshold",
+                                 when={"hog": Not("off", "regions")})
+    hog_every: int = param(1, lo=1, hi=1000, doc="run HOG every N frames (speed)",
+                           when={"hog": Not("off", "regions")})
 
 
 @dataclass(frozen=True)
@@ -541,8 +636,9 @@ def _keys_shown(keys: list[str], prefix: str = "", most: int = 5) -> str:
 
 def from_dict(cls: type, data: dict[str, Any], where: str = "") -> Any:
     """Build a config dataclass from a nested dict; unknown keys and bad types are errors."""
+    where = where or _section_paths().get(cls, "")
     if not isinstance(data, dict):
-        raise ConfigError(f"{where or cls.__name__} must be a table, got {_shown(data)}")
+        raise ConfigError(f"{where or 'the config'} must be a table, got {_shown(data)}")
     hints = typing.get_type_hints(cls)
     known = {f.name for f in fields(cls)}
     unknown = sorted(set(data) - known)
@@ -560,14 +656,7 @@ def from_dict(cls: type, data: dict[str, Any], where: str = "") -> Any:
             kwargs[name] = from_dict(typ, value, sub)
         else:
             kwargs[name] = _coerce(value, typ, sub)
-    try:
-        return cls(**kwargs)
-    except ConfigError as exc:
-        # a section names its fields by class ("KNNParams.history"); the user wrote the key path
-        msg, prefix = str(exc), f"{cls.__name__}."
-        if where and msg.startswith(prefix):
-            raise ConfigError(f"{where}.{msg[len(prefix):]}") from None
-        raise
+    return cls(**kwargs)  # a section's own checks name its keys by path (section_path)
 
 
 def presets() -> dict[str, str]:

@@ -36,13 +36,17 @@ def cmd_ablate(args) -> int:
     from pathlib import Path
 
     from ..config import load_config
+    from ..config_activity import warn_inactive_overrides
     from ..io.atomic import atomic_write_text, check_writable, is_stdout
-    from ..studies.ablate import format_table, run_ablation, select_rows
+    from ..studies.ablate import format_table, row_settings, run_ablation, select_rows
 
     if args.json:
         check_writable([Path(args.json)], args.force)
     rows = select_rows(args.rows)
-    table = run_ablation(args.source, args.gt, load_config(args.config, args.overrides), rows,
+    cfg = load_config(args.config, args.overrides)
+    # a --set key is in effect when one of the rows switches it on
+    warn_inactive_overrides(cfg, args.overrides, points=row_settings(rows))
+    table = run_ablation(args.source, args.gt, cfg, rows,
                          xi=args.xi, jobs=args.jobs, scoring=args.scoring)
     (sys.stderr if is_stdout(args.json) else sys.stdout).write(format_table(table))
     if args.json:

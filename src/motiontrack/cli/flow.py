@@ -78,6 +78,7 @@ def sparse_params(items: list[str]):
 
 def _config(args):
     from ..config import load_config
+    from ..config_activity import warn_inactive_overrides
     from ._common import run_overrides
 
     overrides = run_overrides(args)
@@ -85,7 +86,14 @@ def _config(args):
         overrides.append("output.video=false")
     if args.mask_video:
         overrides.append("output.mask_video=true")
-    return load_config(args.config, overrides)
+    cfg = load_config(args.config, overrides)
+    if args.mode == "dense":  # the Farneback detector, whatever motion.method says
+        warn_inactive_overrides(cfg, args.overrides, points=[{"motion.method": "farneback"}],
+                                reads=("dense flow", ("source", "motion.farneback", "output")))
+    else:
+        warn_inactive_overrides(cfg, args.overrides, reads=("sparse flow", (
+            "source", "preprocess", "motion", "cleanup", "regions", "output")))
+    return cfg
 
 
 def cmd_flow(args) -> int:

@@ -51,6 +51,7 @@ def cmd_sweep(args) -> int:
     from tqdm import tqdm
 
     from ..config import load_config
+    from ..config_activity import warn_inactive_overrides
     from ..errors import ConfigError, printable
     from ..studies.sweep import TABLE_FILE, load_study, run_sweep, study_from_args, versions
     from ..render.streams import parse_streams
@@ -77,6 +78,7 @@ def cmd_sweep(args) -> int:
         cfg = load_config(args.config, args.overrides)
         study = study_from_args(args.source, args.gt, args.param, cfg, args.sequences, args.xi,
                                 parse_streams(args.save), scoring=args.scoring)
+        warn_inactive_overrides(cfg, args.overrides, domains=dict(study.grid))
     n = study.n_runs
     log.info("%d runs (%d grid points x %d sequences)%s", n, n // len(study.sequences), len(study.sequences),
              f" on {args.cluster}" if args.cluster else (f" with {args.jobs} processes" if args.jobs > 1 else ""))

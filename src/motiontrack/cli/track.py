@@ -54,6 +54,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def _build_config(args):
     from ..config import load_config
+    from ..config_activity import warn_inactive_overrides
     from ._common import run_overrides
 
     overrides = run_overrides(args)
@@ -63,7 +64,9 @@ def _build_config(args):
         overrides.append("output.mask_video=true")
     if args.camera:
         overrides.append(f"measure.camera={json.dumps(args.camera)}")
-    return load_config(args.config, overrides, preset=args.preset)
+    cfg = load_config(args.config, overrides, preset=args.preset)
+    warn_inactive_overrides(cfg, args.overrides)
+    return cfg
 
 
 def _viewer():

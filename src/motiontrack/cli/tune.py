@@ -103,6 +103,7 @@ def cmd_tune(args) -> int:
     from tqdm import tqdm
 
     from ..config import load_config
+    from ..config_activity import warn_inactive_overrides
     from ..errors import ConfigError, printable
     from ..studies.sweep import TRACKING_KEYS
     from ..studies.tune import parse_space, require_optuna, tune, write_tune_outputs
@@ -118,6 +119,7 @@ def cmd_tune(args) -> int:
         raise ConfigError("give at least one --train sequence")
     cfg = load_config(args.config, args.overrides)
     space = [parse_space(p) for p in args.param]
+    warn_inactive_overrides(cfg, args.overrides, domains={p.key: p.domain for p in space})
     train, val = _sequences(args.train, "training"), _sequences(args.val, "validation")
     overlap = {s.source for s in train} & {s.source for s in val}
     if overlap:

@@ -14,7 +14,7 @@ from ..errors import ConfigError
 from ..evaluate.scoring import DEFAULT_SCORING, ignores_zero_marked
 from .sweep import RunSpec, SequenceSpec, execute, parse_param
 
-__all__ = ["ROWS", "COLUMNS", "select_rows", "run_ablation", "format_table"]
+__all__ = ["ROWS", "COLUMNS", "select_rows", "row_settings", "run_ablation", "format_table"]
 
 #: rows of the table: label → overrides (cumulative, as in the thesis)
 ROWS: tuple[tuple[str, tuple[str, ...]], ...] = (
@@ -52,6 +52,12 @@ def select_rows(text: str | None) -> list[tuple[str, tuple[str, ...]]]:
     if any(not 1 <= r <= len(ROWS) for r in pick):
         raise ConfigError(f"--rows must be between 1 and {len(ROWS)}")
     return [ROWS[r - 1] for r in pick]
+
+
+def row_settings(rows: Sequence[tuple[str, tuple[str, ...]]]) -> list[dict[str, Any]]:
+    """The settings of each row as ``{key: value}`` (what the row changes in the base config)."""
+    return [{key: values[0] for key, values in map(parse_param, overrides)}
+            for _label, overrides in rows]
 
 
 def run_ablation(source: str, gt: str | None, base: PipelineConfig,

@@ -52,6 +52,7 @@ import numpy as np
 
 from .. import __version__
 from ..config import PipelineConfig, apply_overrides, from_dict, save_config, to_dict
+from ..config_activity import check_study_keys
 from ..errors import ConfigError, InputError, printable
 from ..evaluate.framewise import evaluate_framewise
 from ..evaluate.mot import evaluate_tracking
@@ -169,13 +170,13 @@ def parse_param(item: str) -> tuple[str, tuple[Any, ...]]:
     if not text:
         raise ConfigError(f"--param {item!r} has no values")
     if text.count(":") == 2 and "," not in text and not text.startswith(("'", '"')):
+        if text.rsplit(":", 1)[1].strip().lower() == "log":
+            raise ConfigError(f"--param {item!r}: a grid needs a step, a:b:step (a:b:log is a "
+                              "search range of motiontrack tune)")
         values = _range_values(*text.split(":"), item=item)
     elif ":" in text and "," not in text and not text.startswith(("'", '"')) and text.count(":") == 1:
         raise ConfigError(f"--param {item!r}: a grid needs a step, a:b:step (a:b without a step "
                           "is a search range of motiontrack tune)")
-        if text.rsplit(":", 1)[1].strip().lower() == "log":
-            raise ConfigError(f"--param {item!r}: a grid needs a step, a:b:step (a:b:log is a "
-                              "search range of motiontrack tune)")
     else:
         parts = [p.strip() for p in text.split(",")]
         if any(not p for p in parts):
@@ -1079,5 +1080,8 @@ def study_from_args(sources: Sequence[str], gt: Sequence[str] | None, params: It
         seqs = fixed
     check_ground_truth(seqs)
     grid = tuple(parse_param(p) for p in params)
-    return Study(sequences=tuple(seqs), grid=grid, base_config=to_dict(base_config), xi=xi,
-                 save=tuple(save), scoring=scoring)
+    study = Study(sequences=tuple(seqs), grid=grid, base_config=to_dict(base_config), xi=xi,
+                  save=tuple(save), scoring=scoring)
+    # a key no grid point switches on would score the same in every run
+    check_study_keys(study.base_config, dict(grid), "sweep")
+    return study

@@ -28,6 +28,7 @@ from pathlib import Path
 from typing import Any, Callable, Sequence
 
 from ..config import PipelineConfig, apply_overrides, from_dict, save_config, to_dict
+from ..config_activity import check_study_keys
 from ..errors import ConfigError
 from ..evaluate.scoring import DEFAULT_SCORING, ignores_zero_marked
 from ..io.atomic import atomic_write_text
@@ -58,9 +59,9 @@ class SearchParam:
     high: float = 0.0
     log: bool = False
     choices: tuple[Any, ...] = ()
+    step: float | None = None  # a stepped range: low, low + step, ..., high
 
     def __post_init__(self) -> None:
-    step: float | None = None  # a stepped range: low, low + step, ..., high
         if self.kind not in ("float", "int", "categorical"):
             raise ConfigError(f"search parameter kind must be float, int or categorical, got {self.kind!r}")
         if self.kind == "categorical":
@@ -71,11 +72,11 @@ class SearchParam:
                 raise ConfigError(f"--param {self.key}: need finite lo <= hi, got {self.low}:{self.high}")
             if self.log and self.low <= 0:
                 raise ConfigError(f"--param {self.key}: a log range needs lo > 0, got {self.low}")
-
-    def suggest(self, trial: Any) -> Any:
             if self.step is not None and (self.log or not self.step > 0):
                 raise ConfigError(f"--param {self.key}: a stepped range needs a step > 0 and no "
                                   f"log scale, got step {self.step}")
+
+    def suggest(self, trial: Any) -> Any:
         if self.kind == "float":
             return self.value_of(trial.suggest_float(self.key, self.low, self.high, log=self.log,
                                                      step=self.step))
@@ -84,8 +85,6 @@ class SearchParam:
                                      step=int(self.step or 1))
         return trial.suggest_categorical(self.key, list(self.choices))
 
-
-def parse_space(item: str) -> SearchParam:
     def value_of(self, proposed: Any) -> Any:
         """The value a proposal of Optuna stands for: on a stepped float range the grid value
         computed in decimal, as ``sweep`` computes it (Optuna's ``low + k * step`` drifts:
@@ -101,6 +100,8 @@ def parse_space(item: str) -> SearchParam:
         choices, or a range's two ends."""
         return self.choices or (self.low, self.high)
 
+
+def parse_space(item: str) -> SearchParam:
     """Parse ``key=lo:hi[:log]``, ``key=lo:hi:step`` or ``key=a,b,c`` (see the module doc)."""
     if "=" not in item:
         raise ConfigError(f"--param expects stage.name=lo:hi or stage.name=a,b,..., got {item!r}")
@@ -116,13 +117,13 @@ def parse_space(item: str) -> SearchParam:
             lo, hi = float(parts[0]), float(parts[1])
         except ValueError:
             raise ConfigError(f"--param {item!r}: lo and hi must be numbers") from None
-        is_int = all(p.lstrip("+-").isdigit() for p in parts[:2])
-        return SearchParam(key, "int" if is_int else "float", lo, hi, log=use_log)
         if len(parts) == 3 and not use_log:
             # the values of the sweep grid lo:hi:step (hi is the last of them, as in the grid)
             values = _range_values(*parts, item=item)
             kind = "int" if isinstance(values[0], int) else "float"
             return SearchParam(key, kind, lo, float(values[-1]), step=float(parts[2]))
+        is_int = all(p.lstrip("+-").isdigit() for p in parts[:2])
+        return SearchParam(key, "int" if is_int else "float", lo, hi, log=use_log)
     choices = tuple(_parse_literal(p.strip()) for p in text.split(",") if p.strip())
     if not all(isinstance(c, (bool, int, float, str)) for c in choices):
         raise ConfigError(f"--param {item!r}: choices must be numbers, booleans or strings")
@@ -217,6 +218,8 @@ def tune(train: Sequence[SequenceSpec], validation: Sequence[SequenceSpec], spac
     base = to_dict(base_config)
     for key in keys:
         _check_key(base, key)
+    # a key no point of the space switches on: every trial would score the same
+    check_study_keys(base, {p.key: p.domain for p in space}, "search")
     check_ground_truth([*train, *validation])
 
     def specs(params: dict[str, Any], seqs: Sequence[SequenceSpec], run: int) -> list[RunSpec]:
