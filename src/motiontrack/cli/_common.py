@@ -144,6 +144,22 @@ FPS_HELP = ("frame rate to use instead of the source's own (source.fps), for foo
             "video follow it")
 
 
+def out_help(command: str) -> str:
+    """Help of ``-o`` of a command that writes a run folder."""
+    return (f"output folder (default: a new folder runs/{command}/NAME named after the source: "
+            f"video.mp4 -> runs/{command}/video, then video-2, ...; outputs already in a folder "
+            "given here are replaced only with --force)")
+
+
+def output_folder(args, command: str):
+    """``-o`` when given, else a new run folder (:func:`~motiontrack.run.folders.new_run_folder`)."""
+    if args.out is not None:
+        return args.out
+    from ..run.folders import new_run_folder
+
+    return new_run_folder(command, args.source)
+
+
 def run_overrides(args) -> list[str]:
     """``--set`` overrides plus those implied by ``--start``, ``--max-frames``, ``--fps`` and
     ``--codec`` (the options ``track`` and ``flow`` share), in that order."""

@@ -19,7 +19,7 @@ log = logging.getLogger("motiontrack")
 def register(sub: argparse._SubParsersAction) -> None:
     from ._common import FPS_HELP
 
-    from ._common import CodecOption
+    from ._common import CodecOption, out_help
     from ._common import add_scoring_option
 
     p = sub.add_parser(
@@ -31,7 +31,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("source", help="video file, image folder/glob, camera index, URL or synth:NAME")
     p.add_argument("--mode", choices=("sparse", "dense"), default="sparse",
                    help="sparse (default) or dense")
-    p.add_argument("-o", "--out", default="out", help="output folder (default: out)")
+    p.add_argument("-o", "--out", help=out_help("flow"))
     p.add_argument("--config", help="TOML config file (motion, cleanup, regions, farneback settings)")
     p.add_argument("--set", dest="overrides", action="append", default=[], metavar="STAGE.PARAM=VALUE",
                    help="override one config field, e.g. --set motion.farneback.threshold=1.0")
@@ -99,14 +99,15 @@ def _config(args):
 def cmd_flow(args) -> int:
     from ..errors import ConfigError
     from ..run import dense_flow_job, sparse_flow_job
-    from ._common import frame_loop, read_gt
+    from ._common import frame_loop, output_folder, read_gt
 
     cfg = _config(args)
     if args.max_magnitude is not None and not args.max_magnitude > 0:
         raise ConfigError(f"--max-magnitude must be > 0, got {args.max_magnitude}")
     if args.mode == "sparse":
         gt = read_gt(args.gt) if args.gt else None
-        job = sparse_flow_job(args.source, cfg, args.out, sparse_params(args.params),
+        job = sparse_flow_job(args.source, cfg, output_folder(args, "flow"),
+                              sparse_params(args.params),
                               force=args.force, gt=gt, scoring=args.scoring)
     else:
         if args.params:
@@ -116,7 +117,8 @@ def cmd_flow(args) -> int:
             # dense flow makes no tracks, so there is nothing to score against ground truth
             raise ConfigError("--gt applies to --mode sparse (its tracks are scored); dense flow "
                               "makes no tracks to score")
-        job = dense_flow_job(args.source, cfg, args.out, max_magnitude=args.max_magnitude,
+        job = dense_flow_job(args.source, cfg, output_folder(args, "flow"),
+                             max_magnitude=args.max_magnitude,
                              force=args.force)
     log.info("source %s", job.info.describe())
     with frame_loop(job.expected_frames()) as loop:

@@ -85,7 +85,7 @@ def _opencv_reason(exc: Exception) -> str:
 
 def register(sub: argparse._SubParsersAction) -> None:
     from ..tracking.single import SINGLE_TRACKERS
-    from ._common import FPS_HELP, CodecOption
+    from ._common import FPS_HELP, CodecOption, out_help
 
     names = "|".join(SINGLE_TRACKERS.names())
     p = sub.add_parser(
@@ -100,7 +100,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--tracker", default="csrt", metavar="NAME", help=f"{names} (default csrt)")
     p.add_argument("--param", dest="params", action="append", default=[], metavar="KEY=VALUE",
                    help="tracker parameter, e.g. --param backbone=nano_backbone.onnx (repeatable)")
-    p.add_argument("-o", "--out", default="out", help="output folder (default: out)")
+    p.add_argument("-o", "--out", help=out_help("follow"))
     p.add_argument("--start", type=int, default=0, help="first frame index (0-based)")
     p.add_argument("--max-frames", type=int, default=0, help="process at most this many frames")
     p.add_argument("--fps", type=float, help=FPS_HELP)
@@ -121,13 +121,14 @@ def cmd_follow(args) -> int:
     from ..io.video import check_codec
     from ..run import follow_job
     from ..tracking.single import create_single_tracker, parse_box
-    from ._common import frame_loop, read_gt
+    from ._common import frame_loop, output_folder, read_gt
 
     box = parse_box(args.box)
     params = parse_params(args.params, "--param")
     tracker = create_single_tracker(args.tracker, **params)
     models = check_model_files(params, "--param")
-    check_output_path(args.out, "-o", folder=True)
+    out = output_folder(args, "follow")
+    check_output_path(out, "-o", folder=True)
     check_codec(args.codec)
     if args.start < 0 or args.max_frames < 0:
         raise ConfigError("--start and --max-frames must be >= 0")
@@ -137,7 +138,7 @@ def cmd_follow(args) -> int:
         overrides.append(f"source.fps={args.fps!r}")
     cfg = load_config(None, overrides)
     gt = read_gt(args.gt) if args.gt else None
-    job = follow_job(args.source, cfg, args.out, tracker, box, args.tracker, params=params,
+    job = follow_job(args.source, cfg, out, tracker, box, args.tracker, params=params,
                      video=not args.no_video, force=args.force, gt=gt, gt_id=args.gt_id)
     log.info("source %s", job.info.describe())
     try:

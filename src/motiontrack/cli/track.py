@@ -12,7 +12,7 @@ log = logging.getLogger("motiontrack")
 def register(sub: argparse._SubParsersAction) -> None:
     from ._common import FPS_HELP
 
-    from ._common import CodecOption
+    from ._common import CodecOption, out_help
     from ._common import add_scoring_option
 
     p = sub.add_parser(
@@ -21,7 +21,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "summary.json and the resolved config.toml to the output folder.")
     p.add_argument("source", help="video file, camera index (0), rtsp/http URL, image folder or glob "
                                   "('input/*.jpg'), or synth:NAME (see `motiontrack list`)")
-    p.add_argument("-o", "--out", default="out", help="output folder (default: out)")
+    p.add_argument("-o", "--out", help=out_help("track"))
     p.add_argument("--preset", help="shipped settings to start from: people, fast (see `motiontrack list`)")
     p.add_argument("--config", help="TOML config file (applied after --preset)")
     p.add_argument("--set", dest="overrides", action="append", default=[], metavar="STAGE.PARAM=VALUE",
@@ -103,7 +103,7 @@ def _viewer():
 def cmd_track(args) -> int:
     from ..io.mot import read_mot
     from ..run import track_job
-    from ._common import frame_loop, read_gt
+    from ._common import frame_loop, output_folder, read_gt
 
     cfg = _build_config(args)
     gt = read_gt(args.gt) if args.gt else None
@@ -112,7 +112,7 @@ def cmd_track(args) -> int:
         det = read_mot(args.detections, kind="det")
         if args.min_score is not None:
             det = det.select(det.scores >= args.min_score)
-    job = track_job(args.source, cfg, args.out, force=args.force, gt=gt, detections=det,
+    job = track_job(args.source, cfg, output_folder(args, "track"), force=args.force, gt=gt, detections=det,
                     show=_viewer() if args.show else None, save=args.save,
                     mask_images=args.mask_images, scoring=args.scoring)
     log.info("source %s", job.info.describe())

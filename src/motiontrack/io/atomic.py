@@ -317,9 +317,9 @@ class OutputLock:
     folder (and the process that holds it). The folder is created when missing.
 
     :meth:`release` (also on leaving a ``with`` block, or when the lock is garbage-collected)
-    removes the file, frees the lock and removes the folder again when the lock created it and
-    nothing was written; the system frees the lock of a process that dies, so a killed run never
-    blocks the next one.
+    removes the file, frees the lock and removes the folder again, with the parents it created,
+    when the lock created it and nothing was written; the system frees the lock of a process that
+    dies, so a killed run never blocks the next one.
     """
 
     NAME = ".motiontrack.lock"
@@ -328,7 +328,8 @@ class OutputLock:
         self.folder = Path(folder)
         self.path = self.folder / self.NAME
         self._fd: int | None = None
-        self._created = not self.folder.exists()
+        #: the folders the lock creates, the deepest first
+        self._created = [p for p in (self.folder, *self.folder.parents) if not p.exists()]
         try:
             self.folder.mkdir(parents=True, exist_ok=True)
         except (FileExistsError, NotADirectoryError):
@@ -382,9 +383,11 @@ class OutputLock:
         with contextlib.suppress(OSError):  # removed while held: the next run locks a new file
             os.unlink(self.path)
         os.close(fd)
-        if self._created:
-            with contextlib.suppress(OSError):  # only when empty
-                self.folder.rmdir()
+        for p in self._created:
+            try:
+                p.rmdir()   # only when empty
+            except OSError:
+                break
 
     def __enter__(self) -> "OutputLock":
         return self
