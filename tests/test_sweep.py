@@ -211,7 +211,8 @@ def test_cli_two_parameters_and_intermediate_movies(tmp_path, capsys):
     assert len(rows) == 2 * 2
     assert {(r["motion.median.threshold"], r["regions.min_area"]) for r in rows} == {
         (0.1, 50), (0.1, 400), (0.3, 50), (0.3, 400)}
-    for f in ("pr_map_regions.png", "pr_map_regions.svg", "pr_regions.svg", "pr_map_tracks.svg"):
+    for f in ("pr_map_regions.png", "pr_map_regions.svg", "pr_regions.svg", "pr_map_tracks.svg",
+              "hota_map.svg"):
         assert (out / "figures" / f).is_file(), f
     for s in ("background", "difference", "motion"):
         assert (out / "runs/r001/walker" / f"{s}.avi").stat().st_size > 0
