@@ -1,10 +1,15 @@
 """One self-contained HTML page per study (``motiontrack report DIR -o report.html``).
 
-The page holds the evaluation meta data (base tracker parameters, the swept grid, sequences and
+The page opens with the key metrics (HOTA, MOTA, IDF1: the best run by mean HOTA and the best of
+each metric), before any figure or long table; the best run is marked in both tables as in the
+figures. It then holds the evaluation meta data (base tracker parameters, the swept grid, sequences and
 their ground truth, evaluation parameters, software versions), the per-run summary table and the
 full run × sequence table, every figure of ``DIR/figures`` (an ``<img>`` with the SVG, or the PNG
 when no SVG exists, as a base64 ``data:`` URL) and relative links to the annotated clips /
-intermediate videos found under ``DIR``. It has no scripts and no external resources (fonts, style
+intermediate videos found under ``DIR``. The base parameters listed are those of the stages
+that ran at some point of the grid (:func:`~motiontrack.config_activity.inactive_in_study`): no
+``people.*`` with the people stage off, no ``motion.mog2.*`` while ``motion.method = knn``. It
+has no scripts and no external resources (fonts, style
 sheets), so it reads offline in any browser; nothing read from ``DIR`` becomes markup: text is
 escaped, figures are images (an SVG shown as an image runs no scripts) and links are
 percent-encoded relative paths.
@@ -21,8 +26,10 @@ import urllib.parse
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
-from ..errors import printable
+from ..config_activity import inactive_in_study
+from ..errors import ConfigError, printable
 from ..io.atomic import atomic_write_text
+from .plots import BEST_METRIC, best_point
 from .sweep import STUDY_FILE, SUMMARY_FILE, TABLE_FILE, read_study_meta, read_table
 
 log = logging.getLogger(__name__)
@@ -40,7 +47,15 @@ th{background:#f3f3f3;position:sticky;top:0}td.t{text-align:left}
 figure{margin:1em 0}figure svg,figure img{max-width:100%;height:auto}
 code,pre{background:#f6f6f6;padding:.1em .3em}pre{padding:.6em;overflow:auto}
 .small{color:#666;font-size:.85em}
+tr.best td{background:#fdecea;font-weight:600}
+#key-metrics td,#key-metrics th{font-size:1.15em}
 """
+
+#: the metrics of the block at the top of the page
+KEY_METRICS = ("HOTA", "MOTA", "IDF1")
+
+#: marks the best run's rows in the tables (the figures star it)
+BEST_MARK = "\u2605"
 
 #: columns shown in the per-run summary table (when present)
 SUMMARY_COLUMNS = ("det_pixel_precision", "det_pixel_recall", "det_object_area_precision",
@@ -58,13 +73,82 @@ def _cell(v: Any) -> str:
     return _e(v)
 
 
-def _table(rows: Sequence[Mapping[str, Any]], cols: Sequence[str], text_cols: Sequence[str] = ()) -> str:
+def _table(rows: Sequence[Mapping[str, Any]], cols: Sequence[str], text_cols: Sequence[str] = (),
+           best_run: Any = None) -> str:
+    """A scrolling table; the rows of run ``best_run`` get class ``best`` and a star."""
     head = "".join(f"<th>{_e(c)}</th>" for c in cols)
-    body = "".join(
-        "<tr>" + "".join(f"<td class=\"t\">{_cell(r.get(c, ''))}</td>" if c in text_cols
-                         else f"<td>{_cell(r.get(c, ''))}</td>" for c in cols) + "</tr>"
-        for r in rows)
-    return f"<div class=\"scroll\"><table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table></div>"
+    body = []
+    for r in rows:
+        best = best_run is not None and r.get("run") == best_run
+        cells = []
+        for c in cols:
+            text = _cell(r.get(c, ""))
+            if best and c == "run":
+                text = f"{BEST_MARK} {text}"
+            cells.append(f"<td class=\"t\">{text}</td>" if c in text_cols else f"<td>{text}</td>")
+        body.append(("<tr class=\"best\">" if best else "<tr>") + "".join(cells) + "</tr>")
+    return (f"<div class=\"scroll\"><table><thead><tr>{head}</tr></thead><tbody>{''.join(body)}"
+            "</tbody></table></div>")
+
+
+def _number(v: Any) -> float:
+    try:
+        return float(v)
+    except (TypeError, ValueError):
+        return float("nan")
+
+
+def _best_run(rows: Sequence[Mapping[str, Any]], keys: Sequence[str]) -> Any:
+    """The run of the grid point with the highest mean HOTA over the sequences (the one the
+    figures star), or None."""
+    point = best_point([{**r, BEST_METRIC: _number(r.get(BEST_METRIC))} for r in rows], keys) \
+        if rows and BEST_METRIC in rows[0] else None
+    if point is None:
+        return None
+    return next(r["run"] for r in rows if all(r.get(k) == v for k, v in point.items()))
+
+
+def _key_metrics(per_run: Sequence[Mapping[str, Any]], keys: Sequence[str], best_run: Any) -> str:
+    """The block at the top: the best run (by mean HOTA) with its settings and key metrics, and
+    for each key metric the run that has its best value."""
+    metrics = [m for m in KEY_METRICS if per_run and m in per_run[0]]
+    if not metrics:
+        return "<p>No tracking metrics in this study (no ground truth).</p>"
+    lines = []
+    for label, metric in ((f"best run (mean {BEST_METRIC})", None), *((f"best {m}", m) for m in metrics)):
+        if metric is None:
+            run = best_run
+        else:
+            scored = [(v, i) for i, r in enumerate(per_run) if not math.isnan(v := _number(r.get(metric)))]
+            run = per_run[max(scored, key=lambda s: (s[0], -s[1]))[1]]["run"] if scored else None
+        row = next((r for r in per_run if r.get("run") == run), None)
+        if row is None:
+            continue
+        cells = "".join(f"<td>{_cell(row.get(k, ''))}</td>" for k in keys)
+        cells += "".join(f"<td>{_cell(_number(row.get(m)))}</td>" for m in metrics)
+        is_best = run == best_run
+        lines.append(("<tr class=\"best\">" if is_best else "<tr>") + f"<th>{_e(label)}</th>"
+                     f"<td>{BEST_MARK + ' ' if is_best else ''}{_cell(run)}</td>{cells}</tr>")
+    head = "".join(f"<th>{_e(c)}</th>" for c in ["", "run", *keys, *metrics])
+    return (f"<table id=\"key-metrics-table\"><thead><tr>{head}</tr></thead><tbody>{''.join(lines)}"
+            "</tbody></table>")
+
+
+def _active_parameters(meta: Mapping[str, Any]) -> tuple[dict[str, Any], int]:
+    """The base parameters that take effect at some grid point, and how many were left out.
+    A key this version does not know (a study from another version) is kept."""
+    base = meta.get("base_config", {})
+    flat = _flat(base)
+    domains = {g["key"]: list(g["values"]) for g in meta.get("grid", [])}
+    shown = {}
+    for key, value in flat.items():
+        try:
+            dead = inactive_in_study(base, [key], domains)
+        except (ConfigError, TypeError, ValueError, KeyError):
+            dead = []
+        if not dead:
+            shown[key] = value
+    return shown, len(flat) - len(shown)
 
 
 def _kv(d: Mapping[str, Any]) -> str:
@@ -158,6 +242,8 @@ def build_report(folder: str | Path, report_path: str | Path | None = None) -> s
     ev = dict(meta.get("evaluation", {}))
     sum_cols = ["run"] + keys + [c for c in SUMMARY_COLUMNS if summary and c in summary[0]]
     all_cols = list(rows[0].keys()) if rows else []
+    best_run = _best_run(rows, keys)
+    params, left_out = _active_parameters(meta)
     title = f"Parameter study: {', '.join(keys)}"
     out = [
         "<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\">",
@@ -166,15 +252,22 @@ def build_report(folder: str | Path, report_path: str | Path | None = None) -> s
         f"<p class=\"small\">{len(summary) or meta.get('runs', '?')} parameter settings × "
         f"{len(seqs)} sequence(s); study folder <code>{_e(folder.resolve())}</code>. "
         "Reproduce with <code>motiontrack sweep --replay " + _e(folder) + " -o NEW_DIR</code>.</p>",
+        "<section id=\"key-metrics\"><h2>Key metrics (mean over sequences)</h2>",
+        _key_metrics(summary or rows, keys, best_run),
+        f"<p class=\"small\">{BEST_MARK} marks the best run (highest mean {BEST_METRIC}) in the "
+        "tables below; the figures star it.</p></section>",
         "<h2>Sequences and ground truth</h2>",
         _table(seqs, ["name", "group", "source", "gt"], text_cols=["name", "group", "source", "gt"]),
         "<h2>Swept parameters</h2>", _table(grid_rows, ["parameter", "values"], ["parameter", "values"]),
         "<h2>Evaluation parameters</h2>", _kv(ev),
         "<h2>Figures</h2>", _figures(folder),
-        "<h2>Summary (mean over sequences)</h2>", _table(summary, sum_cols),
-        "<h2>All runs × sequences</h2>", _table(rows, all_cols, ["sequence", "group"]),
+        "<h2>Summary (mean over sequences)</h2>", _table(summary, sum_cols, best_run=best_run),
+        "<h2>All runs × sequences</h2>", _table(rows, all_cols, ["sequence", "group"],
+                                                  best_run=best_run),
         "<h2>Annotated clips</h2>", _clips(folder, report_dir),
-        "<h2>Base tracker parameters</h2>", _kv(_flat(meta.get("base_config", {}))),
+        "<h2>Base tracker parameters</h2>",
+        f"<p class=\"small\">Those of the stages in use; {left_out} parameter(s) of stages "
+        "and methods no run used are left out.</p>" if left_out else "", _kv(params),
         "<h2>Software</h2>", _kv(meta.get("versions", {})),
         "</body></html>",
     ]
