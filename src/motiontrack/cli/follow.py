@@ -84,10 +84,8 @@ def _opencv_reason(exc: Exception) -> str:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    from ..tracking.single import SINGLE_TRACKERS
     from ._common import FPS_HELP, CodecOption, out_help
 
-    names = "|".join(SINGLE_TRACKERS.names())
     p = sub.add_parser(
         "follow", help="follow one object from a given box with a single-object tracker",
         description="Follow one object through VIDEO, starting from --box in the first processed "
@@ -97,7 +95,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--box", required=True, metavar="x,y,w,h",
                    help="the object's box in the first processed frame (pixels, top-left + size); "
                         "write --box=-5,10,20,40 when x is negative")
-    p.add_argument("--tracker", default="csrt", metavar="NAME", help=f"{names} (default csrt)")
+    # no names listed here: they come from the tracker module (OpenCV, SciPy), which is
+    # imported when follow runs, not whenever any command starts
+    p.add_argument("--tracker", default="csrt", metavar="NAME",
+                   help="single-object tracker (default csrt; `motiontrack list` names those "
+                        "this installation has)")
     p.add_argument("--param", dest="params", action="append", default=[], metavar="KEY=VALUE",
                    help="tracker parameter, e.g. --param backbone=nano_backbone.onnx (repeatable)")
     p.add_argument("-o", "--out", help=out_help("follow"))
