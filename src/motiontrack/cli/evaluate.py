@@ -51,11 +51,22 @@ def register(subparsers) -> None:
                     "ignore-regions drops the tracker boxes on them too); framewise metrics follow "
                     "ViPER-PE. The table prints ratios in percent and counts as integers.",
     )
-    p.add_argument("--gt", required=True, help="ground-truth file (MOT CSV, ViPER, CVML, CVAT, JSON)")
-    p.add_argument("--pred", required=True, action="append",
+    p.add_argument("--gt", help="ground-truth file (MOT CSV, ViPER, CVML, CVAT, JSON)")
+    p.add_argument("--pred", action="append",
                    help="tracker result file, or a folder with one result file per tracker; "
                         "repeatable: one row per result file, named by the file, or by its folder "
                         "when file names repeat (e.g. many tracks.txt)")
+    p.add_argument("--gt-folder", type=Path, metavar="SPLIT",
+                   help="instead of --gt/--pred, a MOTChallenge benchmark (as TrackEval's "
+                        "run_mot_challenge.py): SPLIT/<seq>/gt/gt.txt and SPLIT/<seq>/seqinfo.ini "
+                        "(seqLength); every sequence scored and all of them combined as TrackEval "
+                        "combines them (COMBINED)")
+    p.add_argument("--trackers-folder", type=Path, metavar="TRACKERS",
+                   help="with --gt-folder: TRACKERS/<tracker>/data/<seq>.txt, one sub-folder per "
+                        "tracker, each needing a file for every sequence")
+    p.add_argument("--seqmap", type=Path, metavar="FILE",
+                   help="with --gt-folder: the sequences to evaluate, a TrackEval seqmap file "
+                        "(header line, then one name per line; default every sequence folder)")
     p.add_argument("--frames", type=frame_range, metavar="A:B",
                    help="evaluate only frames A..B (inclusive, 1-based)")
     p.add_argument("--metrics", default=None,
@@ -191,11 +202,12 @@ def _fmt(key: str, v) -> str:
     return f"{100 * float(v):.2f}"
 
 
-def format_table(results: dict[str, dict]) -> str:
-    """A plain-text table: one row per tracker, one column per metric (counts as integers,
-    ratios in percent), and a last line naming the scoring convention of the tracking metrics."""
+def format_table(results: dict[str, dict], label: str = "tracker") -> str:
+    """A plain-text table: one row per tracker (``label`` heads the column of row names), one
+    column per metric (counts as integers, ratios in percent), and a last line naming the
+    scoring convention of the tracking metrics."""
     keys = [k for k in TABLE_KEYS if any(k in r for r in results.values())]
-    head = ["tracker"] + [_SHORT.get(k, k) for k in keys]
+    head = [label] + [_SHORT.get(k, k) for k in keys]
     body = [[name] + [_fmt(k, r.get(k)) for k in keys] for name, r in results.items()]
     widths = [max(len(row[i]) for row in [head] + body) for i in range(len(head))]
     lines = ["  ".join(c.rjust(w) if i else c.ljust(w) for i, (c, w) in enumerate(zip(row, widths)))
@@ -218,6 +230,14 @@ def _jsonable(v):
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.gt_folder is not None or args.trackers_folder is not None:
+        return run_benchmark(args)
+    if args.seqmap is not None:
+        raise ConfigError("--seqmap selects sequences of --gt-folder; give --gt-folder and "
+                          "--trackers-folder with it")
+    if args.gt is None or not args.pred:
+        raise ConfigError("give --gt and --pred (one sequence), or --gt-folder and "
+                          "--trackers-folder (a MOTChallenge benchmark)")
     metrics = _parse_metrics(args.metrics)
     outputs = [p for p in (args.json, args.per_frame) if p is not None]
     if sum(map(is_stdout, outputs)) > 1:
@@ -261,4 +281,56 @@ def run(args: argparse.Namespace) -> int:
             w.writerow({k: _jsonable(v) for k, v in r.items()})
         atomic_write_text(args.per_frame, buf.getvalue())
         log.info("wrote %s", args.per_frame)
+    return 0
+
+
+def run_benchmark(args: argparse.Namespace) -> int:
+    """``--gt-folder SPLIT --trackers-folder TRACKERS``: every tracker on every sequence of the
+    split, and the sequences combined, as TrackEval's ``run_mot_challenge.py``."""
+    if args.gt is not None or args.pred:
+        raise ConfigError("--gt-folder/--trackers-folder evaluate a benchmark folder; they cannot "
+                          "be combined with --gt/--pred (one sequence)")
+    if args.gt_folder is None or args.trackers_folder is None:
+        raise ConfigError("a benchmark needs both --gt-folder and --trackers-folder")
+    if args.frames is not None or args.per_frame is not None:
+        raise ConfigError("--frames and --per-frame apply to --gt/--pred, not to a benchmark "
+                          "folder (sequences are scored whole, as TrackEval does)")
+    metrics = _parse_metrics(args.metrics) if args.metrics is not None else TRACKING
+    if "framewise" in metrics:
+        raise ConfigError("framewise metrics are not combined over sequences; with --gt-folder "
+                          "choose from clear,identity,hota")
+    outputs = [args.json] if args.json is not None else []
+    check_writable(outputs, args.force)
+    from ..evaluate.benchmark import COMBINED, evaluate_tracker, flatten_benchmark
+    from ..io.mot import read_mot
+    from ..io.mot_layout import split_sequences, tracker_file, tracker_names
+
+    seqs = split_sequences(args.gt_folder, args.seqmap)
+    trackers = tracker_names(args.trackers_folder)
+    # every file is found before any is read: a missing one fails at once, as in TrackEval
+    files = {t: {s.name: tracker_file(args.trackers_folder, t, s.name) for s in seqs}
+             for t in trackers}
+    gt = {s.name: read_mot(s.gt_path, kind="gt") for s in seqs}
+    lengths = {s.name: s.length for s in seqs}
+    zero = ignores_zero_marked(args.scoring)
+    results: dict[str, dict[str, dict]] = {}
+    for t in trackers:
+        log.debug("evaluating %s on %d sequences", t, len(seqs))
+        pred = {seq: read_mot(path, kind="results") for seq, path in files[t].items()}
+        try:
+            res = evaluate_tracker(gt, lengths, pred, metrics, ignore_zero_marked=zero)
+        except InputError as exc:  # name the tracker: the folder holds many
+            raise InputError(f"tracker {t}: {exc}") from None
+        results[t] = {seq: {**flat, "scoring": args.scoring}
+                      for seq, flat in flatten_benchmark(res).items()}
+    out = sys.stderr if args.json is not None and is_stdout(args.json) else sys.stdout
+    for i, (t, rows) in enumerate(results.items()):
+        out.write(("\n" if i else "") + f"{t} ({len(rows) - 1} sequences and {COMBINED})\n")
+        out.write(format_table(rows, label="sequence"))
+    if args.json:
+        # sequences in evaluation order, COMBINED last; metric keys sorted as for --gt/--pred
+        obj = {t: {seq: {k: _jsonable(flat[k]) for k in sorted(flat)} for seq, flat in rows.items()}
+               for t, rows in results.items()}
+        atomic_write_text(args.json, json.dumps(obj, indent=2) + "\n")
+        log.info("wrote %s", args.json)
     return 0
