@@ -146,6 +146,22 @@ def test_save_intermediate_movies(tmp_path):
     assert {"background", "difference", "motion"} <= set(summary["outputs"])
 
 
+def test_save_annotated_with_the_annotated_video_writes_one_file(tmp_path):
+    out = tmp_path / "o"
+    assert main(["track", "synth:walker?n_frames=12", "-o", str(out), "--codec", "mjpg",
+                 "--save", "annotated,motion"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    paths = list(summary["outputs"].values())
+    assert len(paths) == len(set(paths))
+    cap = cv2.VideoCapture(str(out / "annotated.avi"))
+    assert int(cap.get(cv2.CAP_PROP_FRAME_COUNT)) == 12
+    # without the annotated video, --save annotated still writes it
+    out2 = tmp_path / "o2"
+    assert main(["track", "synth:walker?n_frames=12", "-o", str(out2), "--codec", "mjpg",
+                 "--no-video", "--save", "annotated"]) == 0
+    assert "annotated" in json.loads((out2 / "summary.json").read_text())["outputs"]
+
+
 def test_save_unknown_stream_is_an_error(tmp_path, capsys):
     assert main(["track", SCENE, "-o", str(tmp_path / "o"), "--save", "nope"]) == 2
     assert "unknown --save stream" in capsys.readouterr().err

@@ -66,6 +66,10 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
     if mask_images is not None and detections is not None:
         raise ConfigError("--mask-images needs motion masks; with --detections there are none")
     streams = parse_streams(save)
+    if cfg.output.video and "annotated" in streams:
+        # the movie would be written to the annotated video's own file name
+        log.info("--save annotated: the annotated video is written anyway")
+        streams = tuple(s for s in streams if s != "annotated")
     codec = cfg.output.codec
     camera = None
     if cfg.measure.camera:
