@@ -282,6 +282,7 @@ def test_flow_cli_dense(tmp_path, capsys):
     (["synth:walker", "--param", "per_object=0"], "per_object"),
     (["synth:walker", "--mode", "dense", "--param", "trail=3"], "--param applies"),
     (["synth:walker", "--mode", "dense", "--gt", "gt.txt"], "--gt applies to --mode sparse"),
+    (["synth:walker", "--mode", "dense", "--scoring", "trackeval"], "--scoring applies"),
     (["synth:walker", "--max-magnitude", "0"], "max-magnitude"),
     (["synth:walker", "--set", "motion.method=nope"], "nope"),
     (["MISSING.avi"], "not found"),

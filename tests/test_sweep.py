@@ -224,6 +224,7 @@ def test_cli_two_parameters_and_intermediate_movies(tmp_path, capsys):
 
 @pytest.mark.parametrize("argv, message", [
     (["sweep", "synth:walker", "-o", "X"], "at least one --param"),
+    (["sweep", "--replay", "X", "--scoring", "ignore-regions", "-o", "Y"], "--scoring with it"),
     (["sweep", "synth:walker", "--param", "motion.nope=1", "-o", "X"], "unknown config key"),
     (["sweep", "video.avi", "--param", "regions.min_area=1", "-o", "X"], "--gt is required"),
     (["sweep", "synth:walker", "--param", "regions.min_area=1", "--save", "colour", "-o", "X"],

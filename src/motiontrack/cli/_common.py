@@ -135,7 +135,21 @@ def add_scoring_option(parser) -> None:
     from ..evaluate.scoring import DEFAULT_SCORING, SCORING, SCORING_HELP
 
     parser.add_argument("--scoring", choices=tuple(SCORING), default=DEFAULT_SCORING,
-                        help=SCORING_HELP)
+                        action=_GivenStore, help=SCORING_HELP)
+
+
+class _GivenStore(argparse.Action):
+    """Store the value and remember that it was given (``args.<dest>_given``), so a command can
+    refuse an option that would have no effect instead of ignoring it."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        setattr(namespace, self.dest, values)
+        setattr(namespace, f"{self.dest}_given", True)
+
+
+def given(args, dest: str) -> bool:
+    """Whether option ``dest`` (stored with :class:`_GivenStore`) was on the command line."""
+    return bool(getattr(args, f"{dest}_given", False))
 
 
 #: help of ``--fps``, the option of every command that reads video

@@ -17,9 +17,7 @@ log = logging.getLogger("motiontrack")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    from ._common import FPS_HELP
-
-    from ._common import CodecOption, out_help
+    from ._common import FPS_HELP, CodecOption, out_help
     from ._common import add_scoring_option
 
     p = sub.add_parser(
@@ -99,7 +97,7 @@ def _config(args):
 def cmd_flow(args) -> int:
     from ..errors import ConfigError
     from ..run import dense_flow_job, sparse_flow_job
-    from ._common import frame_loop, output_folder, read_gt
+    from ._common import frame_loop, given, output_folder, read_gt
 
     cfg = _config(args)
     if args.max_magnitude is not None and not args.max_magnitude > 0:
@@ -117,6 +115,9 @@ def cmd_flow(args) -> int:
             # dense flow makes no tracks, so there is nothing to score against ground truth
             raise ConfigError("--gt applies to --mode sparse (its tracks are scored); dense flow "
                               "makes no tracks to score")
+        if given(args, "scoring"):
+            raise ConfigError("--scoring applies to --mode sparse with --gt; dense flow makes no "
+                              "tracks to score")
         job = dense_flow_job(args.source, cfg, output_folder(args, "flow"),
                              max_magnitude=args.max_magnitude,
                              force=args.force)

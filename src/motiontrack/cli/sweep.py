@@ -55,7 +55,7 @@ def cmd_sweep(args) -> int:
     from ..errors import ConfigError, printable
     from ..studies.sweep import TABLE_FILE, load_study, run_sweep, study_from_args, versions
     from ..render.streams import parse_streams
-    from ._common import sigterm_as_interrupt
+    from ._common import given, sigterm_as_interrupt
 
     # options that need no file: refused before anything is read or written
     if args.jobs < 1:
@@ -63,9 +63,10 @@ def cmd_sweep(args) -> int:
     if args.resume and args.force:
         raise ConfigError("--resume continues a study and --force starts it over: give one of them")
     if args.replay:
-        if args.source or args.param or args.sequences or args.gt or args.config or args.overrides:
+        if (args.source or args.param or args.sequences or args.gt or args.config or args.overrides
+                or given(args, "scoring")):
             raise ConfigError("--replay takes the study from DIR/study.json; do not give SOURCE, "
-                              "--gt, --param, --sequences, --config or --set with it")
+                              "--gt, --param, --sequences, --config, --set or --scoring with it")
         study, meta = load_study(args.replay)
         now = versions()
         for k, v in meta.get("versions", {}).items():
