@@ -24,7 +24,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="ground truth per SOURCE, in order (optional for synth: sources)")
     p.add_argument("--param", action="append", default=[], metavar="KEY=V1,V2,...|LO:HI:STEP",
                    help="values of one config key: a list, or the inclusive range LO:HI:STEP, e.g. "
-                        "motion.median.threshold=0.05:0.3:0.05 (repeatable; the grid is the "
+                        "motion.knn.dist2_threshold=200:800:200 (repeatable; the grid is the "
                         "product)")
     p.add_argument("--sequences", help="TOML manifest of [[sequence]] tables (name, source, gt, group)")
     p.add_argument("--config", help="base TOML config")

@@ -27,7 +27,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    metavar="KEY=V1,V2,...|LO:HI:STEP|LO:HI[:log]",
                    help="values of one config key, searched: a list (choices), the range LO:HI:STEP "
                         "(the values of the same sweep --param), or a continuous range LO:HI, "
-                        "uniform or on a log scale, e.g. motion.median.threshold=0.02:0.4 "
+                        "uniform or on a log scale, e.g. motion.knn.dist2_threshold=100:1000:log "
                         "(repeatable)")
     p.add_argument("--metric", default="det_object_f1",
                    help="table column to optimise (default det_object_f1; e.g. det_pixel_f1, HOTA)")
