@@ -32,6 +32,19 @@ def test_draw_overlay_colours_and_legend():
     assert (corner == PALETTE[0]).all(axis=1).any()
 
 
+def _legend_rows(w, h):
+    """Rows (px) the one-line legend of a single layer covers on a black frame."""
+    img = np.zeros((h, w, 3), np.uint8)
+    out = draw_overlay(img, [("run a", PALETTE[0], np.zeros((0, 4)), np.zeros(0))])
+    rows = np.flatnonzero((out[:, : w // 2] == PALETTE[0]).all(axis=2).any(axis=1))
+    return rows.max() - rows.min() + 1
+
+
+def test_overlay_text_is_as_tall_relative_to_the_frame_at_320x240_and_1920x1080():
+    small, large = _legend_rows(320, 240) / 240, _legend_rows(1920, 1080) / 1080
+    assert small == pytest.approx(large, rel=0.25)
+
+
 def test_palette_is_distinct():
     assert len(set(PALETTE)) == len(PALETTE) and GT_COLOR not in PALETTE
 

@@ -15,7 +15,7 @@ import cv2
 import numpy as np
 
 from ..types import Annotations
-from .annotate import draw_label
+from .annotate import draw_label, line_width, text_scale
 
 log = logging.getLogger(__name__)
 
@@ -48,22 +48,25 @@ def draw_overlay(image: np.ndarray, layers: Sequence[tuple[str, tuple[int, int, 
     (h, w, 3) uint8
     """
     img = image.copy() if image.ndim == 3 else cv2.cvtColor(image, cv2.COLOR_GRAY2BGR)
+    # text and lines grow with the frame, as in the annotated video
+    scale, thickness = text_scale(img.shape)
+    width = line_width(img.shape)
     for li, (name, color, boxes, ids) in enumerate(layers):
-        thick = 2 if li == 0 else 1
+        thick = width if li == 0 else max(1, width // 2)
         for b, i in zip(np.asarray(boxes).reshape(-1, 4), np.asarray(ids).reshape(-1)):
             p1 = (int(round(b[0])), int(round(b[1])))
             p2 = (int(round(b[0] + b[2])), int(round(b[1] + b[3])))
             cv2.rectangle(img, p1, p2, color, thick)
-            cv2.putText(img, str(int(i)), (p1[0] + 2, p2[1] - 3), cv2.FONT_HERSHEY_SIMPLEX, 0.35,
-                        color, 1, cv2.LINE_AA)
+            cv2.putText(img, str(int(i)), (p1[0] + 2, p2[1] - 3), cv2.FONT_HERSHEY_SIMPLEX,
+                        0.7 * scale, color, thickness, cv2.LINE_AA)
     if legend:
         y = 4
         for name, color, _, _ in layers:
-            (tw, th), base = cv2.getTextSize(name, cv2.FONT_HERSHEY_SIMPLEX, 0.5, 1)
+            (tw, th), base = cv2.getTextSize(name, cv2.FONT_HERSHEY_SIMPLEX, scale, thickness)
             y += th + base + 4
-            draw_label(img, name, (6, y), color)
+            draw_label(img, name, (6, y), color, scale=None)
     if frame_label:
-        draw_label(img, frame_label, (6, img.shape[0] - 6), (30, 30, 30))
+        draw_label(img, frame_label, (6, img.shape[0] - 6), (30, 30, 30), scale=None)
     return img
 
 
