@@ -28,6 +28,11 @@ __all__ = [
     "PeopleFrame",
     "Annotations",
     "INT_LIMIT",
+    "Event",
+    "EVENT_TYPES",
+    "EVENTS_SCHEMA",
+    "EVENTS_SCHEMA_VERSION",
+    "events_header",
 ]
 
 
@@ -374,3 +379,194 @@ class Annotations:
             **{c: np.concatenate([getattr(self, c), getattr(other, c)]) for c in _ANN_COLUMNS},
             meta={**self.meta, **other.meta},
         )
+
+
+# ------------------------------------------------------------------------------------- events
+#: every event type scene analytics emits, in the order documentation lists them
+EVENT_TYPES = (
+    "line_cross",
+    "zone_enter",
+    "zone_exit",
+    "loiter",
+    "stationary_start",
+    "stationary_end",
+    "abandoned",
+    "speeding",
+)
+
+#: the ``schema`` of an events file's header line, and its version (raised on any change a reader
+#: of the previous version would misread)
+EVENTS_SCHEMA = "motiontrack.events"
+EVENTS_SCHEMA_VERSION = 1
+
+#: the fields each type needs beyond ``type, frame, t, track, x, y`` (``speeding`` needs exactly
+#: one of its two speeds), and the optional ones it may carry
+_EVENT_REQUIRED = {
+    "line_cross": ("line", "direction"),
+    "zone_enter": ("zone",),
+    "zone_exit": ("zone", "dwell_s"),
+    "loiter": ("zone", "dwell_s"),
+    "stationary_start": (),
+    "stationary_end": ("duration_s",),
+    "abandoned": ("duration_s",),
+    "speeding": (),
+}
+_EVENT_OPTIONAL = {"abandoned": ("owner",), "speeding": ("speed_mps", "speed_px_s")}
+#: the JSON key order of every event (absent keys are left out)
+_EVENT_KEYS = (
+    "type", "frame", "t", "track", "x", "y", "X", "Y", "line", "direction", "zone", "dwell_s",
+    "speed_mps", "speed_px_s", "duration_s", "owner",
+)  # fmt: skip
+_EVENT_EXTRA = ("line", "direction", "zone", "dwell_s", "speed_mps", "speed_px_s", "duration_s", "owner")
+_EVENT_STR = ("line", "direction", "zone")
+_EVENT_INT = ("frame", "track", "owner")
+
+
+@dataclass(frozen=True)
+class Event:
+    """One scene-analytics event: what happened, when, to which track and where.
+
+    Attributes
+    ----------
+    type : str
+        One of :data:`EVENT_TYPES`.
+    frame : int
+        1-based frame number (MOTChallenge numbering).
+    t : float
+        Seconds since the first frame, ``(frame - 1) / fps``.
+    track : int
+        The track the event is about.
+    x, y : float
+        The track's anchor point in source-frame pixels.
+    X, Y : float or None
+        The anchor on the ground plane in metres (only with a camera calibration; both or none).
+    line, direction : str or None
+        ``line_cross``: the line's name and ``"in"`` or ``"out"``.
+    zone : str or None
+        ``zone_enter``, ``zone_exit``, ``loiter``: the zone's name.
+    dwell_s : float or None
+        ``zone_exit``, ``loiter``: seconds in the zone so far.
+    speed_mps, speed_px_s : float or None
+        ``speeding``: metres per second (with a camera) or pixels per second (without); exactly one.
+    duration_s : float or None
+        ``stationary_end``, ``abandoned``: seconds the object has been static.
+    owner : int or None
+        ``abandoned``: the track that left the object, when known.
+    """
+
+    type: str
+    frame: int
+    t: float
+    track: int
+    x: float
+    y: float
+    X: float | None = None
+    Y: float | None = None
+    line: str | None = None
+    direction: str | None = None
+    zone: str | None = None
+    dwell_s: float | None = None
+    speed_mps: float | None = None
+    speed_px_s: float | None = None
+    duration_s: float | None = None
+    owner: int | None = None
+
+    def __post_init__(self) -> None:
+        if self.type not in _EVENT_REQUIRED:
+            raise ValueError(f"event type must be one of {', '.join(EVENT_TYPES)}, got {self.type!r}")
+        for name in _EVENT_KEYS[1:]:
+            v = getattr(self, name)
+            if v is None:
+                continue
+            if name in _EVENT_STR:
+                ok = isinstance(v, str) and v != ""
+                expected = "a non-empty string"
+            elif name in _EVENT_INT:
+                ok = isinstance(v, (int, np.integer)) and not isinstance(v, bool)
+                expected = "an integer"
+            else:
+                ok = isinstance(v, (int, float, np.number)) and not isinstance(v, bool)
+                ok = ok and math.isfinite(v)
+                expected = "a finite number"
+            if not ok:
+                raise ValueError(f"{self.type} event {name} must be {expected}, got {v!r}")
+        for name in ("frame", "t", "track", "x", "y"):
+            if getattr(self, name) is None:
+                raise ValueError(f"{self.type} event needs {name}")
+        if self.frame < 1:
+            raise ValueError(f"event frame must be >= 1 (1-based), got frame={self.frame}")
+        if self.t < 0:
+            raise ValueError(f"event t must be >= 0 seconds, got t={self.t}")
+        if (self.X is None) != (self.Y is None):
+            raise ValueError(f"{self.type} event needs both X and Y or neither")
+        required = _EVENT_REQUIRED[self.type]
+        allowed = required + _EVENT_OPTIONAL.get(self.type, ())
+        for name in _EVENT_EXTRA:
+            present = getattr(self, name) is not None
+            if name in required and not present:
+                raise ValueError(f"{self.type} event needs {name}")
+            if present and name not in allowed:
+                raise ValueError(f"{self.type} event cannot have {name}")
+        if self.direction is not None and self.direction not in ("in", "out"):
+            raise ValueError(f"line_cross direction must be 'in' or 'out', got {self.direction!r}")
+        if self.type == "speeding" and (self.speed_mps is None) == (self.speed_px_s is None):
+            raise ValueError("speeding event needs exactly one of speed_mps and speed_px_s")
+        for name in ("dwell_s", "duration_s", "speed_mps", "speed_px_s"):
+            v = getattr(self, name)
+            if v is not None and v < 0:
+                raise ValueError(f"{self.type} event {name} must be >= 0, got {v}")
+
+    def to_json(self) -> dict:
+        """The event as one JSON object: keys in schema order, absent ones left out."""
+        out = {}
+        for name in _EVENT_KEYS:
+            v = getattr(self, name)
+            if v is None:
+                continue
+            if name in _EVENT_INT:
+                v = int(v)
+            elif name not in _EVENT_STR and name != "type":
+                v = float(v)
+            out[name] = v
+        return out
+
+    @classmethod
+    def from_json(cls, obj: Mapping) -> "Event":
+        """The event an object of an events file describes (:meth:`to_json`'s inverse).
+
+        Raises ``ValueError`` naming the problem for anything that is not an event of this
+        schema version: not an object, an unknown type or key, a missing or mistyped field.
+        """
+        if not isinstance(obj, Mapping):
+            raise ValueError(f"an event must be a JSON object, got {type(obj).__name__}")
+        kind = obj.get("type")
+        if kind not in _EVENT_REQUIRED:
+            shown = repr(kind)[:40]
+            raise ValueError(f"event type must be one of {', '.join(EVENT_TYPES)}, got {shown}")
+        unknown = [str(k) for k in obj if k not in _EVENT_KEYS]
+        if unknown:
+            raise ValueError(f"{kind} event has unknown key {unknown[0][:40]!r}")
+        for name in ("frame", "t", "track", "x", "y"):
+            if name not in obj:
+                raise ValueError(f"{kind} event needs {name}")
+        values = dict(obj)
+        for name in _EVENT_KEYS[1:]:
+            v = values.get(name)
+            # JSON has one number type: 3.0 is a fine frame, 3.5 is not; ints are fine floats
+            if name in _EVENT_INT and isinstance(v, float) and v.is_integer():
+                values[name] = int(v)
+            elif name not in _EVENT_INT and name not in _EVENT_STR:
+                if isinstance(v, int) and not isinstance(v, bool):
+                    values[name] = float(v)
+        return cls(**values)
+
+
+def events_header(fps: float, source: str = "", scene: str = "") -> dict:
+    """The first line of an events file: schema name and version, frame rate, what was analysed."""
+    return {
+        "schema": EVENTS_SCHEMA,
+        "version": EVENTS_SCHEMA_VERSION,
+        "fps": float(fps),
+        "source": str(source),
+        "scene": str(scene),
+    }
