@@ -33,6 +33,7 @@ __all__ = [
     "EVENTS_SCHEMA",
     "EVENTS_SCHEMA_VERSION",
     "events_header",
+    "SceneFrame",
 ]
 
 
@@ -240,6 +241,7 @@ class FrameResult:
     raw_mask: np.ndarray | None = field(default=None, repr=False)
     people: PeopleFrame | None = field(default=None, repr=False)
     earlier: tuple[tuple[int, Track], ...] = field(default=(), repr=False)
+    scene: SceneFrame | None = field(default=None, repr=False)
 
     def reported(self) -> list[tuple[int, Track]]:
         """``(frame index, track)`` rows this frame adds to a tracks file: its tracks, then the
@@ -570,3 +572,25 @@ def events_header(fps: float, source: str = "", scene: str = "") -> dict:
         "source": str(source),
         "scene": str(scene),
     }
+
+
+@dataclass(frozen=True)
+class SceneFrame:
+    """What scene analytics made of one frame's tracks (:class:`motiontrack.analytics.Analytics`).
+
+    Attributes
+    ----------
+    frame : int
+        1-based frame number.
+    events : tuple of Event
+        The events of this frame, in a fixed order (by track, then rule).
+    line_counts : mapping of line name → (in, out)
+        Crossings of each line so far.
+    occupancy : mapping of zone name → int
+        Tracks inside each zone after this frame.
+    """
+
+    frame: int
+    events: tuple[Event, ...] = ()
+    line_counts: Mapping[str, tuple[int, int]] = field(default_factory=dict)
+    occupancy: Mapping[str, int] = field(default_factory=dict)
