@@ -55,11 +55,16 @@ def _label_boxes(fig):
 def test_point_labels_of_pr_curves_do_not_overlap(captured):
     rows = _crowded_rows()
     plots.pr_curves(rows, "thr", "pr", best=plots.best_point(rows, ["thr"]))
-    boxes = _label_boxes(captured[0])
+    fig = captured[0]
+    boxes = _label_boxes(fig)
     assert all(len(b) >= 5 for b in boxes)        # labelled, just not every crowded point
-    for axis_boxes in boxes:
+    for ax, axis_boxes in zip(fig.axes, boxes):
         for a, b in itertools.combinations(axis_boxes, 2):
             assert not a.overlaps(b), (a, b)
+        # nor on a point of a curve
+        points = [ax.transData.transform(xy) for line in ax.get_lines() if line.get_marker() == "o"
+                  for xy in line.get_xydata()]
+        assert not any(box.contains(*p) for box in axis_boxes for p in points)
 
 
 def test_labels_of_a_sparse_curve_are_all_placed(captured):

@@ -117,28 +117,45 @@ _LABEL_SPOTS = tuple((dx * s, dy * s, ha, va) for s in (1, 2, 3) for dx, dy, ha,
     (6, 0, "left", "center"), (-6, 0, "right", "center")))
 
 
+def _obstacles(ax: Any, px_per_pt: float) -> np.ndarray:
+    """(N, 4) display-space boxes ``x0, y0, x1, y1`` a label must not cover: every marker of
+    the axes and points every few pixels along every line (the curves and y = x)."""
+    boxes = []
+    for line in ax.get_lines():
+        pts = ax.transData.transform(np.column_stack(line.get_data()).astype(float))
+        pts = pts[np.isfinite(pts).all(axis=1)]
+        if line.get_marker() not in (None, "", "None", " ") and len(pts):
+            r = line.get_markersize() * px_per_pt / 2 + 1       # marker radius in pixels
+            boxes.append(np.column_stack([pts - r, pts + r]))
+        if line.get_linestyle() not in ("None", "none", "", " ") and len(pts) > 1:
+            for a, b in zip(pts[:-1], pts[1:]):
+                n = max(int(np.hypot(*(b - a)) / 3), 1)
+                seg = a + (b - a) * np.linspace(0, 1, n + 1)[:, None]
+                boxes.append(np.column_stack([seg - 1, seg + 1]))
+    return np.concatenate(boxes) if boxes else np.zeros((0, 4))
+
+
+def _free(box: tuple[float, float, float, float], others: np.ndarray) -> bool:
+    x0, y0, x1, y1 = box
+    return not np.any((x0 < others[:, 2]) & (others[:, 0] < x1) & (y0 < others[:, 3])
+                      & (others[:, 1] < y1))
+
+
 def place_labels(ax: Any, xs: Sequence[float], ys: Sequence[float], texts: Sequence[str], *,
                  color: Any, fontsize: float = 7, taken: list | None = None) -> list[Any]:
     """Label the points ``(xs[i], ys[i])`` (data coordinates) with ``texts[i]``, each at the
     first spot of :data:`_LABEL_SPOTS` where it overlaps no label placed before (those in
-    ``taken``, a list of display-space boxes this call extends), no marker of the axes and does
-    not leave the axes; a point without such a spot stays unlabelled. Call it after the axes'
-    limits and aspect are set. Returns the labels placed."""
+    ``taken``, a list of display-space boxes ``(x0, y0, x1, y1)`` this call extends), no marker
+    and no line of the axes, and does not leave the axes; a point without such a spot stays
+    unlabelled. Call it after the axes' limits and aspect are set. Returns the labels placed."""
     from matplotlib.font_manager import FontProperties
-    from matplotlib.transforms import Bbox
 
     fig = ax.figure
     renderer = fig.canvas.get_renderer()
     ax.apply_aspect()
     px_per_pt = fig.dpi / 72
     taken = [] if taken is None else taken
-    markers = []
-    for line in ax.get_lines():
-        if line.get_marker() in (None, "", "None", " "):
-            continue
-        r = line.get_markersize() * px_per_pt / 2 + 1   # marker radius in pixels
-        for px, py in ax.transData.transform(np.column_stack(line.get_data()).astype(float)):
-            markers.append(Bbox([[px - r, py - r], [px + r, py + r]]))
+    obstacles = _obstacles(ax, px_per_pt)
     frame = ax.get_window_extent(renderer)
     font = FontProperties(size=fontsize)
     placed = []
@@ -147,13 +164,11 @@ def place_labels(ax: Any, xs: Sequence[float], ys: Sequence[float], texts: Seque
         # the label's box at each spot, from its measured size (cheaper than drawing it there)
         w, h, _ = renderer.get_text_width_height_descent(text, font, ismath=False)
         for dx, dy, ha, va in _LABEL_SPOTS:
-            x0 = px + dx * px_per_pt - {"left": 0, "center": w / 2, "right": w}[ha]
-            y0 = py + dy * px_per_pt - {"bottom": 0, "center": h / 2, "top": h}[va]
-            box = Bbox([[x0 - 2, y0 - 2], [x0 + w + 2, y0 + h + 2]])
-            inside = (frame.x0 <= box.x0 and box.x1 <= frame.x1 and frame.y0 <= box.y0
-                      and box.y1 <= frame.y1)
-            if inside and not any(box.overlaps(b) for b in taken) and not any(
-                    box.overlaps(b) for b in markers):
+            x0 = px + dx * px_per_pt - {"left": 0, "center": w / 2, "right": w}[ha] - 2
+            y0 = py + dy * px_per_pt - {"bottom": 0, "center": h / 2, "top": h}[va] - 2
+            box = (x0, y0, x0 + w + 4, y0 + h + 4)
+            inside = frame.x0 <= x0 and box[2] <= frame.x1 and frame.y0 <= y0 and box[3] <= frame.y1
+            if inside and _free(box, obstacles) and _free(box, np.array(taken).reshape(-1, 4)):
                 taken.append(box)
                 placed.append(ax.annotate(text, ax.transData.inverted().transform((px, py)),
                                           textcoords="offset points", xytext=(dx, dy), ha=ha,
@@ -219,7 +234,7 @@ def pr_curves(rows: Sequence[Mapping[str, Any]], key: str, stem: str | Path, *, 
                title=f"{label}-based", aspect="equal")
         ax.grid(True, alpha=0.3)
         legend = ax.legend(fontsize=7, loc="lower left")
-        taken = [legend.get_window_extent(ax.figure.canvas.get_renderer())]
+        taken = [tuple(legend.get_window_extent(ax.figure.canvas.get_renderer()).extents)]
         for xs, ys, texts, color in reversed(to_label):   # the thick average first: its labels win
             place_labels(ax, xs, ys, texts, color=color, taken=taken)
     what = "motion regions" if prefix == "det_" else "tracks"
