@@ -362,3 +362,73 @@ def test_zero_marked_rows_as_ignore_regions(ignore, expected):
     res = flat(gt, pred, ignore_zero_marked=ignore)
     for key, value in expected.items():
         assert res[key] == pytest.approx(value), key
+
+
+def _crowd(seed: int) -> tuple[Annotations, Annotations]:
+    """A crowded MOT17-style sequence: people overlapping each other, distractor classes and
+    zero-marked rows, a tracker with jitter, misses, identity swaps, false positives, exact
+    duplicate boxes (ties for the assignment solver) and a box over two people."""
+    rng = np.random.default_rng(seed)
+    g_rows, p_rows = [], []
+    for f in range(1, 61):
+        for i in range(1, 13):
+            x, y = 15 * i + 3 * np.sin(f / 5 + i), 5 * (i % 3)
+            klass = 7 if i % 5 == 0 else 1
+            g_rows.append((f, i, x, y, 24, 60, int(i % 7 != 0), klass))
+            if rng.random() < 0.85:
+                tid = ((i - 1) ^ 1) + 1 if f > 30 and i <= 6 else i  # three swaps
+                box = (x + rng.normal(0, 3), y + rng.normal(0, 3), 24, 60)
+                p_rows.append((f, tid, *box))
+                if rng.random() < 0.1:
+                    p_rows.append((f, 100 + tid, *box))
+        for k in range(rng.poisson(2)):
+            p_rows.append((f, 500 + 10 * f + k, rng.uniform(0, 200), rng.uniform(0, 20), 24, 60))
+        if f % 2:  # apart from the crowd: one wide box over two people (IoU 0.5 with each)
+            g_rows += [(f, 50, 400, 0, 20, 60, 1, 1), (f, 51, 420, 0, 20, 60, 1, 1)]
+            p_rows.append((f, 60, 400, 0, 40, 60))
+    return ann(g_rows, gt=True), ann(p_rows)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+@pytest.mark.parametrize("zero", [False, True])
+def test_direct_matches_equal_the_solver_in_every_frame(monkeypatch, seed, zero):
+    # where the candidate pairs of a frame share no row they are taken without the solver;
+    # forcing the solver into every frame must give the very same numbers, bit for bit
+    gt, pred = _crowd(seed)
+    seen = []
+    shared = mot._shared_rows
+    monkeypatch.setattr(mot, "_shared_rows", lambda *a: seen.append(shared(*a)) or seen[-1])
+    fast = mot.evaluate_sequence(gt, pred, ignore_zero_marked=zero)
+    hard = np.concatenate(seen)
+    assert hard.any() and not hard.all()  # both kinds of frame occur
+    monkeypatch.setattr(mot, "_shared_rows", lambda t, *a: np.ones(len(t.frames), dtype=bool))
+    solver = mot.evaluate_sequence(gt, pred, ignore_zero_marked=zero)
+    for fam in solver:
+        for k, v in solver[fam].items():
+            assert np.array_equal(fast[fam][k], v), (fam, k)
+
+
+def test_restricted_pair_table_equals_one_computed_on_the_kept_rows():
+    gt, pred = _crowd(3)
+    rng = np.random.default_rng(3)
+    keep_g, keep_p = rng.random(len(gt)) < 0.7, rng.random(len(pred)) < 0.6
+    full = mot.pair_table(gt.frames, gt.boxes, pred.frames, pred.boxes)
+    got = mot.restrict(full, gt.frames, pred.frames, keep_g, keep_p)
+    ref = mot.pair_table(gt.frames[keep_g], gt.boxes[keep_g], pred.frames[keep_p],
+                         pred.boxes[keep_p])
+    assert len(ref.sim) > 100
+    for k in ("frames", "g0", "ng", "p0", "np_", "offsets", "gi", "pi", "sim"):
+        assert np.array_equal(getattr(got, k), getattr(ref, k)), k
+
+
+def test_frame_sums_add_left_to_right():
+    rng = np.random.default_rng(5)
+    values = rng.random(500) * 10.0 ** rng.integers(-8, 8, 500)
+    frames = np.sort(rng.integers(0, 40, 500))
+    expected = []
+    for f in np.unique(frames):
+        s = 0.0
+        for v in values[frames == f]:
+            s += v
+        expected.append(s)
+    assert mot._frame_sums(values, frames).tolist() == expected

@@ -58,6 +58,7 @@ __all__ = [
     "SequenceData",
     "PairTable",
     "pair_table",
+    "restrict",
     "box_iou_xywh",
     "preprocess",
     "clear_metrics",
@@ -154,8 +155,59 @@ class PairTable:
         m[self.gi[a:b] - self.g0[f], self.pi[a:b] - self.p0[f]] = self.sim[a:b]
         return m
 
+    def pair_frames(self) -> np.ndarray:
+        """(K,) int64: the frame index (into ``frames``) of each pair."""
+        return np.repeat(np.arange(len(self.frames)), np.diff(self.offsets))
+
 
 _CHUNK = 1 << 17  # pairs per vectorised block: keeps temporaries in cache
+
+
+def _frame_blocks(g_frames: np.ndarray, p_frames: np.ndarray) -> tuple[np.ndarray, ...]:
+    """Frames holding both gt and tracker rows, and each side's first row and row count there."""
+    gu, gs, gc = np.unique(g_frames, return_index=True, return_counts=True)
+    pu, ps, pc = np.unique(p_frames, return_index=True, return_counts=True)
+    common, gi_u, pi_u = np.intersect1d(gu, pu, assume_unique=True, return_indices=True)
+    i64 = np.int64
+    return (common.astype(i64), gs[gi_u].astype(i64), gc[gi_u].astype(i64),
+            ps[pi_u].astype(i64), pc[pi_u].astype(i64))
+
+
+def _ranges(starts: np.ndarray, lengths: np.ndarray) -> np.ndarray:
+    """``concatenate([arange(s, s + n) for s, n in zip(starts, lengths)])`` without the loop."""
+    ends = np.cumsum(lengths)
+    return np.arange(int(ends[-1]) if len(ends) else 0) + np.repeat(starts - (ends - lengths),
+                                                                    lengths)
+
+
+def _extents(boxes: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+    """``(left, right)`` and ``(top, bottom)`` of ``x, y, w, h`` boxes, as :func:`box_iou_xywh`
+    computes them."""
+    return [(boxes[:, k], boxes[:, k] + boxes[:, k + 2]) for k in (0, 1)]
+
+
+def _overlaps(g_boxes: np.ndarray, p_boxes: np.ndarray, g_ext: list, p_ext: list,
+              gi: np.ndarray, pi: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The pairs ``(gi, pi)`` whose IoU is > 0, with that IoU. Pairs apart in x or in y are
+    dropped first with the very operations :func:`box_iou_xywh` does (the same floats, so the
+    same pairs survive); the IoU is computed on the rest only."""
+    for (g_lo, g_hi), (p_lo, p_hi) in zip(g_ext, p_ext):
+        near = np.minimum(g_hi[gi], p_hi[pi]) - np.maximum(g_lo[gi], p_lo[pi]) > 0
+        gi, pi = gi[near], pi[near]
+    sim = box_iou_xywh(g_boxes[gi], p_boxes[pi])
+    nz = sim > 0
+    return gi[nz], pi[nz], sim[nz]
+
+
+def _table(g_frames: np.ndarray, p_frames: np.ndarray, gi: np.ndarray, pi: np.ndarray,
+           sim: np.ndarray) -> PairTable:
+    """A :class:`PairTable` from its overlapping pairs (row-major within each frame)."""
+    frames, g0, ng, p0, npp = _frame_blocks(g_frames, p_frames)
+    counts = np.bincount(np.searchsorted(frames, g_frames[gi]), minlength=len(frames))
+    return PairTable(frames=frames, g0=g0, ng=ng, p0=p0, np_=npp,
+                     offsets=np.concatenate([[0], np.cumsum(counts)]).astype(np.int64),
+                     gi=gi.astype(np.int64), pi=pi.astype(np.int64),
+                     sim=sim.astype(np.float64))
 
 
 def pair_table(g_frames: np.ndarray, g_boxes: np.ndarray,
@@ -167,39 +219,35 @@ def pair_table(g_frames: np.ndarray, g_boxes: np.ndarray,
     g_frames, p_frames : (G,), (P,) int64, each sorted ascending.
     g_boxes, p_boxes : (G, 4), (P, 4) float64 ``x, y, w, h``.
     """
-    gu, gs, gc = np.unique(g_frames, return_index=True, return_counts=True)
-    pu, ps, pc = np.unique(p_frames, return_index=True, return_counts=True)
-    common, gi_u, pi_u = np.intersect1d(gu, pu, assume_unique=True, return_indices=True)
-    g0, ng = gs[gi_u].astype(np.int64), gc[gi_u].astype(np.int64)
-    p0, npp = ps[pi_u].astype(np.int64), pc[pi_u].astype(np.int64)
-    sizes = ng * npp
-    cum = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
-    gis, pis, sims, counts = [], [], [], []
+    g_boxes = np.asarray(g_boxes, dtype=np.float64).reshape(-1, 4)
+    p_boxes = np.asarray(p_boxes, dtype=np.float64).reshape(-1, 4)
+    _, g0, ng, p0, npp = _frame_blocks(g_frames, p_frames)
+    g_ext, p_ext = _extents(g_boxes), _extents(p_boxes)
+    cum = np.concatenate([[0], np.cumsum(ng * npp)]).astype(np.int64)
+    gis, pis, sims = [np.zeros(0, np.int64)], [np.zeros(0, np.int64)], [np.zeros(0)]
     start = 0
-    while start < len(common):
+    while start < len(g0):
         stop = int(np.searchsorted(cum, cum[start] + _CHUNK, side="right"))
         stop = max(stop - 1, start + 1)
-        fr = np.arange(start, stop)
-        k = int(cum[stop] - cum[start])
-        fidx = np.repeat(fr, sizes[fr])
-        local = np.arange(k) - (cum[fidx] - cum[start])
-        gi = g0[fidx] + local // npp[fidx]
-        pi = p0[fidx] + local % npp[fidx]
-        sim = box_iou_xywh(g_boxes[gi], p_boxes[pi])
-        nz = sim > 0
-        gis.append(gi[nz])
-        pis.append(pi[nz])
-        sims.append(sim[nz])
-        counts.append(np.bincount(fidx[nz] - start, minlength=len(fr)))
+        fr = slice(start, stop)
+        rows = _ranges(g0[fr], ng[fr])  # every gt row of these frames ...
+        width = np.repeat(npp[fr], ng[fr])  # ... meets every tracker row of its frame
+        gi = np.repeat(rows, width)
+        pi = _ranges(np.repeat(p0[fr], ng[fr]), width)
+        for out, v in zip((gis, pis, sims), _overlaps(g_boxes, p_boxes, g_ext, p_ext, gi, pi)):
+            out.append(v)
         start = stop
-    e = np.zeros(0, np.int64)
-    cnt = np.concatenate(counts) if counts else e
-    return PairTable(
-        frames=common.astype(np.int64), g0=g0, ng=ng, p0=p0, np_=npp,
-        offsets=np.concatenate([[0], np.cumsum(cnt)]).astype(np.int64),
-        gi=np.concatenate(gis) if gis else e, pi=np.concatenate(pis) if pis else e,
-        sim=np.concatenate(sims) if sims else np.zeros(0),
-    )
+    return _table(g_frames, p_frames, np.concatenate(gis), np.concatenate(pis),
+                  np.concatenate(sims))
+
+
+def restrict(t: PairTable, g_frames: np.ndarray, p_frames: np.ndarray, g_keep: np.ndarray,
+             p_keep: np.ndarray) -> PairTable:
+    """The table of the kept rows only (``g_frames``, ``p_frames``: those of all rows), taken
+    from ``t`` (the table of all rows) instead of computing the IoU again."""
+    k = g_keep[t.gi] & p_keep[t.pi]
+    g_new, p_new = np.cumsum(g_keep) - 1, np.cumsum(p_keep) - 1
+    return _table(g_frames[g_keep], p_frames[p_keep], g_new[t.gi[k]], p_new[t.pi[k]], t.sim[k])
 
 
 # --------------------------------------------------------------------------------------------------
@@ -279,20 +327,42 @@ def _sorted(ann: Annotations) -> Annotations:
     return ann.select(np.argsort(ann.frames, kind="stable"))
 
 
-def _distractor_removal(gt: Annotations, pred: Annotations, distractors: Sequence[int],
-                        also: np.ndarray | None = None) -> np.ndarray:
-    """Boolean keep-mask over ``pred`` (both sorted by frame): steps 1-2 of the preprocessing.
+def _shared_rows(t: PairTable, sel: np.ndarray, pair_frame: np.ndarray) -> np.ndarray:
+    """(F,) bool: the frames in which two of the pairs ``sel`` (indices into ``t``, ascending)
+    share a gt row or a tracker row.
+
+    In every other frame those pairs form a matching; when they are the only positive entries of
+    the frame's weight matrix, every maximum-weight assignment picks each of them and nothing
+    else of positive weight, whatever the solver's tie-breaking. The metrics take such frames'
+    matches directly and run the Hungarian algorithm on the others only."""
+    out = np.zeros(len(t.frames), dtype=bool)
+    gi = t.gi[sel]  # row-major: pairs of one gt row are adjacent
+    out[pair_frame[sel[1:][gi[1:] == gi[:-1]]]] = True
+    order = np.argsort(t.pi[sel], kind="stable")  # a tracker row lives in one frame only
+    pi = t.pi[sel][order]
+    out[pair_frame[sel[order][1:][pi[1:] == pi[:-1]]]] = True
+    return out
+
+
+def _distractor_removal(gt: Annotations, num_pred: int, t: PairTable,
+                        distractors: Sequence[int], also: np.ndarray | None = None) -> np.ndarray:
+    """Boolean keep-mask over the ``num_pred`` tracker rows (``t``: the pair table of all rows,
+    both sides sorted by frame): steps 1-2 of the preprocessing.
 
     Tracker boxes matched (Hungarian, IoU >= 0.5) to gt rows of a distractor class are removed;
     ``also`` marks further gt rows treated the same way (ignore regions)."""
-    keep = np.ones(len(pred), dtype=bool)
+    keep = np.ones(num_pred, dtype=bool)
     is_dis = np.isin(gt.classes, np.asarray(distractors, dtype=np.int64))
     if also is not None:
         is_dis = is_dis | also
-    if not is_dis.any() or len(pred) == 0:
+    if not is_dis.any() or num_pred == 0:
         return keep
-    t = pair_table(gt.frames, gt.boxes, pred.frames, pred.boxes)
-    for f in np.flatnonzero(np.isin(t.frames, np.unique(gt.frames[is_dis]))):
+    pf = t.pair_frames()
+    cand = np.flatnonzero(t.sim >= 0.5 - EPS)  # the entries the matching may use
+    hard = _shared_rows(t, cand, pf)
+    on_dis = cand[is_dis[t.gi[cand]]]
+    keep[t.pi[on_dis[~hard[pf[on_dis]]]]] = False
+    for f in np.unique(pf[on_dis[hard[pf[on_dis]]]]):
         s = t.dense(f)
         s[s < 0.5 - EPS] = 0
         r, c = linear_sum_assignment(-s)
@@ -346,17 +416,19 @@ def preprocess(
     gt_s, pred_s = _sorted(gt), _sorted(pred)
     classes_known = len(gt_s) > 0 and bool((gt_s.classes >= 0).any())
     zero = ~gt_s.consider if ignore_zero_marked else None
+    # one IoU table of all rows serves the distractor matching and, restricted, the metrics
+    pairs = pair_table(gt_s.frames, gt_s.boxes, pred_s.frames, pred_s.boxes)
+    pred_keep = np.ones(len(pred_s), dtype=bool)
     if (do_preproc and classes_known) or ignore_zero_marked:
         dis = distractor_classes if do_preproc and classes_known else ()
-        pred_keep = _distractor_removal(gt_s, pred_s, dis, zero)
-        if not pred_keep.all():
-            pred_s = pred_s.select(pred_keep)
+        pred_keep = _distractor_removal(gt_s, len(pred_s), pairs, dis, zero)
     if do_preproc and classes_known:
         gt_keep = gt_s.consider & (gt_s.classes == PEDESTRIAN)
     else:
         gt_keep = gt_s.consider
-    if not gt_keep.all():
-        gt_s = gt_s.select(gt_keep)
+    if not (pred_keep.all() and gt_keep.all()):
+        pairs = restrict(pairs, gt_s.frames, pred_s.frames, gt_keep, pred_keep)
+        gt_s, pred_s = gt_s.select(gt_keep), pred_s.select(pred_keep)
     last = max([int(a.frames.max()) for a in (gt, pred) if len(a)] or [0])
     if num_timesteps is None:
         num_timesteps = last
@@ -367,8 +439,7 @@ def preprocess(
     return SequenceData(
         gt_frames=gt_s.frames, gt_ids=gids.astype(np.int64).reshape(-1),
         pred_frames=pred_s.frames, pred_ids=pids.astype(np.int64).reshape(-1),
-        pairs=pair_table(gt_s.frames, gt_s.boxes, pred_s.frames, pred_s.boxes),
-        num_timesteps=int(num_timesteps), gt_id_values=gvals, pred_id_values=pvals,
+        pairs=pairs, num_timesteps=int(num_timesteps), gt_id_values=gvals, pred_id_values=pvals,
     )
 
 
@@ -457,40 +528,83 @@ def clear_metrics(data: SequenceData, threshold: float = 0.5,
     return res
 
 
-def _clear_loop(data: SequenceData, threshold: float, tp_f: np.ndarray, sw_f: np.ndarray) -> dict:
-    """The per-frame matching of :func:`clear_metrics` (both sides non-empty)."""
-    res: dict = {k: 0 for k in CLEAR_INT}
-    res.update({k: 0.0 for k in CLEAR_FLOAT})
-    n_ids = data.num_gt_ids
-    gt_id_count = np.bincount(data.gt_ids, minlength=n_ids).astype(np.float64)
-    matched_count = np.zeros(n_ids)
-    frag_count = np.zeros(n_ids)
-    prev_id = np.full(n_ids, np.nan)  # last matched tracker id, any frame back (IDSW)
-    prev_ts = np.full(n_ids, np.nan)  # matched tracker id in the previous evaluated frame
-    motp_sum = 0.0
-    thr = threshold - EPS
-    for f in range(len(data.pairs.frames)):
+def _clear_matches(data: SequenceData, thr: float) -> tuple[np.ndarray, ...]:
+    """CLEAR's matches of every frame: frame index, gt row, gt id, tracker id and IoU of each,
+    ordered by gt row (so by frame, and within a frame in the order the solver returns them)."""
+    t = data.pairs
+    pf = t.pair_frames()
+    cand = np.flatnonzero(t.sim >= thr)  # the entries the matching may use
+    hard = _shared_rows(t, cand, pf)
+    hard[pf[cand[t.sim[cand] <= EPS]]] = True
+    if thr <= EPS:  # pairs that do not overlap could be matched too
+        hard[:] = True
+    easy = cand[~hard[pf[cand]]]
+    rows = [t.gi[easy]]
+    mp = [data.pred_ids[t.pi[easy]]]
+    ms = [t.sim[easy]]
+    easy_frames = pf[easy]
+    prev_ts = np.full(data.num_gt_ids, np.nan)  # matched tracker id in the previous frame
+    done: dict[int, tuple[np.ndarray, np.ndarray]] = {}  # hard frame -> (gt ids, tracker ids)
+    for f in np.flatnonzero(hard).tolist():
+        if f - 1 in done:
+            pg, pp = done[f - 1]
+        else:
+            a, b = np.searchsorted(easy_frames, [f - 1, f])
+            pg, pp = data.gt_ids[rows[0][a:b]], mp[0][a:b]
+        prev_ts[pg] = pp
         g, p, sim = data.block(f)
-        # 1. prefer continuing last frame's matches (+1000), then maximise IoU
+        # prefer continuing last frame's matches (+1000), then maximise IoU
         score = (p[None, :] == prev_ts[g][:, None]) * 1000.0 + sim
+        prev_ts[pg] = np.nan
         score[sim < thr] = 0
         r, c = linear_sum_assignment(-score)
         ok = score[r, c] > EPS
         r, c = r[ok], c[ok]
-        mg, mp = g[r], p[c]
-        # 2. identity switches against the last match of each gt, however long ago
-        before = prev_id[mg]
-        sw_f[f] = np.count_nonzero(~np.isnan(before) & (mp != before))
-        # 3. bookkeeping for MT/PT/ML and fragmentation
-        matched_count[mg] += 1
-        not_prev = np.isnan(prev_ts)
-        prev_id[mg] = mp
-        prev_ts[:] = np.nan
-        prev_ts[mg] = mp
-        frag_count += not_prev & ~np.isnan(prev_ts)
-        tp_f[f] = len(mg)
-        if len(mg):
-            motp_sum += sum(sim[r, c])  # python sum: TrackEval's summation order
+        done[f] = g[r], p[c]
+        rows.append(t.g0[f] + r)
+        mp.append(p[c])
+        ms.append(sim[r, c])
+    row = np.concatenate(rows)
+    order = np.argsort(row, kind="stable")
+    row = row[order]
+    return (np.searchsorted(t.g0, row, side="right") - 1, row, data.gt_ids[row],
+            np.concatenate(mp)[order], np.concatenate(ms)[order])
+
+
+def _frame_sums(values: np.ndarray, frames: np.ndarray) -> np.ndarray:
+    """Per run of equal ``frames``, the sum of ``values`` added left to right (Python's
+    ``sum()``, TrackEval's order; NumPy's pairwise sums round differently)."""
+    if len(values) == 0:
+        return np.zeros(0)
+    starts = np.flatnonzero(np.concatenate([[True], frames[1:] != frames[:-1]]))
+    lengths = np.diff(np.concatenate([starts, [len(values)]]))
+    acc = np.zeros(len(starts))
+    for j in range(int(lengths.max())):
+        m = lengths > j
+        acc[m] += values[starts[m] + j]
+    return acc
+
+
+def _clear_loop(data: SequenceData, threshold: float, tp_f: np.ndarray, sw_f: np.ndarray) -> dict:
+    """The matching and counting of :func:`clear_metrics` (both sides non-empty)."""
+    res: dict = {k: 0 for k in CLEAR_INT}
+    res.update({k: 0.0 for k in CLEAR_FLOAT})
+    n_ids, n_frames = data.num_gt_ids, len(data.pairs.frames)
+    fr, _, mg, mp, ms = _clear_matches(data, threshold - EPS)
+    tp_f[:] = np.bincount(fr, minlength=n_frames)
+    # each gt's matches in frame order: IDSW = a tracker id other than its last match's,
+    # however long ago; Frag = runs of consecutive matched frames after the first
+    order = np.lexsort((fr, mg))
+    g, f, p = mg[order], fr[order], mp[order]
+    same = g[1:] == g[:-1]
+    sw_f[:] = np.bincount(f[1:][same & (p[1:] != p[:-1])], minlength=n_frames)
+    runs = np.count_nonzero(~same | (f[1:] != f[:-1] + 1)) + 1 if len(g) else 0
+    tracked = np.count_nonzero(~same) + 1 if len(g) else 0
+    motp_sum = 0.0
+    for s in _frame_sums(ms, fr):  # frame by frame, in TrackEval's order
+        motp_sum += s
+    gt_id_count = np.bincount(data.gt_ids, minlength=n_ids).astype(np.float64)
+    matched_count = np.bincount(mg, minlength=n_ids)
     tp = int(tp_f.sum())
     res["CLR_TP"] = tp
     res["CLR_FN"] = data.num_gt_dets - tp
@@ -501,7 +615,7 @@ def _clear_loop(data: SequenceData, threshold: float, tp_f: np.ndarray, sw_f: np
     res["MT"] = int(np.sum(ratio > 0.8))
     res["PT"] = int(np.sum(ratio >= 0.2)) - res["MT"]
     res["ML"] = n_ids - res["MT"] - res["PT"]
-    res["Frag"] = int(np.sum(frag_count[frag_count > 0] - 1))
+    res["Frag"] = int(runs - tracked)
     res["MOTP_sum"] = float(motp_sum)
     res["CLR_Frames"] = data.num_timesteps
     return _clear_final(res)
@@ -593,6 +707,36 @@ def _hota_final(res: dict) -> dict:
     return res
 
 
+def _hota_matches(data: SequenceData, score: np.ndarray) -> tuple[np.ndarray, ...]:
+    """HOTA's matches (gt id, tracker id, IoU), ordered by gt row: per frame, the Hungarian
+    matching maximising ``score`` (alignment x IoU, one entry per overlapping pair)."""
+    t = data.pairs
+    pf = t.pair_frames()
+    hard = _shared_rows(t, np.arange(len(t.sim)), pf)
+    hard[pf[score <= EPS]] = True
+    easy = np.flatnonzero(~hard[pf])
+    rows, cols, ms = [t.gi[easy]], [t.pi[easy]], [t.sim[easy]]
+    for f in np.flatnonzero(hard).tolist():
+        a, b = t.offsets[f], t.offsets[f + 1]
+        g0, p0 = t.g0[f], t.p0[f]
+        shape = (int(t.ng[f]), int(t.np_[f]))
+        rr, cc = t.gi[a:b] - g0, t.pi[a:b] - p0
+        s_mat = np.zeros(shape)
+        s_mat[rr, cc] = score[a:b]
+        r, c = linear_sum_assignment(-s_mat)
+        sim_mat = np.zeros(shape)
+        sim_mat[rr, cc] = t.sim[a:b]
+        m_sim = sim_mat[r, c]
+        hit = m_sim > 0  # IoU 0 is below every alpha
+        rows.append(g0 + r[hit])
+        cols.append(p0 + c[hit])
+        ms.append(m_sim[hit])
+    row = np.concatenate(rows)
+    order = np.argsort(row, kind="stable")
+    return (data.gt_ids[row[order]], data.pred_ids[np.concatenate(cols)[order]],
+            np.concatenate(ms)[order])
+
+
 def hota_metrics(data: SequenceData) -> dict:
     """HOTA for one sequence (TrackEval ``HOTA.eval_sequence``), all 19 alphas at once.
 
@@ -637,25 +781,7 @@ def hota_metrics(data: SequenceData) -> dict:
     align_u = pot / (gt_count[ukey // max(nt_ids, 1)] + tr_count[ukey % max(nt_ids, 1)] - pot)
     score = align_u[inv.reshape(-1)] * sim
     # 2. one Hungarian matching per frame, maximising alignment x IoU
-    mg_list, mt_list, ms_list = [], [], []
-    for f in range(len(t.frames)):
-        a, b = t.offsets[f], t.offsets[f + 1]
-        g0, p0 = t.g0[f], t.p0[f]
-        shape = (int(t.ng[f]), int(t.np_[f]))
-        rr, cc = pg[a:b] - g0, pp[a:b] - p0
-        s_mat = np.zeros(shape)
-        s_mat[rr, cc] = score[a:b]
-        r, c = linear_sum_assignment(-s_mat)
-        sim_mat = np.zeros(shape)
-        sim_mat[rr, cc] = sim[a:b]
-        m_sim = sim_mat[r, c]
-        hit = m_sim > 0  # IoU 0 is below every alpha
-        mg_list.append(data.gt_ids[g0 + r[hit]])
-        mt_list.append(data.pred_ids[p0 + c[hit]])
-        ms_list.append(m_sim[hit])
-    mg = np.concatenate(mg_list) if mg_list else np.zeros(0, np.int64)
-    mt = np.concatenate(mt_list) if mt_list else np.zeros(0, np.int64)
-    ms = np.concatenate(ms_list) if ms_list else np.zeros(0)
+    mg, mt, ms = _hota_matches(data, score)
     tp_mask = ms[None, :] >= (ALPHAS - EPS)[:, None]  # (19, K)
     tp = tp_mask.sum(axis=1).astype(np.float64)
     res["HOTA_TP"] = tp
