@@ -10,9 +10,7 @@ log = logging.getLogger("motiontrack")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    from ._common import FPS_HELP
-
-    from ._common import CodecOption, out_help
+    from ._common import FPS_HELP, CodecOption, out_help
     from ._common import add_scoring_option
 
     p = sub.add_parser(
@@ -47,6 +45,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--camera", help="calibrated camera (PETS/Tsai XML, OpenCV YAML, TOML): world "
                                     "positions in tracks.txt columns 8-9 (metres), per-track speed and "
                                     "height in summary.json")
+    p.add_argument("--scene", help="scene file (TOML): line crossings, zone dwell, stationary and "
+                                   "speeding events in events.jsonl and counts.csv, lines and zones "
+                                   "on the annotated video (docs/analytics.md)")
+    p.add_argument("--bin-s", type=float, default=60.0,
+                   help="with --scene: seconds per row of counts.csv (default 60)")
     p.add_argument("--show", action="store_true", help="live window (q quits, space pauses)")
     p.add_argument("--force", action="store_true", help="overwrite existing outputs")
     p.set_defaults(func=cmd_track)
@@ -114,7 +117,8 @@ def cmd_track(args) -> int:
             det = det.select(det.scores >= args.min_score)
     job = track_job(args.source, cfg, output_folder(args, "track"), force=args.force, gt=gt, detections=det,
                     show=_viewer() if args.show else None, save=args.save,
-                    mask_images=args.mask_images, scoring=args.scoring)
+                    mask_images=args.mask_images, scoring=args.scoring, scene=args.scene,
+                    bin_s=args.bin_s)
     log.info("source %s", job.info.describe())
     with frame_loop(job.expected_frames()) as loop:
         summary = job.run(progress=loop.update, should_stop=loop.stop)

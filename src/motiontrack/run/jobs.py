@@ -15,6 +15,7 @@ from typing import Any, Callable, Iterable, Sequence
 
 import numpy as np
 
+from ..analytics import Analytics, load_scene
 from ..calibrate import fit_to_image, load_camera
 from ..config import PipelineConfig, SourceConfig, save_config
 from ..errors import ConfigError
@@ -28,6 +29,7 @@ from ..render.streams import parse_streams
 from ..tracking.flow import SparseFlowParams
 from ..tracking.single import SingleTracker, follow_accuracy
 from ..types import Annotations, Box
+from .analytics_writers import CountsWriter, EventsWriter
 from .job import Job
 from .processors import (DenseFlowProcessor, FollowProcessor, OverlayProcessor,
                          SparseFlowProcessor, TrackProcessor)
@@ -54,13 +56,16 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
               gt: Annotations | None = None, detections: Annotations | None = None,
               show: Callable[[np.ndarray], bool] | None = None,
               save: Iterable[str] | str = (), mask_images: str | Path | None = None,
-              scoring: str = DEFAULT_SCORING) -> Job:
+              scoring: str = DEFAULT_SCORING, scene: str | Path | None = None,
+              bin_s: float = 60.0) -> Job:
     """``motiontrack track``: ``tracks.txt``, the annotated video, the mask video and the
     intermediate movies as ``cfg.output`` and ``save`` ask, the mask of every frame as
     ``bin%06d.png`` in the folder ``mask_images``, the live view with ``show``, ``gt.txt`` and
     the accuracy with ground truth (given, or the source's own), ``summary.json`` and
     ``config.toml``. ``scoring`` names how zero-marked ground truth counts
-    (:data:`~motiontrack.evaluate.scoring.SCORING`)."""
+    (:data:`~motiontrack.evaluate.scoring.SCORING`). A ``scene`` file runs scene analytics on
+    the tracks of each frame: ``events.jsonl`` and ``counts.csv`` (rows of ``bin_s`` seconds),
+    the lines and zones with their counts on the annotated video."""
     out = Path(out_dir)
     ignores_zero_marked(scoring)   # an unknown name fails before the source opens
     if mask_images is not None and detections is not None:
@@ -78,18 +83,25 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
     def build(src: Source) -> Job:
         truth = gt if gt is not None else src.ground_truth()
         external = detections is not None
+        fitted = (fit_to_image(camera, src.info.width, src.info.height, cfg.measure.camera)
+                  if camera is not None else None)
+        analytics = None
+        if scene is not None:
+            analytics = Analytics(load_scene(scene, fitted), src.info.fps or 25.0, fitted)
         proc = TrackProcessor(cfg, src.info, detections,
-                              needs_background="background" in streams)
+                              needs_background="background" in streams, analytics=analytics)
         if not external:
             info, scale = src.info, proc.pipe.scale
             log.info("processing at scale %.3g (%dx%d)", scale,
                      *scaled_size(info.width, info.height, scale))
         fill = (fill_gap_frames(cfg, src.info.fps, external) if completes_tracks(cfg, external)
                 else None)
-        fitted = (fit_to_image(camera, src.info.width, src.info.height, cfg.measure.camera)
-                  if camera is not None else None)
         tracks = TracksWriter(out, fitted, fill)
         writers = [tracks]
+        if analytics is not None:
+            sc = analytics.scene
+            writers += [EventsWriter(out, str(source), sc.source),
+                        CountsWriter(out, sc.lines, sc.zones, bin_s)]
         if cfg.output.video:
             writers.append(VideoWriter("video", out / f"annotated{extension_for(codec)}", codec))
         if cfg.output.mask_video:

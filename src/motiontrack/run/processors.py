@@ -12,12 +12,13 @@ picture of it; the writers do the rest.
 
 from __future__ import annotations
 
-from dataclasses import asdict
+from dataclasses import asdict, replace
 from typing import Any, Iterator, Sequence
 
 import cv2
 import numpy as np
 
+from ..analytics import Analytics
 from ..config import FarnebackParams, PipelineConfig
 from ..io.sources import Source, SourceInfo
 from ..motion.dense_flow import DenseFlow
@@ -27,6 +28,7 @@ from ..render.colors import TrackColors
 from ..render.flow import draw_feature_trails, draw_flow_legend, flow_to_bgr
 from ..render.overlay import draw_overlay, layers_at, overlay_layers
 from ..render.people import draw_people
+from ..render.scene import draw_scene
 from ..tracking.flow import SparseFlowParams, SparseFlowTracker
 from ..tracking.single import SingleTracker, follow
 from ..types import Annotations, Box, FrameResult, Track, TrackState
@@ -60,9 +62,11 @@ class TrackProcessor:
     """
 
     def __init__(self, cfg: PipelineConfig, info: SourceInfo,
-                 detections: Annotations | None = None, needs_background: bool = False) -> None:
+                 detections: Annotations | None = None, needs_background: bool = False,
+                 analytics: Analytics | None = None) -> None:
         self.cfg = cfg
         self.external = detections is not None
+        self.analytics = analytics
         # every stage is built now: a bad plug-in name or ROI fails before anything is written
         self.pipe = Pipeline(cfg, (info.width, info.height), detections, info.fps)
         self.pipe.sequential = self.pipe.sequential or needs_background
@@ -70,7 +74,19 @@ class TrackProcessor:
         self.legend = track_legend(cfg, self.external) if cfg.output.legend else ()
 
     def results(self, source: Source) -> Iterator[FrameResult]:
-        return self.pipe.results(source)
+        if self.analytics is None:
+            return self.pipe.results(source)
+        return self._analysed(source)
+
+    def _analysed(self, source: Source) -> Iterator[FrameResult]:
+        """Scene analytics after the tracker, on the tracks each frame reports."""
+        for result in self.pipe.results(source):
+            # the boxes as tracks.txt stores them (2 decimals): `analyze` on that file then
+            # sees exactly what this run saw and finds the same events
+            boxes = np.array([float(f"{v:.2f}") for t in result.tracks
+                              for v in t.box.as_array()]).reshape(-1, 4)
+            scene = self.analytics.step(result.index + 1, [t.id for t in result.tracks], boxes)
+            yield replace(result, scene=scene)
 
     def annotate(self, result: FrameResult) -> np.ndarray:
         out = self.cfg.output
@@ -80,6 +96,8 @@ class TrackProcessor:
                              text=f"frame {result.index}", colors=colors, legend=self.legend)
         if self.pipe.people is not None and result.people is not None:
             draw_people(img, result.people, inplace=True, colors=colors)
+        if self.analytics is not None:
+            draw_scene(img, self.analytics.scene.lines, self.analytics.scene.zones, result.scene)
         return img
 
     def background(self) -> np.ndarray | None:
@@ -87,7 +105,10 @@ class TrackProcessor:
 
     def summary(self) -> dict[str, Any]:
         # the scale detection ran at (``preprocess.scale = 0`` is resolved per frame size)
-        return {} if self.external else {"processing_scale": round(self.pipe.scale, 4)}
+        out = {} if self.external else {"processing_scale": round(self.pipe.scale, 4)}
+        if self.analytics is not None:
+            out["analytics"] = self.analytics.summary()
+        return out
 
 
 class FollowProcessor:

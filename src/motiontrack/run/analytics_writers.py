@@ -1,0 +1,139 @@
+"""Output writers of scene analytics: ``events.jsonl`` and ``counts.csv``.
+
+Both read the :class:`~motiontrack.types.SceneFrame` of each frame: as writers of a
+:class:`~motiontrack.run.job.Job` (``track --scene``: :meth:`write` takes the frame's
+``FrameResult.scene``) or driven directly (``analyze``: :meth:`open`, :meth:`add`,
+:meth:`close`), so both commands write the same files the same way.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import math
+from pathlib import Path
+from typing import Any, Sequence
+
+import numpy as np
+
+from ..errors import ConfigError
+from ..io.atomic import AtomicFile
+from ..types import FrameResult, SceneFrame, events_header
+from .job import JobContext, Writer
+
+__all__ = ["EventsWriter", "CountsWriter"]
+
+
+class EventsWriter(Writer):
+    """``events.jsonl``: a header object (schema, version, fps, source, scene), then one JSON
+    object per event in frame order (``docs/analytics.md``)."""
+
+    def __init__(self, out: Path, source: str = "", scene: str = "") -> None:
+        self.paths = {"events": Path(out) / "events.jsonl"}
+        self.source, self.scene = str(source), str(scene)
+        self.count = 0
+        self._file: AtomicFile | None = None
+
+    def start(self, ctx: JobContext) -> None:
+        self.open(ctx.fps)
+
+    def open(self, fps: float) -> None:
+        self._file = AtomicFile(self.paths["events"])
+        self._file.write(json.dumps(events_header(fps, self.source, self.scene)) + "\n")
+
+    def write(self, result: FrameResult) -> None:
+        if result.scene is not None:
+            self.add(result.scene)
+
+    def add(self, frame: SceneFrame) -> None:
+        if frame.events:
+            self._file.write("".join(json.dumps(e.to_json()) + "\n" for e in frame.events))
+            self.count += len(frame.events)
+
+    def close(self, keep: bool) -> None:
+        if self._file is not None:
+            self._file.commit() if keep else self._file.discard()
+            self._file = None
+
+
+class CountsWriter(Writer):
+    """``counts.csv``: one row per time bin of ``bin_s`` seconds (bin ``k`` holds the frames
+    with ``k * bin_s <= t < (k + 1) * bin_s``): its frames, each line's ``in`` and ``out``
+    crossings in the bin, each zone's mean and peak occupancy over the bin's frames.
+
+    Columns: ``bin, start_s, end_s, frames``, then ``line:NAME:in``, ``line:NAME:out`` per line
+    and ``zone:NAME:mean``, ``zone:NAME:peak`` per zone, in the scene's order.
+    """
+
+    def __init__(self, out: Path, lines: Sequence[Any], zones: Sequence[Any],
+                 bin_s: float = 60.0) -> None:
+        if not (math.isfinite(bin_s) and bin_s > 0):
+            raise ConfigError(f"--bin-s must be > 0 seconds, got {bin_s!r}")
+        self.paths = {"counts": Path(out) / "counts.csv"}
+        self.lines = [ln.name for ln in lines]
+        self.zones = [z.name for z in zones]
+        self.bin_s = float(bin_s)
+        self._file: AtomicFile | None = None
+        self._fps = 25.0
+        self._bin: int | None = None
+
+    def start(self, ctx: JobContext) -> None:
+        self.open(ctx.fps)
+
+    def open(self, fps: float) -> None:
+        self._fps = float(fps)
+        self._file = AtomicFile(self.paths["counts"])
+        head = ["bin", "start_s", "end_s", "frames"]
+        head += [f"line:{n}:{d}" for n in self.lines for d in ("in", "out")]
+        head += [f"zone:{n}:{s}" for n in self.zones for s in ("mean", "peak")]
+        self._file.write(self._row(head))
+
+    def write(self, result: FrameResult) -> None:
+        if result.scene is not None:
+            self.add(result.scene)
+
+    def add(self, frame: SceneFrame) -> None:
+        # a little slack so that t = k * bin_s computed in floating point lands in bin k
+        b = int(math.floor((frame.frame - 1) / self._fps / self.bin_s + 1e-9))
+        if b != self._bin:
+            self._flush()
+            self._bin, self._frames = b, 0
+            self._in = np.zeros(len(self.lines), dtype=np.int64)
+            self._out = np.zeros(len(self.lines), dtype=np.int64)
+            self._sum = np.zeros(len(self.zones), dtype=np.int64)
+            self._peak = np.zeros(len(self.zones), dtype=np.int64)
+        self._frames += 1
+        for e in frame.events:
+            if e.type == "line_cross" and e.line in self.lines:
+                (self._in if e.direction == "in" else self._out)[self.lines.index(e.line)] += 1
+        occ = np.array([frame.occupancy.get(n, 0) for n in self.zones], dtype=np.int64)
+        self._sum += occ
+        self._peak = np.maximum(self._peak, occ)
+
+    def _flush(self) -> None:
+        if self._bin is None or self._frames == 0:
+            return
+        row: list = [self._bin, round(self._bin * self.bin_s, 6),
+                     round((self._bin + 1) * self.bin_s, 6), self._frames]
+        for i in range(len(self.lines)):
+            row += [int(self._in[i]), int(self._out[i])]
+        for k in range(len(self.zones)):
+            row += [round(float(self._sum[k]) / self._frames, 4), int(self._peak[k])]
+        self._file.write(self._row(row))
+        self._bin = None
+
+    @staticmethod
+    def _row(values: list) -> str:
+        buf = io.StringIO()
+        csv.writer(buf, lineterminator="\n").writerow(values)
+        return buf.getvalue()
+
+    def close(self, keep: bool) -> None:
+        if self._file is not None:
+            if keep:
+                self._flush()
+                self._file.commit()
+            else:
+                self._file.discard()
+            self._file = None
