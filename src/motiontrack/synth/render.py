@@ -20,6 +20,7 @@ import numpy as np
 
 __all__ = [
     "Person",
+    "Bag",
     "Column",
     "Sprite",
     "SHIFT",
@@ -29,8 +30,13 @@ __all__ = [
     "LABEL_HAIR",
     "LABEL_SHOES",
     "LABEL_SLEEVE_BACK",
+    "LABEL_BAG",
     "person_position",
+    "person_facing",
+    "bag_box",
     "render_person",
+    "render_bag",
+    "draw_bag",
     "render_shadow",
     "render_background",
     "make_noise_pool",
@@ -47,6 +53,7 @@ LABEL_SKIN = 3
 LABEL_HAIR = 4
 LABEL_SHOES = 5
 LABEL_SLEEVE_BACK = 6  # the far arm, a little darker than the shirt (reads as depth)
+LABEL_BAG = 7  # a bag, carried (part of its owner's sprite) or left on the ground (a sprite of its own)
 
 _GAITS = {
     # leg swing amplitude (rad), arm swing (rad), knee bend (rad), forward lean (rad),
@@ -58,11 +65,13 @@ _GAITS = {
 
 @dataclass(frozen=True)
 class Person:
-    """A synthetic person moving on a straight line at constant speed.
+    """A synthetic person moving at piecewise constant velocity (a straight line without ``turns``).
 
     The foot point (bottom centre, where the person touches the ground) at 0-based frame index
-    ``i`` is ``(x0 + vx * (i - t0), y0 + vy * (i - t0))``. Positions are defined for every ``i``;
-    the person is *in the scene* whenever any of its pixels falls inside the image.
+    ``i`` is ``(x0 + vx * (i - t0), y0 + vy * (i - t0))`` up to the first turn; from each turn
+    ``(t, vx, vy)`` on, the foot point moves with that velocity (a velocity of 0 stands still).
+    Positions are defined for every ``i``; the person is *in the scene* whenever any of its pixels
+    falls inside the image.
 
     Attributes
     ----------
@@ -84,6 +93,9 @@ class Person:
         BGR colours, 0..255.
     horizon : float or None
         Image row of the horizon for perspective scaling (``< y0``); None = constant height.
+    turns : tuple of (t, vx, vy)
+        Velocity changes: from frame index ``t`` on the foot point moves by ``(vx, vy)`` pixels per
+        frame; ``t`` strictly increasing and greater than ``t0``. Empty = a straight line.
     """
 
     id: int
@@ -101,6 +113,7 @@ class Person:
     hair: tuple[int, int, int] = (30, 30, 40)
     shoes: tuple[int, int, int] = (25, 25, 25)
     horizon: float | None = None
+    turns: tuple[tuple[float, float, float], ...] = ()
 
     def __post_init__(self) -> None:
         if self.id < 1:
@@ -121,11 +134,43 @@ class Person:
             c = getattr(self, name)
             if len(c) != 3 or not all(0 <= int(v) <= 255 for v in c):
                 raise ValueError(f"person colour {name} must be 3 BGR values in 0..255, got {c!r}")
+        last = self.t0
+        for turn in self.turns:
+            if len(turn) != 3 or not all(math.isfinite(v) for v in turn):
+                raise ValueError(f"person turns must be finite (t, vx, vy) triples, got {turn!r}")
+            if not turn[0] > last:
+                raise ValueError(f"person turn times must increase after t0={self.t0}, "
+                                 f"got {[t[0] for t in self.turns]}")
+            last = turn[0]
 
     @property
     def speed(self) -> float:
-        """Speed in pixels per frame."""
+        """Speed in pixels per frame (before the first turn)."""
         return math.hypot(self.vx, self.vy)
+
+    def legs(self) -> list[tuple[float, float, float, float, float]]:
+        """The path as ``(t_start, x, y, vx, vy)`` pieces: the foot point is ``(x, y)`` at frame
+        index ``t_start`` and moves by ``(vx, vy)`` per frame until the next piece starts (the first
+        piece also extends backwards in time)."""
+        pieces = [(self.t0, self.x0, self.y0, self.vx, self.vy)]
+        for t, vx, vy in self.turns:
+            t_prev, x, y, pvx, pvy = pieces[-1]
+            pieces.append((t, x + pvx * (t - t_prev), y + pvy * (t - t_prev), vx, vy))
+        return pieces
+
+    def travelled(self, i: float) -> float:
+        """Distance walked since frame index ``t0`` (negative before it), pixels: the gait phase
+        advances with it, so feet do not slide and a person standing still keeps its pose."""
+        if not self.turns or i <= self.turns[0][0]:
+            return self.speed * (i - self.t0)
+        pieces = self.legs()
+        d = 0.0
+        for k, (t, _, _, vx, vy) in enumerate(pieces):
+            end = pieces[k + 1][0] if k + 1 < len(pieces) else math.inf
+            d += math.hypot(vx, vy) * (min(i, end) - t)
+            if i <= end:
+                break
+        return d
 
     def palette(self) -> np.ndarray:
         """``(7, 3) uint8`` BGR colour for each sprite label (row 0 unused)."""
@@ -148,6 +193,95 @@ class Column:
     def __post_init__(self) -> None:
         if self.w <= 0 or self.h <= 0:
             raise ValueError(f"column must have w > 0 and h > 0, got w={self.w}, h={self.h}")
+
+
+@dataclass(frozen=True)
+class Bag:
+    """A bag its owner carries in the near hand, lowers and leaves on the ground.
+
+    Until frame index ``t_drop - lower`` it hangs beside the owner's hip; over the next ``lower``
+    frames it goes down to the ground; from ``t_drop`` on it rests there, static, as an object of
+    its own (ground-truth id ``id``). Its size follows the owner's height (perspective).
+
+    Attributes
+    ----------
+    id : int
+        Ground-truth identity once it rests on the ground, >= 1 and not a person's id.
+    owner : int
+        Id of the person carrying it.
+    t_drop : int
+        First frame index at which the bag rests on the ground.
+    colour : tuple of int
+        BGR.
+    lower : int
+        Frames the owner takes to set it down (the owner should stand still meanwhile).
+    """
+
+    id: int
+    owner: int
+    t_drop: int
+    colour: tuple[int, int, int] = (40, 40, 40)
+    lower: int = 8
+
+    def __post_init__(self) -> None:
+        if self.id < 1:
+            raise ValueError(f"bag id must be >= 1, got id={self.id}")
+        if self.lower < 1 or self.t_drop < self.lower:
+            raise ValueError(f"bag needs 1 <= lower <= t_drop, got lower={self.lower}, "
+                             f"t_drop={self.t_drop}")
+        if len(self.colour) != 3 or not all(0 <= int(v) <= 255 for v in self.colour):
+            raise ValueError(f"bag colour must be 3 BGR values in 0..255, got {self.colour!r}")
+
+    def carried(self, i: int) -> bool:
+        """Is the bag part of its owner's figure at frame index ``i``?"""
+        return i < self.t_drop
+
+    def palette(self) -> np.ndarray:
+        """``(8, 3) uint8`` BGR colour per sprite label: only :data:`LABEL_BAG` is used."""
+        pal = np.zeros((8, 3), dtype=np.uint8)
+        pal[LABEL_BAG] = self.colour
+        return pal
+
+
+# A carried bag hangs from the hand with its bottom this far above the feet, its centre this far
+# in front of the body (fractions of the owner's height); its body is BAG_W x BAG_H of the height.
+_BAG_LIFT = 0.30
+_BAG_FRONT = 0.17
+BAG_W, BAG_H = 0.28, 0.20
+
+
+def bag_box(bag: Bag, owner: Person, i: int) -> tuple[float, float, float, float, float]:
+    """The bag's body at frame index ``i``: centre x, bottom y, width, height (pixels, floats) and
+    the owner's height it is sized by; fixed from ``t_drop`` on."""
+    k = min(i, bag.t_drop)
+    fx, fy, h = person_position(owner, k)
+    d = person_facing(owner, k)
+    lift = _BAG_LIFT * min(1.0, max(0.0, (bag.t_drop - k) / bag.lower))
+    return fx + d * _BAG_FRONT * h, fy - lift * h, BAG_W * h, BAG_H * h, h
+
+
+def draw_bag(labels: np.ndarray, ox: int, oy: int, box: tuple[float, ...]) -> None:
+    """Draw a bag (body and handle) with :data:`LABEL_BAG` into ``labels`` (in place), the
+    label image's top-left pixel being ``(ox, oy)`` in the frame."""
+    cx, bottom, w, hb, h = box
+    x1, y1 = _pt(cx - w / 2, bottom - hb, ox, oy)
+    x2, y2 = _pt(cx + w / 2, bottom, ox, oy)
+    cv2.rectangle(labels, (x1, y1), (x2, y2), LABEL_BAG, -1, cv2.LINE_8, SHIFT)
+    centre = _pt(cx, bottom - hb, ox, oy)
+    axes = (int(0.25 * w * _ONE), int(0.09 * h * _ONE))
+    cv2.ellipse(labels, centre, axes, 0, 180, 360, LABEL_BAG, max(1, int(round(0.02 * h))),
+                cv2.LINE_8, SHIFT)
+
+
+def render_bag(bag: Bag, owner: Person, i: int) -> Sprite:
+    """The bag resting on the ground (frame index ``i >= t_drop``) as a :class:`Sprite`."""
+    box = bag_box(bag, owner, i)
+    cx, bottom, w, hb, h = box
+    ox = int(math.floor(cx - w / 2)) - 2
+    oy = int(math.floor(bottom - hb - 0.09 * h)) - 3
+    lab = np.zeros((int(math.ceil(hb + 0.09 * h)) + 7, int(math.ceil(w)) + 5), dtype=np.uint8)
+    draw_bag(lab, ox, oy, box)
+    return Sprite(ox, oy, lab)
 
 
 @dataclass(frozen=True, eq=False)
@@ -177,15 +311,32 @@ class Sprite:
 
 def person_position(p: Person, i: float) -> tuple[float, float, float]:
     """Foot point ``(x, y)`` and height (pixels) of ``p`` at frame index ``i``."""
-    dt = i - p.t0
-    fx = p.x0 + p.vx * dt
-    fy = p.y0 + p.vy * dt
+    if not p.turns or i <= p.turns[0][0]:
+        dt = i - p.t0
+        fx = p.x0 + p.vx * dt
+        fy = p.y0 + p.vy * dt
+    else:
+        t, x, y, vx, vy = [leg for leg in p.legs() if leg[0] < i][-1]
+        fx, fy = x + vx * (i - t), y + vy * (i - t)
     h = p.height
     if p.horizon is not None:
         # Pinhole camera over a flat ground plane: apparent height is proportional to the
         # distance of the foot point below the horizon (Hartley & Zisserman, 2nd ed., §8.6).
         h = p.height * max(fy - p.horizon, 1.0) / (p.y0 - p.horizon)
     return fx, fy, h
+
+
+def person_facing(p: Person, i: float) -> float:
+    """+1 when ``p`` faces right at frame index ``i``, -1 left: the sign of the horizontal
+    velocity, kept from the last piece that moved sideways while it walks straight up or down or
+    stands."""
+    d = 1.0 if p.vx >= 0 else -1.0
+    for t, _, _, vx, _ in p.legs()[1:]:
+        if t >= i:
+            break
+        if vx != 0:
+            d = 1.0 if vx > 0 else -1.0
+    return d
 
 
 def _pt(x: float, y: float, ox: int, oy: int) -> tuple[int, int]:
@@ -243,9 +394,9 @@ class _Figure:
     def at(cls, p: Person, i: int) -> "_Figure":
         g = _GAITS[p.gait]
         fx, fy, h = person_position(p, i)
-        d = 1.0 if p.vx >= 0 else -1.0  # facing direction
+        d = person_facing(p, i)
         # Phase advances 2π per gait cycle (two steps) of length cycle·h.
-        phase = p.phase0 + 2.0 * math.pi * p.speed * (i - p.t0) / (g["cycle"] * p.height)
+        phase = p.phase0 + 2.0 * math.pi * p.travelled(i) / (g["cycle"] * p.height)
         bob = -g["bob"] * h * abs(math.sin(phase))  # up at mid-stance of either leg
         margin = 3
         ox = int(math.floor(fx - 0.62 * h)) - margin

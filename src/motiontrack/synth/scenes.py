@@ -17,19 +17,25 @@ import logging
 import math
 import zlib
 from dataclasses import dataclass, field
-from typing import Any, Callable, Mapping
+from typing import Any, Callable, Mapping, NamedTuple
 
 import cv2
 import numpy as np
 
 from ..errors import ConfigError
-from ..types import Annotations
+from ..types import Annotations, Event
+from .events import ground_truth_events, scene_toml
 from .render import (
+    Bag,
     Column,
     Person,
     Sprite,
+    bag_box,
+    draw_bag,
     make_noise_pool,
+    person_position,
     render_background,
+    render_bag,
     render_person,
     render_shadow,
 )
@@ -102,6 +108,14 @@ def _stable_hash(text: str) -> int:
     return zlib.crc32(text.encode("utf-8"))
 
 
+class _Item(NamedTuple):
+    """One object drawn in a frame: its ground-truth id, colour per label and label sprite."""
+
+    id: int
+    palette: np.ndarray
+    sprite: Sprite
+
+
 @dataclass(frozen=True, eq=False)
 class SyntheticScene:
     """A synthetic surveillance sequence with exact ground truth.
@@ -120,6 +134,8 @@ class SyntheticScene:
         Number of frames; valid frame indices are ``0 .. n_frames - 1``.
     people : tuple of Person
         Who walks where (ids 1..).
+    bags : tuple of Bag
+        Bags people carry and leave (ids after the people's).
     column : Column or None
         Static occluder drawn over people.
     noise : float
@@ -132,6 +148,9 @@ class SyntheticScene:
         +1 shadows fall to the right of the feet, -1 to the left.
     overrides : mapping
         The overrides the scene was made with (for :attr:`spec`).
+    scene_file : mapping or None
+        The scene-analytics lines and zones of this scene, as the scene file's TOML tables
+        (pixels; see :mod:`motiontrack.synth.events`); None = none.
     """
 
     name: str
@@ -147,6 +166,8 @@ class SyntheticScene:
     lighting: Lighting | None = None
     shadow_side: float = 1.0
     overrides: Mapping[str, Any] = field(default_factory=dict)
+    bags: tuple[Bag, ...] = ()
+    scene_file: Mapping[str, Any] | None = None
     _cache: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -161,6 +182,12 @@ class SyntheticScene:
         ids = [p.id for p in self.people]
         if len(set(ids)) != len(ids):
             raise ValueError(f"person ids must be unique, got {ids}")
+        for b in self.bags:
+            if b.owner not in ids:
+                raise ValueError(f"bag {b.id} has no owner: no person has id {b.owner}")
+        all_ids = ids + [b.id for b in self.bags]
+        if len(set(all_ids)) != len(all_ids):
+            raise ValueError(f"person and bag ids must be unique, got {all_ids}")
 
     # ------------------------------------------------------------------ basics
     def __getstate__(self) -> dict:
@@ -227,26 +254,17 @@ class SyntheticScene:
         return pool
 
     # ----------------------------------------------------------- composition
-    def _layers(self, i: int) -> tuple[list[tuple[Person, Sprite]], list[Sprite]]:
-        """People sprites touching the image, sorted back (far) to front, and their shadows."""
+    def _layers(self, i: int) -> tuple[list[_Item], list[Sprite]]:
+        """People and bags touching the image, sorted back (far) to front, and people's shadows."""
         last = self._cache.get("layers")
         if last is not None and last[0] == i:
             return last[1]
-        W, H = self.width, self.height
-        people: list[tuple[float, int, Person, Sprite]] = []
+        items = self._people_only(i)
         shadows: list[Sprite] = []
-        for p in self.people:
-            s = render_person(p, i)
-            lh, lw = s.labels.shape
-            if s.ox >= W or s.oy >= H or s.ox + lw <= 0 or s.oy + lh <= 0:
-                continue
-            fy = p.y0 + p.vy * (i - p.t0)
-            people.append((fy, p.id, p, s))
-            if self.shadows:
-                shadows.append(render_shadow(p, i, self.shadow_side))
-        # Painter's order: larger foot y = closer to the camera = drawn later.
-        people.sort(key=lambda t: (t[0], t[1]))
-        result = ([(p, s) for _, _, p, s in people], shadows)
+        if self.shadows:
+            drawn = {it.id for it in items}
+            shadows = [render_shadow(p, i, self.shadow_side) for p in self.people if p.id in drawn]
+        result = (items, shadows)
         self._cache["layers"] = (i, result)
         return result
 
@@ -282,14 +300,14 @@ class SyntheticScene:
             m = sh.labels[ss].astype(bool)
             region = out[fs]
             region[m] = (region[m] * _SHADOW_GAIN).astype(np.uint8)
-        for p, s in people:
-            c = self._clip(s, W, H)
+        for it in people:
+            c = self._clip(it.sprite, W, H)
             if c is None:
                 continue
             fs, ss = c
-            lab = s.labels[ss]
+            lab = it.sprite.labels[ss]
             m = lab > 0
-            out[fs][m] = p.palette()[lab[m]]
+            out[fs][m] = it.palette[lab[m]]
         if self.column is not None and people:
             cs = self._column_slices()
             if cs is not None:
@@ -344,23 +362,23 @@ class SyntheticScene:
             if c is not None:
                 fs, ss = c
                 mask[fs][sh.labels[ss] > 0] = MASK_SHADOW
-        for _, s in people:
-            c = self._clip(s, W, H)
+        for it in people:
+            c = self._clip(it.sprite, W, H)
             if c is not None:
                 fs, ss = c
-                mask[fs][s.labels[ss] > 0] = MASK_PERSON
+                mask[fs][it.sprite.labels[ss] > 0] = MASK_PERSON
         cs = self._column_slices()
         if cs is not None:
             mask[cs] = 0
         return mask
 
     # ---------------------------------------------------------- ground truth
-    def _visibility(self, people: list[tuple[Person, Sprite]]) -> list[tuple[int, tuple, float]]:
-        """Per person: (id, full bbox, visible fraction) for one frame's back-to-front layers."""
+    def _visibility(self, people: list[_Item]) -> list[tuple[int, tuple, float]]:
+        """Per object: (id, full bbox, visible fraction) for one frame's back-to-front layers."""
         W, H = self.width, self.height
         cs = self._column_slices()
         rows = []
-        for k, (p, s) in enumerate(people):
+        for k, (pid, _, s) in enumerate(people):
             bbox = s.bbox()
             if bbox is None:
                 continue
@@ -386,14 +404,14 @@ class SyntheticScene:
                 if a2 > a1 and b2 > b1:
                     vis[a1:a2, b1:b2] = False
             # Hidden by people drawn later (in front).
-            for _, q in people[k + 1:]:
+            for _, _, q in people[k + 1:]:
                 qh, qw = q.labels.shape
                 a1, a2 = max(q.oy - s.oy, 0), min(q.oy + qh - s.oy, lh)
                 b1, b2 = max(q.ox - s.ox, 0), min(q.ox + qw - s.ox, lw)
                 if a2 > a1 and b2 > b1:
                     qa1, qb1 = a1 + s.oy - q.oy, b1 + s.ox - q.ox
                     vis[a1:a2, b1:b2] &= q.labels[qa1:qa1 + (a2 - a1), qb1:qb1 + (b2 - b1)] == 0
-            rows.append((p.id, bbox, float(vis.sum()) / total))
+            rows.append((pid, bbox, float(vis.sum()) / total))
         return rows
 
     def ground_truth(self) -> Annotations:
@@ -446,18 +464,58 @@ class SyntheticScene:
         self._cache["gt"] = gt
         return gt
 
-    def _people_only(self, i: int) -> list[tuple[Person, Sprite]]:
-        """Like :meth:`_layers` but without shadows and without touching the one-frame cache."""
+    def _people_only(self, i: int) -> list[_Item]:
+        """Like :meth:`_layers` but without shadows and without touching the one-frame cache.
+
+        A carried bag is drawn into its owner's sprite (it is part of the person); a bag on the
+        ground is an object of its own.
+        """
         W, H = self.width, self.height
-        items = []
+        owners = {p.id: p for p in self.people}
+        carried = {b.owner: b for b in self.bags if b.carried(i)}
+        items: list[tuple[float, _Item]] = []
         for p in self.people:
             s = render_person(p, i)
-            lh, lw = s.labels.shape
+            pal = p.palette()
+            bag = carried.get(p.id)
+            if bag is not None:
+                draw_bag(s.labels, s.ox, s.oy, bag_box(bag, p, i))
+                pal = np.vstack([pal, np.asarray(bag.colour, np.uint8)[None]])
+            items.append((person_position(p, i)[1], _Item(p.id, pal, s)))
+        for b in self.bags:
+            if not b.carried(i):
+                box = bag_box(b, owners[b.owner], i)
+                items.append((box[1], _Item(b.id, b.palette(), render_bag(b, owners[b.owner], i))))
+        visible = []
+        for depth, it in items:
+            lh, lw = it.sprite.labels.shape
+            s = it.sprite
             if s.ox >= W or s.oy >= H or s.ox + lw <= 0 or s.oy + lh <= 0:
                 continue
-            items.append((p.y0 + p.vy * (i - p.t0), p.id, p, s))
-        items.sort(key=lambda t: (t[0], t[1]))
-        return [(p, s) for _, _, p, s in items]
+            visible.append((depth, it))
+        # Painter's order: larger foot y = closer to the camera = drawn later.
+        visible.sort(key=lambda t: (t[0], t[1].id))
+        return [it for _, it in visible]
+
+    # ------------------------------------------------------------ analytics
+    def ground_truth_events(self) -> list[Event]:
+        """The exact scene-analytics events of :attr:`scene_file` on the ground truth (see
+        :func:`motiontrack.synth.events.ground_truth_events`); empty without a scene file.
+
+        The result is cached (a new list each call).
+        """
+        ev = self._cache.get("events")
+        if ev is None:
+            ev = [] if self.scene_file is None else ground_truth_events(
+                self.scene_file, self.ground_truth(), self.fps, {b.id: b.owner for b in self.bags})
+            self._cache["events"] = ev
+        return list(ev)
+
+    def scene_toml(self) -> str:
+        """:attr:`scene_file` as the TOML text ``track --scene`` and ``analyze --scene`` read."""
+        if self.scene_file is None:
+            raise ValueError(f"scene {self.name!r} has no scene file")
+        return scene_toml(self.scene_file, f"lines and zones of {self.spec} (pixels)")
 
     # -------------------------------------------------------------- describe
     def describe(self) -> dict:
@@ -469,11 +527,36 @@ class SyntheticScene:
             entry, person_events = self._person(p, gt)
             people.append(entry)
             events += person_events
+        bags = []
+        for b in self.bags:
+            entry, bag_events = self._bag(b, gt)
+            bags.append(entry)
+            events += bag_events
         for a_id, b_id, a, b in self._overlaps(gt):
-            events.append({"frames": [a, b], "what": f"boxes of persons {a_id} and {b_id} overlap"})
+            kind = "persons" if {a_id, b_id} <= {p.id for p in self.people} else "objects"
+            events.append({"frames": [a, b], "what": f"boxes of {kind} {a_id} and {b_id} overlap"})
         events += self._lighting_events()
         events.sort(key=lambda e: (e["frames"][0], e["frames"][1]))
-        return {**self._settings(), "people": people, "events": events}
+        out = {**self._settings(), "people": people, "events": events}
+        if bags:
+            out["bags"] = bags
+        if self.scene_file is not None:
+            out["scene_file"] = self.scene_file
+            out["analytics_events"] = [e.to_json() for e in self.ground_truth_events()]
+        return out
+
+    def _bag(self, b: Bag, gt: Annotations) -> tuple[dict[str, Any], list[dict]]:
+        """A bag's description, and when it is set down."""
+        f = gt.frames[gt.ids == b.id]
+        entry = {"id": b.id, "owner": b.owner, "colour_bgr": list(b.colour),
+                 "dropped_frame": b.t_drop + 1,
+                 "first_frame": int(f.min()) if f.size else None}
+        events = [{"frames": [b.t_drop - b.lower + 1, b.t_drop],
+                   "what": f"person {b.owner} sets bag {b.id} down"}]
+        if f.size:
+            events.append({"frames": [int(f.min()), int(f.max())],
+                           "what": f"bag {b.id} lies on the ground (an object of its own)"})
+        return entry, events
 
     def _background_events(self, gt: Annotations) -> list[dict]:
         """The frames before anyone appears."""
@@ -499,6 +582,10 @@ class SyntheticScene:
             "first_frame": int(f.min()) if f.size else None,
             "last_frame": int(f.max()) if f.size else None,
         }
+        if p.turns:
+            # where the velocity changes: frame number, foot point, new velocity (px/frame)
+            entry["path"] = [[round(t + 1, 2), round(x, 1), round(y, 1), round(vx, 3), round(vy, 3)]
+                             for t, x, y, vx, vy in p.legs()]
         events: list[dict] = []
         if f.size:
             side = "left" if p.vx >= 0 else "right"
@@ -729,6 +816,133 @@ def _build_lighting(ctx: _Ctx) -> dict:
     return d
 
 
+# Lines and zones reach this far below the image (fraction of its height): a horizontal edge at the
+# bottom border would be crossed back and forth by the feet of people walking along it.
+_BELOW = 1.25
+
+
+def _q(v: float) -> float:
+    """A coordinate a quarter pixel past an integer: box anchors are whole or half pixels, so no
+    anchor ever lies exactly on a line or a zone edge placed here (no ties in the event rules)."""
+    return math.floor(v) + 0.25
+
+
+def _rect(x1: float, y1: float, x2: float, y2: float) -> list[list[float]]:
+    return [[_q(x1), _q(y1)], [_q(x2), _q(y1)], [_q(x2), _q(y2)], [_q(x1), _q(y2)]]
+
+
+def _gate(ctx: _Ctx, x: float) -> dict:
+    """A vertical line at column ``x`` across the walkway, drawn bottom to top, so that walking
+    left to right is ``in`` (the crossing rule of :mod:`motiontrack.synth.events`). It runs on
+    below the image: feet at the bottom border still cross it."""
+    return {"name": "gate",
+            "points": [[_q(x), _q(_BELOW * ctx.height)], [_q(x), _q(0.45 * ctx.height)]]}
+
+
+def _layout(ctx: _Ctx, gate_x: float, zone: tuple[float, float, float, float],
+            loiter_s: float) -> dict:
+    """A scene file: the line ``gate`` at column ``gate_x``, the rectangular zone ``plaza``
+    ``(x1, y1, x2, y2)`` and the stationary and abandoned rules every synthetic scene shares."""
+    return {
+        "anchor": "bottom_center",
+        "hysteresis_px": 5.0,
+        "line": [_gate(ctx, gate_x)],
+        "zone": [{"name": "plaza", "polygon": _rect(*zone), "loiter_s": float(loiter_s)}],
+        "stationary": {"after_s": 3.0, "radius_px": 8.0},
+        "abandoned": {"after_s": 4.0, "distance_heights": 1.5},
+    }
+
+
+def _street_layout(ctx: _Ctx, loiter_s: float = 10.0) -> dict:
+    """The scene file of the walkway scenes: the line ``gate`` across the middle and the zone
+    ``plaza`` around it (wider than any walker needs ``loiter_s`` to cross)."""
+    W, H = ctx.width, ctx.height
+    return _layout(ctx, 0.5 * W, (0.3 * W, 0.45 * H, 0.7 * W, _BELOW * H), loiter_s)
+
+
+def _walk_through(ctx: _Ctx, pid: int, t_enter: float, start: tuple[float, float],
+                  legs: list[tuple[float, float, float]], height_ref: float,
+                  colours: dict) -> Person:
+    """A person whose foot point starts at ``start`` at frame index ``t_enter`` and then walks to
+    each ``(x, y)`` of ``legs`` at the leg's speed (px/frame), keeping the last velocity."""
+    x, y = start
+    t = float(t_enter)
+    velocities = []
+    for tx, ty, speed in legs:
+        dist = math.hypot(tx - x, ty - y)
+        velocities.append((t, (tx - x) / dist * speed, (ty - y) / dist * speed))
+        t += dist / speed
+        x, y = tx, ty
+    h_at = height_ref * (start[1] - ctx.horizon) / (ctx.height - ctx.horizon)
+    (_, vx, vy), turns = velocities[0], tuple(velocities[1:])
+    return Person(id=pid, x0=start[0], y0=start[1], vx=vx, vy=vy, height=h_at, t0=float(t_enter),
+                  gait="walk", phase0=float(ctx.rng.uniform(0, 2 * math.pi)), horizon=ctx.horizon,
+                  turns=turns, **colours)
+
+
+def _build_loiter(ctx: _Ctx) -> dict:
+    """Someone walks in from the left, lingers in ``plaza`` (slow, turning walk for 7-9 s at
+    25 fps), and leaves by either side."""
+    rng, W, H = ctx.rng, ctx.width, ctx.height
+    zone = (0.25 * W, 0.58 * H, 0.62 * W, _BELOW * H)
+    inner = (0.32 * W, 0.70 * H, 0.55 * W, 0.90 * H)  # where the lingering stays
+    fast = rng.uniform(2.8, 3.0) * ctx.sx
+    height_ref = rng.uniform(112, 122) * ctx.sy
+    y_in = rng.uniform(0.74, 0.84) * H
+    lead = 0.22 * height_ref
+    linger = int(rng.integers(175, 226))  # frames between reaching the first and last point
+    points = [(rng.uniform(inner[0], inner[0] + 0.3 * (inner[2] - inner[0])),
+               rng.uniform(inner[1], inner[3]))]
+    while len(points) < 4:
+        cand = (rng.uniform(inner[0], inner[2]), rng.uniform(inner[1], inner[3]))
+        d = math.hypot(cand[0] - points[-1][0], cand[1] - points[-1][1])
+        if not 0.06 * W <= d <= 0.14 * W:
+            continue
+        if len(points) >= 2:
+            # no sharp reversal: a lingering walk, never a spot stood on (the stationary rule)
+            ax, ay = points[-1][0] - points[-2][0], points[-1][1] - points[-2][1]
+            bx, by = cand[0] - points[-1][0], cand[1] - points[-1][1]
+            if ax * bx + ay * by < -0.5 * math.hypot(ax, ay) * d:
+                continue
+        points.append(cand)
+    legs = [(points[0][0], points[0][1], fast)]
+    for a, b in zip(points[:-1], points[1:]):
+        legs.append((b[0], b[1], math.hypot(b[0] - a[0], b[1] - a[1]) / (linger / 3)))
+    leave_right = bool(rng.integers(2))
+    legs.append((W + lead if leave_right else -lead, rng.uniform(0.74, 0.84) * H, fast))
+    p = _walk_through(ctx, 1, _EMPTY_FRAMES + 2 + int(rng.integers(0, 3)), (-lead, y_in), legs,
+                      height_ref, _colours(rng, 1)[0])
+    return {"people": (p,), "scene_file": _layout(ctx, 0.12 * W, zone, 5.0)}
+
+
+def _build_leftbag(ctx: _Ctx) -> dict:
+    """Someone carries a bag in, stops, sets it down and walks on out of view; the bag stays."""
+    rng, W, H = ctx.rng, ctx.width, ctx.height
+    cols = _colours(rng, 2)
+    from_left = bool(rng.integers(2))
+    speed = rng.uniform(2.6, 3.0) * ctx.sx
+    height_ref = rng.uniform(112, 122) * ctx.sy
+    foot_y = rng.uniform(0.78, 0.86) * H
+    lead = 0.22 * height_ref
+    drop_x = rng.uniform(0.30, 0.42) * W
+    sign = 1.0 if from_left else -1.0
+    x_start = -lead if from_left else W + lead
+    x_stop = drop_x if from_left else W - drop_x
+    t_enter = _EMPTY_FRAMES + 2 + int(rng.integers(0, 3))
+    t_stop = t_enter + abs(x_stop - x_start) / speed
+    stand = 30  # frames standing: 4 to reach down, 8 lowering the bag, 18 before walking on
+    h_at = height_ref * (foot_y - ctx.horizon) / (H - ctx.horizon)
+    p = Person(id=1, x0=x_start, y0=foot_y, vx=sign * speed, vy=0.0, height=h_at,
+               t0=float(t_enter), gait="walk", phase0=float(rng.uniform(0, 2 * math.pi)),
+               horizon=ctx.horizon, turns=((t_stop, 0.0, 0.0), (t_stop + stand, sign * speed, 0.0)),
+               **cols[0])
+    bag = Bag(id=2, owner=1, t_drop=int(math.ceil(t_stop)) + 12, colour=cols[1]["shirt"], lower=8)
+    # the zone lies on the far side of the gate, where the owner walks off, away from the bag
+    zx = (0.58 * W, 0.88 * W) if from_left else (0.12 * W, 0.42 * W)
+    layout = _layout(ctx, 0.5 * W, (zx[0], 0.45 * H, zx[1], _BELOW * H), 10.0)
+    return {"people": (p,), "bags": (bag,), "scene_file": layout}
+
+
 @dataclass(frozen=True)
 class _SceneType:
     build: Callable[[_Ctx], dict]
@@ -746,6 +960,10 @@ _SCENE_TYPES: dict[str, _SceneType] = {
     "crowd": _SceneType(_build_crowd, 250, "5-8 people walking (one may run), many occlusions"),
     "lighting": _SceneType(_build_lighting, 250,
                            "a walker with a gradual and a sudden illumination change"),
+    "loiter": _SceneType(_build_loiter, 520,
+                         "one person walks in, lingers 7-9 s in the zone plaza, then leaves"),
+    "leftbag": _SceneType(_build_leftbag, 360,
+                          "one person sets a bag down and walks off out of view; the bag stays"),
 }
 
 #: Names of the built-in scene types.
@@ -844,6 +1062,8 @@ def make_scene(name: str, seed: int = 0, **overrides: Any) -> SyntheticScene:
         fps=ov.get("fps", 25.0),
         n_frames=n_frames,
         people=built["people"],
+        bags=built.get("bags", ()),
+        scene_file=built.get("scene_file") or _street_layout(ctx),
         column=built.get("column"),
         noise=ov.get("noise", 3.5),
         shadows=ov.get("shadows", False),
