@@ -125,3 +125,15 @@ def test_two_parameter_study_gets_hota_maps_per_sequence_and_mean(captured, tmp_
 def test_one_parameter_study_draws_no_maps(captured, tmp_path):
     written = plots.study_figures(_crowded_rows(), SimpleNamespace(keys=("thr",)), tmp_path)
     assert not any("map" in w for w in written)
+
+
+def test_the_star_takes_no_colour_of_the_curves(captured):
+    from matplotlib.colors import to_hex
+
+    rows = [_row(run, "walker", {"thr": t, "min": m}, 0.3 + t, 0.9 - t, 0.5 + t * (m == 0.001))
+            for run, (t, m) in enumerate(itertools.product((0.1, 0.2, 0.3), (0, 0.001, 0.002)), 1)]
+    plots.pr_curves(rows, "thr", "pr", series="min", best=plots.best_point(rows, ["thr", "min"]))
+    ax = captured[0].axes[0]
+    curves = [to_hex(ln.get_color()) for ln in ax.get_lines() if ln.get_marker() == "o"]
+    assert curves == ["#1f77b4", "#ff7f0e", "#2ca02c"]       # C0, C1, C2: the cycle in order
+    assert [t.get_text() for t in ax.get_legend().get_texts()][-1] == "best HOTA"

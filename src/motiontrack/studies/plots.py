@@ -38,8 +38,9 @@ __all__ = ["pr_curves", "pr_heatmaps", "metric_heatmaps", "metric_curves", "stud
 
 #: the metric whose best run the figures (and the report) mark
 BEST_METRIC = "HOTA"
-_BEST_STYLE = {"marker": "*", "ms": 16, "mfc": "none", "mec": "crimson", "mew": 1.6, "ls": "none",
-               "zorder": 5}
+# an explicit colour: the star does not take (and shift) a colour of the curves' cycle
+_BEST_STYLE = {"marker": "*", "ms": 16, "mfc": "none", "mec": "crimson", "color": "crimson",
+               "mew": 1.6, "ls": "none", "zorder": 5}
 
 _PAIRS = (("pixel", "pixel_precision", "pixel_recall"),
           ("object", "object_area_precision", "object_area_recall"),
@@ -214,7 +215,7 @@ def pr_curves(rows: Sequence[Mapping[str, Any]], key: str, stem: str | Path, *, 
                     groups.append((f"average {g or '(no group)'}",
                                    [r for r in rows if r.get("group", "") == g], 2.0, False))
             groups.append(("average" if len(seqs) > 1 else seqs[0], list(rows), 3.0, True))
-        to_label = []
+        to_label, star = [], None
         for name, rs, lw, labelled in groups:
             x = _curve(rs, key, prefix + rk, values)
             y = _curve(rs, key, prefix + pk, values)
@@ -229,7 +230,9 @@ def pr_curves(rows: Sequence[Mapping[str, Any]], key: str, stem: str | Path, *, 
                 on_curve = best is not None and (series is None or rs[0][series] == best[series])
                 if on_curve and best[key] in list(shown):
                     i = list(shown).index(best[key])
-                    ax.plot([x[ok][i]], [y[ok][i]], label=f"best {BEST_METRIC}", **_BEST_STYLE)
+                    star = (x[ok][i], y[ok][i])
+        if star is not None:   # after the curves: last in the legend
+            ax.plot([star[0]], [star[1]], label=f"best {BEST_METRIC}", **_BEST_STYLE)
         ax.set(xlim=(0, 1.02), ylim=(0, 1.02), xlabel="recall", ylabel="precision",
                title=f"{label}-based", aspect="equal")
         ax.grid(True, alpha=0.3)
