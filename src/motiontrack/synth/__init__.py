@@ -10,7 +10,7 @@ See ``docs/synthetic.md`` for the scenes, their parameters and the ground-truth 
 
 from __future__ import annotations
 
-from .render import Column, Person
+from .render import Bag, Column, Person
 from .scenes import (
     MASK_PERSON,
     MASK_SHADOW,
@@ -31,6 +31,7 @@ __all__ = [
     "scene_summaries",
     "SyntheticSource",
     "Person",
+    "Bag",
     "Column",
     "Lighting",
     "MASK_PERSON",

@@ -108,7 +108,7 @@ class _Emitter:
 
     def __call__(self, kind: str, frame: int, p: Sequence[float], **fields: Any) -> None:
         fields = {k: (round(float(v), 3) if isinstance(v, float) else v) for k, v in fields.items()}
-        self.events.append(Event(type=kind, frame=int(frame), t=round((frame - 1) / self.fps, 6),
+        self.events.append(Event(type=kind, frame=int(frame), t=round(float(frame - 1) / self.fps, 6),
                                  track=self.track, x=round(float(p[0]), 2),
                                  y=round(float(p[1]), 2), **fields))
 
