@@ -16,7 +16,8 @@ def register(subparsers) -> None:
                         "from a tracks file",
         description="Run a scene file's rules over a tracks file in any supported annotation "
                     "format (another tracker's output or ground truth) and write events.jsonl, "
-                    "counts.csv and summary.json in the output folder (docs/analytics.md).")
+                    "counts.csv, heatmap.png (and heatmap_world.png with --camera) and "
+                    "summary.json in the output folder (docs/analytics.md).")
     p.add_argument("tracks", type=Path, help="tracks file (MOTChallenge, CVML, ViPER, CVAT, JSON)")
     p.add_argument("--scene", type=Path, required=True, help="scene file (TOML)")
     p.add_argument("--fps", type=float, default=None,
@@ -25,6 +26,11 @@ def register(subparsers) -> None:
     p.add_argument("--camera", type=Path, default=None,
                    help="camera file (.xml, .yml, .toml): positions in metres, world geometry "
                         "and the scene's rules in metres")
+    p.add_argument("--video", default=None,
+                   help="the tracked video (file, image folder or glob): heatmap.png is drawn "
+                        "over the median of frames sampled from it, at its size (default: on "
+                        "black, at the size a seqinfo.ini or summary.json beside the tracks "
+                        "states, else the tracks' extent)")
     p.add_argument("-o", "--out", type=Path, required=True, help="output folder")
     p.add_argument("--bin-s", type=float, default=60.0,
                    help="seconds per row of counts.csv (default 60)")
@@ -37,7 +43,8 @@ def cmd_analyze(args: argparse.Namespace) -> int:
     from ..calibrate import load_camera
     from ..errors import ConfigError
     from ..io.annotations import read_annotations
-    from ..run.analyze import analyze_tracks, frame_rate_beside
+    from ..run.analyze import analyze_tracks, frame_rate_beside, frame_size_beside
+    from ..run.heatmaps import median_background
 
     fps = args.fps if args.fps is not None else frame_rate_beside(args.tracks)
     if fps is None:
@@ -45,8 +52,12 @@ def cmd_analyze(args: argparse.Namespace) -> int:
     camera = load_camera(args.camera) if args.camera is not None else None
     scene = load_scene(args.scene, camera)
     tracks = read_annotations(args.tracks)
+    background = median_background(args.video) if args.video is not None else None
+    size = ((background.shape[1], background.shape[0]) if background is not None
+            else frame_size_beside(args.tracks))
     summary = analyze_tracks(tracks, scene, fps, args.out, camera=camera, bin_s=args.bin_s,
-                             force=args.force, source=str(args.tracks))
+                             force=args.force, source=str(args.tracks), size=size,
+                             background=background)
     totals = summary["analytics"]
     n = sum(totals["events"].values())
     lines = ", ".join(f"{k} in {v['in']} out {v['out']}" for k, v in totals["lines"].items())

@@ -21,10 +21,11 @@ from ..io.atomic import atomic_write_text, check_writable
 from ..io.mot import read_seqinfo
 from ..types import Annotations
 from .analytics_writers import CountsWriter, EventsWriter
+from .heatmaps import HeatmapWriter, scene_geometry
 
 log = logging.getLogger(__name__)
 
-__all__ = ["analyze_tracks", "frame_rate_beside"]
+__all__ = ["analyze_tracks", "frame_rate_beside", "frame_size_beside", "tracks_extent"]
 
 
 def frame_rate_beside(tracks_path: str | Path) -> float | None:
@@ -43,20 +44,57 @@ def frame_rate_beside(tracks_path: str | Path) -> float | None:
     for d in (folder, folder.parent):
         if (d / "seqinfo.ini").is_file():
             try:
-                fps = read_seqinfo(d).get("frameRate")
+                fps = read_seqinfo(d).get("framerate")   # the reader lower-cases keys
             except InputError:
                 return None
             return float(fps) if isinstance(fps, (int, float)) and fps > 0 else None
     return None
 
 
+def frame_size_beside(tracks_path: str | Path) -> tuple[int, int] | None:
+    """``(width, height)`` of the frames a tracks file's folder states: ``summary.json`` of the
+    ``track`` run that wrote it, or a MOTChallenge ``seqinfo.ini`` (``imWidth``, ``imHeight``)
+    in its folder or the one above; ``None`` when neither does."""
+    folder = Path(tracks_path).resolve().parent
+    summary = folder / "summary.json"
+    if summary.is_file():
+        try:
+            doc = json.loads(summary.read_text(encoding="utf-8"))
+            w, h = doc.get("width"), doc.get("height")
+        except (OSError, ValueError, AttributeError):
+            w = h = None
+        if isinstance(w, int) and isinstance(h, int) and w > 0 and h > 0:
+            return w, h
+    for d in (folder, folder.parent):
+        if (d / "seqinfo.ini").is_file():
+            try:
+                info = read_seqinfo(d)
+            except InputError:
+                return None
+            w, h = info.get("imwidth"), info.get("imheight")
+            return (w, h) if isinstance(w, int) and isinstance(h, int) and w > 0 and h > 0 else None
+    return None
+
+
+def tracks_extent(tracks: Annotations) -> tuple[int, int]:
+    """``(width, height)`` covering every box of ``tracks`` (at least 1 x 1 pixel)."""
+    if not len(tracks):
+        return 1, 1
+    b = tracks.boxes
+    return (max(1, int(math.ceil(float(np.max(b[:, 0] + b[:, 2]))))),
+            max(1, int(math.ceil(float(np.max(b[:, 1] + b[:, 3]))))))
+
+
 def analyze_tracks(tracks: Annotations, scene: Scene, fps: float, out: str | Path, *,
                    camera: Any = None, bin_s: float = 60.0, force: bool = False,
-                   source: str = "") -> dict[str, Any]:
-    """Write ``events.jsonl``, ``counts.csv`` and ``summary.json`` for ``tracks`` in ``out``.
+                   source: str = "", size: tuple[int, int] | None = None,
+                   background: np.ndarray | None = None) -> dict[str, Any]:
+    """Write ``events.jsonl``, ``counts.csv``, ``heatmap.png`` (``heatmap_world.png`` with a
+    camera) and ``summary.json`` for ``tracks`` in ``out``.
 
-    Rows marked ``consider = 0`` (ground truth's ignored objects) are left out. Returns the
-    summary.
+    Rows marked ``consider = 0`` (ground truth's ignored objects) are left out. The heat map is
+    ``size`` pixels (default: the extent of the tracks) over ``background`` (default: black).
+    Returns the summary.
     """
     out = Path(out)
     analytics = Analytics(scene, fps, camera)   # a bad frame rate fails before any file
@@ -69,15 +107,19 @@ def analyze_tracks(tracks: Annotations, scene: Scene, fps: float, out: str | Pat
         tracks = tracks.select(tracks.consider)
     events = EventsWriter(out, source, scene.source)
     counts = CountsWriter(out, scene.lines, scene.zones, bin_s)
+    heat = HeatmapWriter(out, scene.anchor, size or tracks_extent(tracks), camera, background,
+                         scene_geometry(scene.lines, scene.zones))
     writers = (events, counts)
     summary_path = out / "summary.json"
-    check_writable([*events.paths.values(), *counts.paths.values(), summary_path], force)
+    check_writable([*events.paths.values(), *counts.paths.values(), *heat.paths.values(),
+                    summary_path], force)
     rows = tracks.by_frame()
     last = int(tracks.frames.max()) if len(tracks) else 0
     empty = np.zeros((0, 4))
     keep = False
     for w in writers:
         w.open(fps)
+    heat.open()
     try:
         for f in range(1, last + 1):
             idx = rows.get(f)
@@ -86,13 +128,15 @@ def analyze_tracks(tracks: Annotations, scene: Scene, fps: float, out: str | Pat
             frame = analytics.step(f, ids, boxes)
             for w in writers:
                 w.add(frame)
+            heat.add_boxes(boxes)
         keep = True
     finally:
-        for w in writers:
+        for w in (*writers, heat):
             w.close(keep)
     summary = {"source": str(source), "fps": float(fps), "frames": last,
                "tracks": int(len(np.unique(tracks.ids))), "analytics": analytics.summary(),
-               "outputs": {k: str(p) for w in writers for k, p in w.paths.items()}}
+               "heatmap": heat.info,
+               "outputs": {k: str(p) for w in (*writers, heat) for k, p in w.paths.items()}}
     summary["outputs"]["summary"] = str(summary_path)
     atomic_write_text(summary_path, json.dumps(summary, indent=2) + "\n")
     return summary

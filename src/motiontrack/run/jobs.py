@@ -30,6 +30,7 @@ from ..tracking.flow import SparseFlowParams
 from ..tracking.single import SingleTracker, follow_accuracy
 from ..types import Annotations, Box
 from .analytics_writers import CountsWriter, EventsWriter
+from .heatmaps import HeatmapWriter, scene_geometry
 from .job import Job
 from .processors import (DenseFlowProcessor, FollowProcessor, OverlayProcessor,
                          SparseFlowProcessor, TrackProcessor)
@@ -101,7 +102,9 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
         if analytics is not None:
             sc = analytics.scene
             writers += [EventsWriter(out, str(source), sc.source),
-                        CountsWriter(out, sc.lines, sc.zones, bin_s)]
+                        CountsWriter(out, sc.lines, sc.zones, bin_s),
+                        HeatmapWriter(out, sc.anchor, camera=fitted,
+                                      geometry=scene_geometry(sc.lines, sc.zones))]
         if cfg.output.video:
             writers.append(VideoWriter("video", out / f"annotated{extension_for(codec)}", codec))
         if cfg.output.mask_video:
