@@ -11,6 +11,8 @@ log = logging.getLogger(__name__)
 
 
 def register(subparsers) -> None:
+    from ._sinks import add_sink_options
+
     p = subparsers.add_parser(
         "analyze", help="line counts, zone dwell, loitering, stationary and speeding events "
                         "from a tracks file",
@@ -35,6 +37,7 @@ def register(subparsers) -> None:
     p.add_argument("--bin-s", type=float, default=60.0,
                    help="seconds per row of counts.csv (default 60)")
     p.add_argument("--force", action="store_true", help="replace existing outputs")
+    add_sink_options(p, "the name of the tracks file's folder")
     p.set_defaults(func=cmd_analyze)
 
 
@@ -44,8 +47,11 @@ def cmd_analyze(args: argparse.Namespace) -> int:
     from ..errors import ConfigError
     from ..io.annotations import read_annotations
     from ..run.analyze import analyze_tracks, frame_rate_beside, frame_size_beside
+    from ..run.folders import source_name
     from ..run.heatmaps import median_background
+    from ._sinks import sink_targets, sinks_writer
 
+    targets = sink_targets(args)
     fps = args.fps if args.fps is not None else frame_rate_beside(args.tracks)
     if fps is None:
         raise ConfigError(f"analyze needs the frame rate of {args.tracks.name}: give --fps")
@@ -57,7 +63,9 @@ def cmd_analyze(args: argparse.Namespace) -> int:
             else frame_size_beside(args.tracks))
     summary = analyze_tracks(tracks, scene, fps, args.out, camera=camera, bin_s=args.bin_s,
                              force=args.force, source=str(args.tracks), size=size,
-                             background=background)
+                             background=background,
+                             sinks=sinks_writer(targets, args.camera_name,
+                                                source_name(args.tracks.resolve().parent)))
     totals = summary["analytics"]
     n = sum(totals["events"].values())
     lines = ", ".join(f"{k} in {v['in']} out {v['out']}" for k, v in totals["lines"].items())

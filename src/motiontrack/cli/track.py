@@ -11,6 +11,7 @@ log = logging.getLogger("motiontrack")
 
 def register(sub: argparse._SubParsersAction) -> None:
     from ._common import FPS_HELP, CodecOption, out_help
+    from ._sinks import add_sink_options
     from ._common import add_scoring_option
 
     p = sub.add_parser(
@@ -51,6 +52,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--bin-s", type=float, default=60.0,
                    help="with --scene: seconds per row of counts.csv (default 60)")
     p.add_argument("--show", action="store_true", help="live window (q quits, space pauses)")
+    add_sink_options(p, "the source's name, as the run folder's")
     p.add_argument("--force", action="store_true", help="overwrite existing outputs")
     p.set_defaults(func=cmd_track)
 
@@ -107,7 +109,9 @@ def cmd_track(args) -> int:
     from ..io.mot import read_mot
     from ..run import track_job
     from ._common import frame_loop, output_folder, read_gt
+    from ._sinks import sink_targets
 
+    sinks = sink_targets(args)
     cfg = _build_config(args)
     gt = read_gt(args.gt) if args.gt else None
     det = None
@@ -118,7 +122,7 @@ def cmd_track(args) -> int:
     job = track_job(args.source, cfg, output_folder(args, "track"), force=args.force, gt=gt, detections=det,
                     show=_viewer() if args.show else None, save=args.save,
                     mask_images=args.mask_images, scoring=args.scoring, scene=args.scene,
-                    bin_s=args.bin_s)
+                    bin_s=args.bin_s, sinks=sinks, camera_name=args.camera_name)
     log.info("source %s", job.info.describe())
     with frame_loop(job.expected_frames()) as loop:
         summary = job.run(progress=loop.update, should_stop=loop.stop)

@@ -21,6 +21,7 @@ from ..io.atomic import atomic_write_text, check_writable
 from ..io.mot import read_seqinfo
 from ..types import Annotations
 from .analytics_writers import CountsWriter, EventsWriter
+from .event_sinks import EventSinksWriter
 from .heatmaps import HeatmapWriter, scene_geometry
 
 log = logging.getLogger(__name__)
@@ -88,7 +89,8 @@ def tracks_extent(tracks: Annotations) -> tuple[int, int]:
 def analyze_tracks(tracks: Annotations, scene: Scene, fps: float, out: str | Path, *,
                    camera: Any = None, bin_s: float = 60.0, force: bool = False,
                    source: str = "", size: tuple[int, int] | None = None,
-                   background: np.ndarray | None = None) -> dict[str, Any]:
+                   background: np.ndarray | None = None,
+                   sinks: EventSinksWriter | None = None) -> dict[str, Any]:
     """Write ``events.jsonl``, ``counts.csv``, ``heatmap.png`` (``heatmap_world.png`` with a
     camera) and ``summary.json`` for ``tracks`` in ``out``.
 
@@ -109,7 +111,7 @@ def analyze_tracks(tracks: Annotations, scene: Scene, fps: float, out: str | Pat
     counts = CountsWriter(out, scene.lines, scene.zones, bin_s)
     heat = HeatmapWriter(out, scene.anchor, size or tracks_extent(tracks), camera, background,
                          scene_geometry(scene.lines, scene.zones))
-    writers = (events, counts)
+    writers = (events, counts) + ((sinks,) if sinks is not None else ())
     summary_path = out / "summary.json"
     check_writable([*events.paths.values(), *counts.paths.values(), *heat.paths.values(),
                     summary_path], force)
@@ -138,5 +140,7 @@ def analyze_tracks(tracks: Annotations, scene: Scene, fps: float, out: str | Pat
                "heatmap": heat.info,
                "outputs": {k: str(p) for w in (*writers, heat) for k, p in w.paths.items()}}
     summary["outputs"]["summary"] = str(summary_path)
+    if sinks is not None:   # webhooks and MQTT brokers: what each delivered, dropped, retried
+        summary["sinks"] = sinks.stats()
     atomic_write_text(summary_path, json.dumps(summary, indent=2) + "\n")
     return summary

@@ -21,6 +21,7 @@ from ..config import PipelineConfig, SourceConfig, save_config
 from ..errors import ConfigError
 from ..evaluate.score import score_run
 from ..evaluate.scoring import DEFAULT_SCORING, ignores_zero_marked
+from ..io.sinks import check_camera_name
 from ..io.sources import Source
 from ..imaging import scaled_size
 from ..io.video import extension_for
@@ -30,6 +31,8 @@ from ..tracking.flow import SparseFlowParams
 from ..tracking.single import SingleTracker, follow_accuracy
 from ..types import Annotations, Box
 from .analytics_writers import CountsWriter, EventsWriter
+from .event_sinks import EventSinksWriter, deliveries
+from .folders import source_name
 from .heatmaps import HeatmapWriter, scene_geometry
 from .job import Job
 from .processors import (DenseFlowProcessor, FollowProcessor, OverlayProcessor,
@@ -58,7 +61,8 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
               show: Callable[[np.ndarray], bool] | None = None,
               save: Iterable[str] | str = (), mask_images: str | Path | None = None,
               scoring: str = DEFAULT_SCORING, scene: str | Path | None = None,
-              bin_s: float = 60.0) -> Job:
+              bin_s: float = 60.0, sinks: Sequence[Any] = (),
+              camera_name: str | None = None) -> Job:
     """``motiontrack track``: ``tracks.txt``, the annotated video, the mask video and the
     intermediate movies as ``cfg.output`` and ``save`` ask, the mask of every frame as
     ``bin%06d.png`` in the folder ``mask_images``, the live view with ``show``, ``gt.txt`` and
@@ -66,9 +70,14 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
     ``config.toml``. ``scoring`` names how zero-marked ground truth counts
     (:data:`~motiontrack.evaluate.scoring.SCORING`). A ``scene`` file runs scene analytics on
     the tracks of each frame: ``events.jsonl`` and ``counts.csv`` (rows of ``bin_s`` seconds),
-    the lines and zones with their counts on the annotated video."""
+    the lines and zones with their counts on the annotated video. ``sinks`` (webhook and MQTT
+    targets, :mod:`motiontrack.io.sinks`) receive every event too, named ``camera_name``
+    (default: the source's name, :func:`~motiontrack.run.folders.source_name`)."""
     out = Path(out_dir)
     ignores_zero_marked(scoring)   # an unknown name fails before the source opens
+    if sinks and scene is None:
+        raise ConfigError("--webhook and --mqtt send scene-analytics events: give --scene")
+    camera_name = check_camera_name(camera_name or source_name(source)) if sinks else None
     if mask_images is not None and detections is not None:
         raise ConfigError("--mask-images needs motion masks; with --detections there are none")
     streams = parse_streams(save)
@@ -118,6 +127,8 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
         if truth is not None:
             writers.append(ScoreWriter(out, truth, tracks,
                                        functools.partial(score_run, scoring=scoring)))
+        if sinks:
+            writers.append(EventSinksWriter(deliveries(sinks, camera_name), camera_name))
         return Job(src, proc, writers, out, force=force, config=(save_config, cfg))
 
     return _opened(source, cfg.source, build)
