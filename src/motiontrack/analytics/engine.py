@@ -18,7 +18,7 @@ import numpy as np
 from ..calibrate.measure import world_positions
 from ..errors import ConfigError
 from ..types import EVENT_TYPES, Event, SceneFrame
-from .lines import LineState, cross_lines
+from .lines import LineSet
 from .movement import REARM, SpeedWindow, Stay
 from .scene import Scene
 from .zones import ZoneEdges
@@ -33,21 +33,48 @@ _ORDER = {k: i for i, k in enumerate(("line_cross", "zone_exit", "zone_enter", "
 
 
 class _TrackState:
-    """What the rules remember of one track."""
+    """What the rules remember of one track; its line and zone state is row ``row`` of the
+    engine's :class:`_Table`."""
 
-    __slots__ = ("last_frame", "point", "world", "lines", "zone_in", "enter_frame", "loitered",
-                 "stay", "speed")
+    __slots__ = ("row", "last_frame", "point", "world", "stay", "speed")
 
-    def __init__(self, n_lines: int, n_zones: int) -> None:
+    def __init__(self, row: int) -> None:
+        self.row = row
         self.last_frame = -1
         self.point = (0.0, 0.0)
         self.world: tuple[float, float] | None = None
-        self.lines = LineState(n_lines)
-        self.zone_in = np.zeros(n_zones, dtype=bool)
-        self.enter_frame = np.zeros(n_zones, dtype=np.int64)
-        self.loitered = np.zeros(n_zones, dtype=bool)
         self.stay = Stay()
         self.speed = SpeedWindow()
+
+
+class _Table:
+    """The line and zone state of every track, one row per track: a frame's tracks are read
+    and written with one fancy index per column instead of a loop over track objects."""
+
+    _COLUMNS = ("side", "touched", "s", "point", "zone_in", "enter_frame", "loitered")
+
+    def __init__(self, n_lines: int, n_zones: int, capacity: int = 16) -> None:
+        self.side = np.zeros((capacity, n_lines), dtype=np.int8)
+        self.touched = np.zeros((capacity, n_lines), dtype=bool)
+        self.s = np.zeros((capacity, n_lines))          # s(p) of each line at the last anchor
+        self.point = np.zeros((capacity, 2))            # the last anchor
+        self.zone_in = np.zeros((capacity, n_zones), dtype=bool)
+        self.enter_frame = np.zeros((capacity, n_zones), dtype=np.int64)
+        self.loitered = np.zeros((capacity, n_zones), dtype=bool)
+        self.free = list(range(capacity - 1, -1, -1))
+
+    def take(self) -> int:
+        """A cleared row for a new track."""
+        if not self.free:
+            n = len(self.side)
+            for name in self._COLUMNS:
+                col = getattr(self, name)
+                setattr(self, name, np.concatenate([col, np.zeros_like(col)]))
+            self.free = list(range(2 * n - 1, n - 1, -1))
+        row = self.free.pop()
+        for name in self._COLUMNS:
+            getattr(self, name)[row] = 0
+        return row
 
 
 def _r(v: float, digits: int) -> float:
@@ -76,16 +103,18 @@ class Analytics:
         if scene.abandoned is not None:
             log.warning("the scene's [abandoned] table is not analysed: no abandoned events")
         self.scene, self.fps, self.camera = scene, float(fps), camera
-        self.a = np.array([ln.a for ln in scene.lines], dtype=np.float64).reshape(-1, 2)
-        self.b = np.array([ln.b for ln in scene.lines], dtype=np.float64).reshape(-1, 2)
+        self.lines = LineSet([ln.a for ln in scene.lines], [ln.b for ln in scene.lines])
         self.edges = ZoneEdges(scene.zones)
+        self.table = _Table(self.lines.n, self.edges.n)
         self.loiter_frames = np.array([np.inf if z.loiter_s is None else z.loiter_s * fps
                                        for z in scene.zones])
+        self.loiters = bool(np.isfinite(self.loiter_frames).any())
         self.forget_frames = scene.forget_s * fps
         self.tracks: dict[int, _TrackState] = {}
         self.crossings = np.zeros((len(scene.lines), 2), dtype=np.int64)  # in, out
         self.occupancy = np.zeros(len(scene.zones), dtype=np.int64)
         self.last_frame = 0
+        self._counts: tuple[dict, dict] | None = None
         # totals for the summary
         self.frames = 0
         self.by_type: Counter[str] = Counter()
@@ -112,33 +141,43 @@ class Analytics:
                              f"after {self.last_frame}")
         ids = np.asarray(ids, dtype=np.int64).reshape(-1)
         boxes = np.asarray(boxes, dtype=np.float64).reshape(-1, 4)
-        _, first = np.unique(ids, return_index=True)  # a repeated id: its first row counts
-        first = np.sort(first)
-        ids, boxes = ids[first], boxes[first]
+        id_list = ids.tolist()
+        if len(set(id_list)) != len(id_list):
+            _, first = np.unique(ids, return_index=True)  # a repeated id: its first row counts
+            first = np.sort(first)
+            ids, boxes = ids[first], boxes[first]
+            id_list = ids.tolist()
         events: list[Event] = []
-        self._forget(frame, set(ids.tolist()), events)
+        self._forget(frame, events)
         points = self._anchors(boxes)
         world = self._world(boxes)
         states = []
-        for tid in ids.tolist():
+        for tid in id_list:
             st = self.tracks.get(tid)
             if st is None:
-                st = self.tracks[tid] = _TrackState(len(self.a), self.edges.n)
+                st = self.tracks[tid] = _TrackState(self.table.take())
             states.append(st)
-        self._lines(frame, ids, states, points, world, events)
-        self._zones(frame, ids, states, points, world, events)
+        rows = np.fromiter((st.row for st in states), dtype=np.int64, count=len(states))
+        known = np.fromiter((st.last_frame > 0 for st in states), dtype=bool, count=len(states))
+        self._lines(frame, ids, rows, known, points, world, events)
+        self._zones(frame, ids, states, rows, known, points, world, events)
         self._movement(frame, ids, states, points, world, events)
+        self.table.point[rows] = points
         for i, st in enumerate(states):
             st.last_frame = frame
             st.point = (float(points[i, 0]), float(points[i, 1]))
             st.world = None if world is None else (float(world[i, 0]), float(world[i, 1]))
         self.last_frame = frame
         self.frames += 1
-        self.peak = np.maximum(self.peak, self.occupancy)
+        np.maximum(self.peak, self.occupancy, out=self.peak)
         self.occupancy_sum += self.occupancy
-        events.sort(key=lambda e: (e.track, _ORDER[e.type], e.line or "", e.zone or ""))
-        self.by_type.update(e.type for e in events)
-        return SceneFrame(frame, tuple(events), self.counts_by_line(), self.occupancy_by_zone())
+        if events:
+            events.sort(key=lambda e: (e.track, _ORDER[e.type], e.line or "", e.zone or ""))
+            self.by_type.update(e.type for e in events)
+            self._counts = None
+        if self._counts is None:   # the totals change only with events
+            self._counts = (self.counts_by_line(), self.occupancy_by_zone())
+        return SceneFrame(frame, tuple(events), dict(self._counts[0]), dict(self._counts[1]))
 
     def finish(self, last_frame: int | None = None) -> list[Event]:
         """Events at the end of the input: none. A track still in a zone or stationary has not
@@ -198,17 +237,19 @@ class Analytics:
     def _seconds(self, frames: float) -> float:
         return _r(frames / self.fps, 3)
 
-    def _forget(self, frame: int, present: set[int], events: list[Event]) -> None:
+    def _forget(self, frame: int, events: list[Event]) -> None:
         """Tracks unseen for more than ``forget_s`` have left: they exit their zones and end
         their stationary stay (at their last position). A track id seen again after that is a
         new track."""
         for tid in [t for t, st in self.tracks.items() if frame - st.last_frame > self.forget_frames]:
             st = self.tracks.pop(tid)
-            for k in np.flatnonzero(st.zone_in):
+            self.table.free.append(st.row)
+            enter_frame = self.table.enter_frame[st.row]
+            for k in np.flatnonzero(self.table.zone_in[st.row]):
                 events.append(self._event("zone_exit", frame, tid, st.point, st.world,
                                           zone=self.scene.zones[k].name,
-                                          dwell_s=self._seconds(st.last_frame - st.enter_frame[k])))
-                self._exited(k, st.last_frame - st.enter_frame[k])
+                                          dwell_s=self._seconds(st.last_frame - enter_frame[k])))
+                self._exited(k, st.last_frame - enter_frame[k])
             if st.stay.stationary:
                 events.append(self._event("stationary_end", frame, tid, st.point, st.world,
                                           duration_s=self._seconds(st.stay.last - st.stay.first)))
@@ -218,44 +259,47 @@ class Analytics:
         self.exits[k] += 1
         self.dwell_frames[k] += dwell
 
-    def _lines(self, frame, ids, states, points, world, events) -> None:
-        if not len(self.a) or not len(ids):
+    def _lines(self, frame, ids, rows, known, points, world, events) -> None:
+        if not self.lines.n or not len(ids):
             return
-        has_prev = np.array([st.last_frame > 0 for st in states])
-        prev = np.array([st.point for st in states], dtype=np.float64).reshape(-1, 2)
-        crossed = cross_lines([st.lines for st in states], prev, has_prev, points, self.a,
-                              self.b, self.scene.hysteresis_px)
+        t = self.table
+        crossed, t.side[rows], t.touched[rows], t.s[rows] = self.lines.step(
+            t.side[rows], t.touched[rows], t.s[rows], t.point[rows], known, points,
+            self.scene.hysteresis_px)
+        if not crossed.any():
+            return
         for i, j in zip(*np.nonzero(crossed)):
             direction = "in" if crossed[i, j] > 0 else "out"
             self.crossings[j, 0 if direction == "in" else 1] += 1
             events.append(self._event("line_cross", frame, ids[i], points[i], _row(world, i),
                                       line=self.scene.lines[j].name, direction=direction))
 
-    def _zones(self, frame, ids, states, points, world, events) -> None:
+    def _zones(self, frame, ids, states, rows, known, points, world, events) -> None:
         if not self.edges.n or not len(ids):
             return
-        was_in = np.stack([st.zone_in for st in states])
-        known = np.array([st.last_frame > 0 for st in states])
+        t = self.table
+        was_in = t.zone_in[rows]
         now_in = self.edges.membership(was_in, known, points, self.scene.hysteresis_px)
         for i, k in zip(*np.nonzero(now_in != was_in)):
-            st, name = states[i], self.scene.zones[k].name
+            r, name = rows[i], self.scene.zones[k].name
             if now_in[i, k]:
-                st.enter_frame[k], st.loitered[k] = frame, False
+                t.enter_frame[r, k], t.loitered[r, k] = frame, False
                 self.occupancy[k] += 1
                 self.enters[k] += 1
                 events.append(self._event("zone_enter", frame, ids[i], points[i], _row(world, i),
                                           zone=name))
             else:
-                dwell = frame - st.enter_frame[k]
+                dwell = frame - t.enter_frame[r, k]
                 self._exited(k, dwell)
                 events.append(self._event("zone_exit", frame, ids[i], points[i], _row(world, i),
                                           zone=name, dwell_s=self._seconds(dwell)))
-            st.zone_in[k] = now_in[i, k]
-        enter = np.stack([st.enter_frame for st in states])
-        loitered = np.stack([st.loitered for st in states])
-        due = now_in & ~loitered & (frame - enter >= self.loiter_frames[None, :] - 1e-9)
+            t.zone_in[r, k] = now_in[i, k]
+        if not self.loiters:
+            return
+        enter = t.enter_frame[rows]
+        due = now_in & ~t.loitered[rows] & (frame - enter >= self.loiter_frames[None, :] - 1e-9)
         for i, k in zip(*np.nonzero(due)):
-            states[i].loitered[k] = True
+            t.loitered[rows[i], k] = True
             events.append(self._event("loiter", frame, ids[i], points[i], _row(world, i),
                                       zone=self.scene.zones[k].name,
                                       dwell_s=self._seconds(frame - enter[i, k])))
@@ -265,8 +309,9 @@ class Analytics:
         if stat is not None:
             pos = world if stat.radius_m is not None else points
             radius = stat.radius_m if stat.radius_m is not None else stat.radius_px
+            finite = np.isfinite(pos).all(axis=1).tolist()
             for i, st in enumerate(states):
-                if not np.all(np.isfinite(pos[i])):
+                if not finite[i]:
                     continue
                 what, lasted = st.stay.step((pos[i, 0], pos[i, 1]), frame, radius,
                                             stat.after_s * self.fps)
@@ -280,8 +325,9 @@ class Analytics:
             metres = speed.limit_mps is not None
             pos = world if metres else points
             limit = speed.limit_mps if metres else speed.limit_px_s
+            finite = np.isfinite(pos).all(axis=1).tolist()
             for i, st in enumerate(states):
-                if not np.all(np.isfinite(pos[i])):
+                if not finite[i]:
                     continue
                 v = st.speed.speed(frame, (pos[i, 0], pos[i, 1]), speed.window_s * self.fps, self.fps)
                 if v is None:

@@ -13,18 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["LineState", "cross_lines", "steps_meet_lines"]
-
-
-class LineState:
-    """One track's state for ``L`` lines: confirmed side (+1, -1, 0 = not yet) and whether a
-    step since the last confirmed position met the segment."""
-
-    __slots__ = ("side", "touched")
-
-    def __init__(self, n_lines: int) -> None:
-        self.side = np.zeros(n_lines, dtype=np.int8)
-        self.touched = np.zeros(n_lines, dtype=bool)
+__all__ = ["LineSet", "steps_meet_lines"]
 
 
 def steps_meet_lines(p0: np.ndarray, p1: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -58,40 +47,78 @@ def steps_meet_lines(p0: np.ndarray, p1: np.ndarray, a: np.ndarray, b: np.ndarra
     return meet
 
 
-def cross_lines(states: list[LineState], prev: np.ndarray, has_prev: np.ndarray,
-                points: np.ndarray, a: np.ndarray, b: np.ndarray,
-                hysteresis_px: float) -> np.ndarray:
-    """One frame of the crossing rule for ``N`` tracks and ``L`` lines; updates ``states``.
+def _meet_pairs(p0: np.ndarray, p1: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """:func:`steps_meet_lines` for K (step, segment) pairs: ``p0, p1, a, b`` all (K, 2);
+    returns (K,) bool. The same arithmetic, element by element."""
+    ax, ay, bx, by = a[:, 0], a[:, 1], b[:, 0], b[:, 1]
+    x0, y0, x1, y1 = p0[:, 0], p0[:, 1], p1[:, 0], p1[:, 1]
+    d1 = (bx - ax) * (y0 - ay) - (by - ay) * (x0 - ax)
+    d2 = (bx - ax) * (y1 - ay) - (by - ay) * (x1 - ax)
+    d3 = (x1 - x0) * (ay - y0) - (y1 - y0) * (ax - x0)
+    d4 = (x1 - x0) * (by - y0) - (y1 - y0) * (bx - x0)
+    meet = (d1 * d2 <= 0) & (d3 * d4 <= 0)
+    collinear = (d1 == 0) & (d2 == 0)
+    if np.any(collinear):
+        overlap = ((np.minimum(x0, x1) <= np.maximum(ax, bx))
+                   & (np.maximum(x0, x1) >= np.minimum(ax, bx))
+                   & (np.minimum(y0, y1) <= np.maximum(ay, by))
+                   & (np.maximum(y0, y1) >= np.minimum(ay, by)))
+        meet = np.where(collinear, overlap, meet)
+    return meet
 
-    Parameters
-    ----------
-    states : N :class:`LineState`, one per track (changed in place).
-    prev : (N, 2) float64 each track's previous anchor (any value where ``has_prev`` is false).
-    has_prev : (N,) bool
-    points : (N, 2) float64 the anchors now.
-    a, b : (L, 2) float64 the lines' end points.
 
-    Returns
-    -------
-    (N, L) int8: +1 for an ``in`` crossing, -1 for ``out``, 0 for none.
+class LineSet:
+    """``L`` lines (end points ``a``, ``b``: (L, 2) float64) and one frame of the crossing rule
+    for ``N`` tracks at once.
+
+    The per-track state is columnar, one row per track, kept by the caller: ``side`` (N, L)
+    int8 the confirmed side (+1, -1, 0 = not yet), ``touched`` (N, L) bool whether a step
+    since the last confirmed position met the segment, and ``s`` (N, L) float64 the value of
+    :func:`.geometry.side` at the track's previous anchor.
     """
-    n, nl = len(points), len(a)
-    if n == 0 or nl == 0:
-        return np.zeros((n, nl), dtype=np.int8)
-    side = np.stack([s.side for s in states])
-    touched = np.stack([s.touched for s in states])
-    length = np.hypot(b[:, 0] - a[:, 0], b[:, 1] - a[:, 1])
-    s = ((b[None, :, 0] - a[None, :, 0]) * (points[:, 1:2] - a[None, :, 1])
-         - (b[None, :, 1] - a[None, :, 1]) * (points[:, 0:1] - a[None, :, 0]))
-    d = s / length[None, :]
-    beyond = np.abs(d) > hysteresis_px
-    new_side = np.where(beyond, np.sign(d), 0).astype(np.int8)
-    touched |= steps_meet_lines(prev, points, a, b) & has_prev[:, None]
-    flips = beyond & (side != 0) & (new_side != side)
-    crossing = np.where(flips & touched, new_side, 0).astype(np.int8)
-    side = np.where(beyond, new_side, side)
-    touched &= ~beyond
-    for i, st in enumerate(states):
-        st.side = side[i]
-        st.touched = touched[i]
-    return crossing
+
+    def __init__(self, a: np.ndarray, b: np.ndarray) -> None:
+        self.a = np.asarray(a, dtype=np.float64).reshape(-1, 2)
+        self.b = np.asarray(b, dtype=np.float64).reshape(-1, 2)
+        self.n = len(self.a)
+        self.ax, self.ay = self.a[None, :, 0], self.a[None, :, 1]
+        self.dx = self.b[None, :, 0] - self.ax
+        self.dy = self.b[None, :, 1] - self.ay
+        self.length = np.hypot(self.dx, self.dy)
+
+    def side_values(self, points: np.ndarray) -> np.ndarray:
+        """``s(p)`` of (N, 2) points for every line: (N, L) float64."""
+        return self.dx * (points[:, 1:2] - self.ay) - self.dy * (points[:, 0:1] - self.ax)
+
+    def step(self, side: np.ndarray, touched: np.ndarray, s_prev: np.ndarray,
+             prev: np.ndarray, has_prev: np.ndarray, points: np.ndarray,
+             hysteresis_px: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """One frame of the rule.
+
+        Parameters
+        ----------
+        side, touched, s_prev : the tracks' state (see the class docstring); not changed.
+        prev : (N, 2) float64 each track's previous anchor (any value where ``has_prev`` is
+            false); ``has_prev`` (N,) bool.
+        points : (N, 2) float64 the anchors now.
+
+        Returns
+        -------
+        crossing : (N, L) int8, +1 for an ``in`` crossing, -1 for ``out``, 0 for none.
+        side, touched, s : the new state.
+        """
+        s = self.side_values(points)
+        d = s / self.length
+        beyond = np.abs(d) > hysteresis_px
+        new_side = np.where(beyond, np.sign(d), 0).astype(np.int8)
+        # a step can meet a segment only where its ends are not strictly on one side of the
+        # line (s_prev * s <= 0): the full segment test runs for those few pairs only
+        i, j = np.nonzero((s_prev * s <= 0) & has_prev[:, None])
+        touched = touched.copy()
+        if len(i):
+            touched[i, j] |= _meet_pairs(prev[i], points[i], self.a[j], self.b[j])
+        flips = beyond & (side != 0) & (new_side != side)
+        crossing = np.where(flips & touched, new_side, 0).astype(np.int8)
+        side = np.where(beyond, new_side, side)
+        touched &= ~beyond
+        return crossing, side, touched, s
