@@ -145,7 +145,7 @@ def test_loiter_time_is_known(seed):
     assert loiter.dwell_s == 5.0
     # the stay lasts the lingering (7-9 s between the first and last point) and more
     assert leave.dwell_s == (leave.frame - enter.frame) / s.fps
-    assert 7.0 <= leave.dwell_s <= 14.0
+    assert 9.0 <= leave.dwell_s <= 12.5  # docs/synthetic.md: 9.1-12.1 s on seeds 0-9
     # a lingering walk, never standing: nobody is stationary
     assert not _events(s, "stationary_start")
     person = s.people[0]
