@@ -199,6 +199,8 @@ def test_scene_file_toml_round_trips(name):
     d = s.describe()
     assert d["scene_file"] == s.scene_file
     assert d["analytics_events"] == [e.to_json() for e in s.ground_truth_events()]
+    d["scene_file"]["line"].clear()  # the description is a copy: the scene keeps its lines
+    assert s.scene_file["line"] and tomllib.loads(s.scene_toml()) == s.scene_file
 
 
 def test_scene_file_scales_with_the_frame():

@@ -13,6 +13,7 @@ small crowd and a lighting-change scene. See ``docs/synthetic.md``.
 
 from __future__ import annotations
 
+import copy
 import logging
 import math
 import zlib
@@ -541,7 +542,7 @@ class SyntheticScene:
         if bags:
             out["bags"] = bags
         if self.scene_file is not None:
-            out["scene_file"] = self.scene_file
+            out["scene_file"] = copy.deepcopy(dict(self.scene_file))  # the caller's to change
             out["analytics_events"] = [e.to_json() for e in self.ground_truth_events()]
         return out
 
