@@ -301,8 +301,10 @@ def test_world_geometry_and_metre_rules_go_through_the_camera():
     assert ev[0].speed_mps == 15.0 and (ev[1].X, ev[1].Y) == (0.0, -9.0)
 
 
-def test_abandoned_table_is_validated_but_yields_no_events(caplog):
+def test_abandoned_without_static_foreground_yields_no_events_and_says_why(caplog):
+    # abandoned objects come from the video (tests/test_abandoned.py); tracks alone have none
     scene = parse_scene({"abandoned": {"after_s": 5, "distance_heights": 2}})
+    an = Analytics(scene, FPS)
     with caplog.at_level("WARNING"):
-        Analytics(scene, FPS)
-    assert "abandoned" in caplog.text
+        assert an.step(1, [1], [(0, 0, 10, 10)]).events == ()
+    assert "abandoned" in caplog.text and an.wants_static

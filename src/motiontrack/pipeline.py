@@ -27,13 +27,14 @@ from .io.sources import Source, open_source, prefetch
 from .motion import create_detector
 from .motion.cleanup import clean_mask
 from .motion.ghosts import GhostFilter
+from .motion.static import DualBackground
 from .motion.regions import find_regions
 from .people import PeopleStage, head_params
 from .people.heads import split_regions_by_heads
 from .preprocess import load_roi, preprocess
 from .tracking.bridge import Bridge
 from .tracking.tracker import TRACKERS
-from .types import Annotations, Box, Frame, FrameResult, PeopleFrame, Region
+from .types import Annotations, Box, Frame, FrameResult, PeopleFrame, Region, StaticFrame
 
 log = logging.getLogger(__name__)
 
@@ -89,12 +90,14 @@ def fill_gap_frames(cfg: PipelineConfig, fps: float | None, external: bool) -> i
 class Motion:
     """The image work of one frame (:meth:`Pipeline.motion`): the cleaned motion ``mask`` and
     the detector's ``raw_mask`` at processing scale, the preprocessed frame ``small`` they came
-    from; with external detections only ``detections`` (``mask`` is None)."""
+    from, the ``static`` foreground when the pipeline keeps a dual background; with external
+    detections only ``detections`` (``mask`` is None)."""
 
     mask: np.ndarray | None
     raw_mask: np.ndarray | None = None
     small: np.ndarray | None = None
     detections: list[Region] = field(default_factory=list)
+    static: StaticFrame | None = None
 
 
 @dataclass(frozen=True)
@@ -120,10 +123,14 @@ class Pipeline:
         they replace the motion stage.
     fps : the source's frame rate (None = unknown, taken as 25): converts durations in seconds
         (``tracker.max_lost_s``) to frames.
+    static : keep a dual background (:class:`~motiontrack.motion.static.DualBackground`) and
+        report each frame's recently stopped objects (``FrameResult.static``); only with the
+        motion stage (not with external detections). It does not change the tracks.
     """
 
     def __init__(self, cfg: PipelineConfig, image_size: tuple[int, int],
-                 detections: Annotations | None = None, fps: float | None = None) -> None:
+                 detections: Annotations | None = None, fps: float | None = None,
+                 static: bool = False) -> None:
         self.cfg = cfg
         self._min_gap: float | None = None   # shortest time between frames seen: one period
         self._last_ts: float | None = None
@@ -167,6 +174,8 @@ class Pipeline:
         self.bridge = None
         if cfg.tracker.bridge != "none":
             self.bridge = Bridge(cfg.tracker.bridge, cfg.tracker.bridge_frames)
+        self.static = (DualBackground(fps or 25.0, self.scale)
+                       if static and self.detector is not None else None)
         self.frames_seen = 0
         #: run detection and tracking in one thread (needed when a later stage reads the
         #: detector's state, e.g. its background image, for the same frame). Head-based
@@ -222,7 +231,8 @@ class Pipeline:
         raw = self.detector.apply(small, self._protect_mask(small.shape[:2]))
         if self.roi is not None:
             raw = np.bitwise_and(raw, self.roi)
-        return Motion(clean_mask(raw, self.cfg.cleanup), raw_mask=raw, small=small)
+        static = self.static.apply(small) if self.static is not None else None
+        return Motion(clean_mask(raw, self.cfg.cleanup), raw_mask=raw, small=small, static=static)
 
     def regions_of(self, index: int, motion: Motion) -> Detection:
         """Second half of :meth:`detect`: the mask's regions, split between heads while the
@@ -295,7 +305,8 @@ class Pipeline:
         return FrameResult(index=frame.index, timestamp=frame.timestamp, frame=frame.image,
                            mask=mask, regions=tuple(regions), tracks=tuple(tracks),
                            raw_mask=det.motion.raw_mask, people=people,
-                           earlier=tuple(self.tracker.confirmed_earlier))
+                           earlier=tuple(self.tracker.confirmed_earlier),
+                           static=det.motion.static)
 
     def process(self, frame: Frame) -> FrameResult:
         """Both stages of one frame."""

@@ -34,6 +34,8 @@ __all__ = [
     "EVENTS_SCHEMA_VERSION",
     "events_header",
     "SceneFrame",
+    "StaticObject",
+    "StaticFrame",
 ]
 
 
@@ -227,7 +229,8 @@ class FrameResult:
     ``mask`` is the cleaned motion mask (``uint8``, 0/255) at processing resolution, or ``None``
     when detections came from elsewhere; ``raw_mask`` the detector's mask before clean-up.
     ``people`` is what the people stage (or ``people.auto_split``'s head search) found, when it
-    ran. ``earlier`` holds the tracks confirmed in this frame at the earlier frames where they
+    ran; ``static`` the recently stopped objects of the dual background, when the run asked
+    for them (a scene with ``[abandoned]``). ``earlier`` holds the tracks confirmed in this frame at the earlier frames where they
     were still tentative, as ``(frame index, Track)`` pairs (empty unless ``tracker.backfill``
     applies to the run).
     """
@@ -242,6 +245,7 @@ class FrameResult:
     people: PeopleFrame | None = field(default=None, repr=False)
     earlier: tuple[tuple[int, Track], ...] = field(default=(), repr=False)
     scene: SceneFrame | None = field(default=None, repr=False)
+    static: StaticFrame | None = field(default=None, repr=False)
 
     def reported(self) -> list[tuple[int, Track]]:
         """``(frame index, track)`` rows this frame adds to a tracks file: its tracks, then the
@@ -594,3 +598,37 @@ class SceneFrame:
     events: tuple[Event, ...] = ()
     line_counts: Mapping[str, tuple[int, int]] = field(default_factory=dict)
     occupancy: Mapping[str, int] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class StaticObject:
+    """A recently stopped object: a blob of static foreground (foreground in a slowly learning
+    background model, background in a fast one; :class:`motiontrack.motion.static.DualBackground`).
+
+    Attributes
+    ----------
+    box : Box
+        Bounding box in source-frame pixels.
+    area : float
+        Static pixels, in source-frame pixels².
+    frames : int
+        Frames its longest-static pixel has been static foreground.
+    change : float
+        Mean difference (largest colour channel, levels) of the frame from the short-term
+        background over the object's pixels: about the sensor noise for a still object in view,
+        more for one that moves a little (a standing person) or is hidden behind a passer-by.
+    """
+
+    box: Box
+    area: float
+    frames: int
+    change: float = 0.0
+
+
+@dataclass(frozen=True)
+class StaticFrame:
+    """The static foreground of one frame: its objects and the mask they came from
+    (``(h, w) uint8`` 0/255 at processing scale; None before the models have settled)."""
+
+    objects: tuple[StaticObject, ...] = ()
+    mask: np.ndarray | None = field(default=None, repr=False)

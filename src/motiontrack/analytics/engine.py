@@ -2,7 +2,8 @@
 
 Each frame's tracks (ids and boxes) go through the rules in a fixed order: tracks unseen for
 ``forget_s`` are forgotten (they leave their zones and stop being stationary), then line
-crossings, zone membership (enter, exit, loiter), stationary stays and speeding. Events carry
+crossings, zone membership (enter, exit, loiter), stationary stays, speeding and abandoned
+objects (from the frame's static objects, :mod:`.abandoned`). Events carry
 the frame, its time ``(frame - 1) / fps``, the track's anchor in pixels and, with a camera,
 its foot point on the ground plane in metres.
 """
@@ -17,7 +18,8 @@ import numpy as np
 
 from ..calibrate.measure import world_positions
 from ..errors import ConfigError
-from ..types import EVENT_TYPES, Event, SceneFrame
+from ..types import EVENT_TYPES, Event, SceneFrame, StaticFrame
+from .abandoned import AbandonedRule
 from .lines import LineSet
 from .movement import REARM, SpeedWindow, Stay
 from .scene import Scene
@@ -29,7 +31,8 @@ __all__ = ["Analytics"]
 
 #: the order of a frame's events for one track (then by line or zone order)
 _ORDER = {k: i for i, k in enumerate(("line_cross", "zone_exit", "zone_enter", "loiter",
-                                      "stationary_end", "stationary_start", "speeding"))}
+                                      "stationary_end", "stationary_start", "abandoned",
+                                      "speeding"))}
 
 
 class _TrackState:
@@ -100,9 +103,12 @@ class Analytics:
         if scene.needs_camera and camera is None:
             raise ConfigError("the scene measures in metres and needs a camera calibration "
                               "(--camera)")
-        if scene.abandoned is not None:
-            log.warning("the scene's [abandoned] table is not analysed: no abandoned events")
         self.scene, self.fps, self.camera = scene, float(fps), camera
+        self.abandoned = None
+        if scene.abandoned is not None:
+            self.abandoned = AbandonedRule(scene.abandoned, self.fps, scene.forget_s * self.fps,
+                                           self._anchors, self._world)
+        self._warned_static = False
         self.lines = LineSet([ln.a for ln in scene.lines], [ln.b for ln in scene.lines])
         self.edges = ZoneEdges(scene.zones)
         self.table = _Table(self.lines.n, self.edges.n)
@@ -124,17 +130,27 @@ class Analytics:
         self.peak = np.zeros(len(scene.zones), dtype=np.int64)
         self.occupancy_sum = np.zeros(len(scene.zones), dtype=np.int64)
 
-    # ------------------------------------------------------------------------------- frames
-    def update(self, frame: int, tracks: Sequence[Any]) -> list[Event]:
-        """The events of frame ``frame`` (1-based) with these tracks (each with ``.id`` and
-        ``.box`` ``x, y, w, h``)."""
-        return list(self.step(frame, [t.id for t in tracks],
-                              [(t.box.x, t.box.y, t.box.w, t.box.h) for t in tracks]).events)
+    @property
+    def wants_static(self) -> bool:
+        """Whether the rules need each frame's static objects (``[abandoned]``): the pipeline
+        then keeps its dual background (:class:`~motiontrack.motion.static.DualBackground`)."""
+        return self.abandoned is not None
 
-    def step(self, frame: int, ids: Any, boxes: Any) -> SceneFrame:
+    # ------------------------------------------------------------------------------- frames
+    def update(self, frame: int, tracks: Sequence[Any],
+               static: StaticFrame | None = None) -> list[Event]:
+        """The events of frame ``frame`` (1-based) with these tracks (each with ``.id`` and
+        ``.box`` ``x, y, w, h``) and the frame's static objects."""
+        return list(self.step(frame, [t.id for t in tracks],
+                              [(t.box.x, t.box.y, t.box.w, t.box.h) for t in tracks],
+                              static).events)
+
+    def step(self, frame: int, ids: Any, boxes: Any,
+             static: StaticFrame | None = None) -> SceneFrame:
         """One frame from columns: ``ids`` (N,) int and ``boxes`` (N, 4) ``x, y, w, h``
-        pixels. Frames must come in increasing order; a frame without tracks is a step too (it
-        is how tracks are forgotten and occupancy averaged)."""
+        pixels, and the frame's static objects (``FrameResult.static``; the ``abandoned`` rule
+        needs them). Frames must come in increasing order; a frame without tracks is a step too
+        (it is how tracks are forgotten and occupancy averaged)."""
         frame = int(frame)
         if frame < 1 or frame <= self.last_frame:
             raise ValueError(f"analytics frames must be 1-based and increasing: frame {frame} "
@@ -162,6 +178,8 @@ class Analytics:
         self._lines(frame, ids, rows, known, points, world, events)
         self._zones(frame, ids, states, rows, known, points, world, events)
         self._movement(frame, ids, states, points, world, events)
+        if self.abandoned is not None:
+            self._abandoned(frame, ids, boxes, static, events)
         self.table.point[rows] = points
         for i, st in enumerate(states):
             st.last_frame = frame
@@ -339,6 +357,18 @@ class Analytics:
                                               _row(world, i), **{key: _r(v, 2)}))
                 elif v <= REARM * limit:
                     st.speed.speeding = False
+
+
+    def _abandoned(self, frame, ids, boxes, static, events) -> None:
+        if static is None and not self._warned_static:
+            self._warned_static = True
+            log.warning("abandoned objects are found in the video's static foreground "
+                        "(track --scene); from tracks alone there are no abandoned events")
+        for oid, owner, box, static_s in self.abandoned.step(frame, ids, boxes, static):
+            b = box[None]
+            w = self._world(b)
+            events.append(self._event("abandoned", frame, oid, self._anchors(b)[0],
+                                      _row(w, 0), duration_s=_r(static_s, 3), owner=owner))
 
 
 def _row(world: np.ndarray | None, i: int) -> tuple[float, float] | None:

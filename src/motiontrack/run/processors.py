@@ -68,7 +68,9 @@ class TrackProcessor:
         self.external = detections is not None
         self.analytics = analytics
         # every stage is built now: a bad plug-in name or ROI fails before anything is written
-        self.pipe = Pipeline(cfg, (info.width, info.height), detections, info.fps)
+        # a scene with [abandoned] needs the recently stopped objects of the dual background
+        self.pipe = Pipeline(cfg, (info.width, info.height), detections, info.fps,
+                             static=analytics is not None and analytics.wants_static)
         self.pipe.sequential = self.pipe.sequential or needs_background
         self.colors = TrackColors()
         self.legend = track_legend(cfg, self.external) if cfg.output.legend else ()
@@ -85,7 +87,8 @@ class TrackProcessor:
             # sees exactly what this run saw and finds the same events
             boxes = np.array([float(f"{v:.2f}") for t in result.tracks
                               for v in t.box.as_array()]).reshape(-1, 4)
-            scene = self.analytics.step(result.index + 1, [t.id for t in result.tracks], boxes)
+            scene = self.analytics.step(result.index + 1, [t.id for t in result.tracks], boxes,
+                                        result.static)
             yield replace(result, scene=scene)
 
     def annotate(self, result: FrameResult) -> np.ndarray:
