@@ -4,8 +4,8 @@ the tracker's tracks give are compared with the ground truth's.
 
 Each (scene, seed) is tracked once per module (the ``tracked`` fixture) and shared by every
 assertion about it. Only ``walker`` seed 0 runs in the fast suite; the seed sweeps are slow
-(5-13 s per run, the whole module about 5 minutes on a 2-core machine). ``benchmarks/scene_events.py`` prints the same comparison
-as a table.
+(5-13 s per run, the whole module about 5 minutes on a 2-core machine).
+``benchmarks/scene_events.py`` prints the same comparison as a table.
 """
 
 from __future__ import annotations
