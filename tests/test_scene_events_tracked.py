@@ -3,8 +3,8 @@ events, ``track --scene`` runs the whole pipeline on the rendered video with it,
 the tracker's tracks give are compared with the ground truth's.
 
 Each (scene, seed) is tracked once per module (the ``tracked`` fixture) and shared by every
-assertion about it. Only ``walker`` seed 0 runs in the fast suite; the seed sweeps are slow
-(5-13 s per run, the whole module about 5 minutes on a 2-core machine).
+assertion about it. Only ``runner`` seed 0 (150 frames) runs in the fast suite; the seed
+sweeps are slow (5-13 s per run, the whole module about 5 minutes on a 2-core machine).
 ``benchmarks/scene_events.py`` prints the same comparison as a table.
 """
 
@@ -64,7 +64,7 @@ def tracked(tmp_path_factory):
 
 # ----------------------------------------------------- one or two people: everything exact
 # walker, runner and loiter: one person; crossing: two who pass each other in front of the line
-EXACT = [pytest.param(name, seed, marks=[] if (name, seed) == ("walker", 0) else pytest.mark.slow)
+EXACT = [pytest.param(name, seed, marks=[] if (name, seed) == ("runner", 0) else pytest.mark.slow)
          for name in ("walker", "runner", "crossing", "loiter") for seed in SEEDS]
 
 
