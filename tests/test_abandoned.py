@@ -224,7 +224,7 @@ def test_track_scene_writes_the_abandoned_event_that_evaluate_events_matches(tmp
     assert e.owner == 1 and e.duration_s > 5
     capsys.readouterr()
     assert main(["evaluate-events", "--gt", str(gt / "events.jsonl"),
-                 "--pred", str(run / "events.jsonl"), "--json"]) == 0
+                 "--pred", str(run / "events.jsonl"), "--json", "-"]) == 0
     out = json.loads(capsys.readouterr().out)
     ab = out["types"]["abandoned"]
     assert (ab["gt"], ab["tp"], ab["fp"]) == (1, 1, 0)
