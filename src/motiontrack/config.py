@@ -346,6 +346,11 @@ class MotionConfig(_Section):
     ghost_pixels: bool = param(True, doc="with the ghost filter on, also take a ghost apart pixel by "
                                          "pixel from its border (a ghost still joined to the person "
                                          "who left it)", when={"ghost_ratio": Not(0.0, 0.7)})
+    keep_stopped: bool = param(
+        False, doc="keep people who stop walking in the mask: a dual background's static "
+                   "foreground (long-term foreground, short-term background) inside the box of a "
+                   "track that has moved is added to the motion mask (about 3 ms a frame at "
+                   "384x288; see docs/benchmarks.md)")
     frame_diff: FrameDiffParams = field(default_factory=FrameDiffParams)
     mog2: MOG2Params = field(default_factory=MOG2Params)
     knn: KNNParams = field(default_factory=KNNParams)

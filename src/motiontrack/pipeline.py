@@ -18,6 +18,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Iterable, Iterator
 
+import cv2
 import numpy as np
 
 from . import synth as _synth  # noqa: F401  (registers the synth: sources)
@@ -174,8 +175,14 @@ class Pipeline:
         self.bridge = None
         if cfg.tracker.bridge != "none":
             self.bridge = Bridge(cfg.tracker.bridge, cfg.tracker.bridge_frames)
+        #: the dual background: for FrameResult.static (``static``) and motion.keep_stopped
         self.static = (DualBackground(fps or 25.0, self.scale)
-                       if static and self.detector is not None else None)
+                       if (static or cfg.motion.keep_stopped) and self.detector is not None
+                       else None)
+        self.report_static = static
+        self.keep_stopped = cfg.motion.keep_stopped and self.static is not None
+        #: frames a lost track may coast: its stopped pixels are kept that long
+        self._keep_unseen = self.tracker.max_lost
         self.frames_seen = 0
         #: run detection and tracking in one thread (needed when a later stage reads the
         #: detector's state, e.g. its background image, for the same frame). Head-based
@@ -240,6 +247,8 @@ class Pipeline:
         mask = motion.mask
         if mask is None:
             return Detection(motion, None, motion.detections)
+        if self.keep_stopped:
+            mask = self._keep_stopped(mask, motion.static)
         if self.ghosts is not None:   # it learns its background in the warm-up frames too
             mask, regions = self.ghosts.regions(motion.small, mask, self._find, self.scale)
         else:
@@ -250,6 +259,29 @@ class Pipeline:
         if regions:
             regions, heads = self._split_upright(mask, regions)
         return Detection(motion, mask, regions, heads)
+
+    def _keep_stopped(self, mask: np.ndarray, static: StaticFrame | None) -> np.ndarray:
+        """``motion.keep_stopped``: the mask plus the static foreground that lies both in a
+        static object (ghosts are left out) and in the box of a track that has moved (where the
+        tracker expects it; lost tracks too, up to ``tracker.max_lost_s``). A person who stops
+        fades into the motion detector's background within a second or two, while the dual
+        background's long-term model keeps them as foreground for tens of seconds."""
+        if static is None or static.mask is None or not static.objects:
+            return mask
+        boxes = self.tracker.moving_boxes(unseen=self._keep_unseen)
+        if not len(boxes):
+            return mask
+        shape = mask.shape[:2]
+        near = np.zeros(shape, np.uint8)
+        for box in boxes:
+            x1, y1, x2, y2 = pixel_window(box, self.scale, shape)
+            near[y1:y2, x1:x2] = 255
+        objects = np.zeros(shape, np.uint8)
+        for obj in static.objects:
+            x1, y1, x2, y2 = pixel_window(obj.box.as_array(), self.scale, shape)
+            objects[y1:y2, x1:x2] = 255
+        held = cv2.bitwise_and(cv2.bitwise_and(static.mask, near), objects)
+        return cv2.bitwise_or(mask, held)
 
     def _find(self, mask: np.ndarray) -> list[Region]:
         return find_regions(mask, self.cfg.regions, self.scale, self.image_size)
@@ -306,7 +338,7 @@ class Pipeline:
                            mask=mask, regions=tuple(regions), tracks=tuple(tracks),
                            raw_mask=det.motion.raw_mask, people=people,
                            earlier=tuple(self.tracker.confirmed_earlier),
-                           static=det.motion.static)
+                           static=det.motion.static if self.report_static else None)
 
     def process(self, frame: Frame) -> FrameResult:
         """Both stages of one frame."""

@@ -478,12 +478,13 @@ class MultiObjectTracker:
         return [TrackView(m.tid, m.state, m.tsu, m.moved, m.bridged)
                 for m in self.meta if m.tid > 0]
 
-    def moving_boxes(self, margin: float = 0.1) -> np.ndarray:
-        """Boxes (N, 4) where established tracks that have travelled at least one body height are
-        expected next frame (current box moved by one step of velocity, grown by ``margin`` of its
-        size on each side). Used to protect them from being learnt into the background."""
+    def moving_boxes(self, margin: float = 0.1, unseen: int = 2) -> np.ndarray:
+        """Boxes (N, 4) where established tracks that have travelled at least one body height and
+        were seen in the last ``unseen`` frames are expected next frame (current box moved by one
+        step of velocity, grown by ``margin`` of its size on each side). Used to protect them from
+        being learnt into the background, and to keep people who stop in the mask."""
         keep = [i for i, m in enumerate(self.meta) if m.moved and m.state != TrackState.TENTATIVE
-                and m.tsu <= 2]
+                and m.tsu <= unseen]
         if not keep:
             return np.zeros((0, 4))
         x = self.x[keep]
