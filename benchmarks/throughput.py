@@ -53,7 +53,7 @@ def decode_only(video: Path, n: int) -> tuple[float, None]:
 
 
 def baseline(video: Path, n: int) -> tuple[float, Annotations]:
-    """The tutorial approach, as described in the issue (frames are decoded inside the timing)."""
+    """The tutorial approach, as the tutorial describes it (frames are decoded inside the timing)."""
     cap = cv2.VideoCapture(str(video))
     sub = cv2.createBackgroundSubtractorMOG2(500, 16, True)
     k3 = np.ones((3, 3), np.uint8)
