@@ -271,24 +271,30 @@ def pr_heatmaps(rows: Sequence[Mapping[str, Any]], key_x: str, key_y: str, stem:
         for i, (what, col) in enumerate((("precision", pk), ("recall", rk))):
             grid = np.array([[_mean([float(r[prefix + col]) for r in rows
                                      if r[key_x] == xv and r[key_y] == yv]) for xv in xs] for yv in ys])
-            ax = axes[i, j]
-            im = ax.imshow(grid, origin="lower", cmap="viridis", vmin=0, vmax=1, aspect="auto")
-            ax.set_xticks(range(len(xs)), [_fmt(v) for v in xs], fontsize=7, rotation=45)
-            ax.set_yticks(range(len(ys)), [_fmt(v) for v in ys], fontsize=7)
-            ax.set(xlabel=key_x, ylabel=key_y, title=f"{label}-based {what}")
-            if len(xs) * len(ys) <= 150:
-                for yi in range(len(ys)):
-                    for xi in range(len(xs)):
-                        v = grid[yi, xi]
-                        if not math.isnan(v):
-                            ax.text(xi, yi, f"{v:.2f}", ha="center", va="center", fontsize=6,
-                                    color="white" if v < 0.6 else "black")
-            _outline_best(ax, xs, ys, best, key_x, key_y)
-            fig.colorbar(im, ax=ax, fraction=0.046, pad=0.04)
+            _grid_panel(fig, axes[i, j], grid, xs, ys, key_x, key_y, f"{label}-based {what}", best)
     fig.suptitle(title or f"precision and recall over {key_x} × {key_y}"
                  + (f" (outlined: best {BEST_METRIC})" if best is not None else ""))
     fig.tight_layout()
     return save_figure(fig, stem)
+
+
+def _grid_panel(fig, ax, grid: np.ndarray, xs: Sequence, ys: Sequence, key_x: str, key_y: str,
+                title: str, best: Mapping[str, Any] | None) -> None:
+    """One map of values in [0, 1] over the grid ``xs`` × ``ys``: colours, the values written in
+    the cells while they stay legible (at most 150), the ``best`` point outlined, a colour bar."""
+    im = ax.imshow(grid, origin="lower", cmap="viridis", vmin=0, vmax=1, aspect="auto")
+    ax.set_xticks(range(len(xs)), [_fmt(v) for v in xs], fontsize=7, rotation=45)
+    ax.set_yticks(range(len(ys)), [_fmt(v) for v in ys], fontsize=7)
+    ax.set(xlabel=key_x, ylabel=key_y, title=title)
+    if len(xs) * len(ys) <= 150:
+        for yi in range(len(ys)):
+            for xi in range(len(xs)):
+                v = grid[yi, xi]
+                if not math.isnan(v):
+                    ax.text(xi, yi, f"{v:.2f}", ha="center", va="center", fontsize=6,
+                            color="white" if v < 0.6 else "black")
+    _outline_best(ax, xs, ys, best, key_x, key_y)
+    fig.colorbar(im, ax=ax, fraction=0.046, pad=0.04)
 
 
 def metric_heatmaps(rows: Sequence[Mapping[str, Any]], key_x: str, key_y: str, stem: str | Path, *,
@@ -315,19 +321,7 @@ def metric_heatmaps(rows: Sequence[Mapping[str, Any]], key_x: str, key_y: str, s
     for ax, (name, rs) in zip(axes.flat, panels):
         grid = np.array([[_mean([float(r[metric]) for r in rs if r[key_x] == xv and r[key_y] == yv])
                           for xv in xs] for yv in ys])
-        im = ax.imshow(grid, origin="lower", cmap="viridis", vmin=0, vmax=1, aspect="auto")
-        ax.set_xticks(range(len(xs)), [_fmt(v) for v in xs], fontsize=7, rotation=45)
-        ax.set_yticks(range(len(ys)), [_fmt(v) for v in ys], fontsize=7)
-        ax.set(xlabel=key_x, ylabel=key_y, title=f"{metric}: {name}")
-        if len(xs) * len(ys) <= 150:
-            for yi in range(len(ys)):
-                for xi in range(len(xs)):
-                    v = grid[yi, xi]
-                    if not math.isnan(v):
-                        ax.text(xi, yi, f"{v:.2f}", ha="center", va="center", fontsize=6,
-                                color="white" if v < 0.6 else "black")
-        _outline_best(ax, xs, ys, best, key_x, key_y)
-        fig.colorbar(im, ax=ax, fraction=0.046, pad=0.04)
+        _grid_panel(fig, ax, grid, xs, ys, key_x, key_y, f"{metric}: {name}", best)
     fig.suptitle(title or f"{metric} over {key_x} × {key_y}"
                  + (f" (outlined: best mean {BEST_METRIC})" if best is not None else ""))
     fig.tight_layout()
