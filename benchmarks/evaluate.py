@@ -291,23 +291,9 @@ def main(argv=None) -> int:
                             "speed-up metrics": t_te / t_eval,
                             "max |diff|": d, "identical (1e-6)": d <= 1e-6})
             rows.append(row)
-    keys = list(dict.fromkeys(k for r in rows for k in r))
     print("one core; 'speed-up' = TrackEval (load + preprocess + metrics) / ours (read_mot + "
           "metrics); 'speed-up metrics' leaves out our file reading")
-
-    def fmt(v):
-        if isinstance(v, bool):
-            return "yes" if v else "NO"
-        if isinstance(v, float):
-            return f"{v:.3g}" if abs(v) < 1e-3 and v else f"{v:.3f}"
-        return str(v)
-
-    table = [keys] + [[fmt(r.get(k, "-")) for k in keys] for r in rows]
-    w = [max(len(t[i]) for t in table) for i in range(len(keys))]
-    for i, t in enumerate(table):
-        print("  ".join(c.ljust(x) for c, x in zip(t, w)))
-        if i == 0:
-            print("-" * (sum(w) + 2 * (len(w) - 1)))
+    print_table(rows)
     if a.run_mot_challenge:
         print()
         folders_main(a)
