@@ -1,0 +1,460 @@
+// motiontrack live: camera tiles, event feed, counts and the line/zone editor.
+// Plain browser JavaScript, no build step; it talks only to the JSON API of `motiontrack serve`.
+"use strict";
+
+const TOKEN = new URLSearchParams(location.search).get("token");
+const FEED_MAX = 200;           // feed lines kept on the page (newest first)
+const POLL_MS = 1000;           // /api/cameras
+const COUNTS_POLL_MS = 5000;    // /api/cameras/{name}/counts: the server's totals win over local sums
+
+// ---------------------------------------------------------------- requests
+
+// Every request carries the token: images and EventSource cannot set headers, so it goes in the query.
+function withToken(path) {
+  if (!TOKEN) return path;
+  return path + (path.includes("?") ? "&" : "?") + "token=" + encodeURIComponent(TOKEN);
+}
+
+function cameraPath(name, rest) {
+  return "api/cameras/" + encodeURIComponent(name) + "/" + rest;
+}
+
+async function api(path, options = {}) {
+  const response = await fetch(withToken(path), { cache: "no-store", ...options });
+  let body = null;
+  const type = response.headers.get("content-type") || "";
+  if (type.includes("json")) body = await response.json();
+  else body = await response.text();
+  if (!response.ok) {
+    const text = body && typeof body === "object" && body.error ? body.error : String(body || response.statusText);
+    const err = new Error(text);
+    err.status = response.status;
+    throw err;
+  }
+  return body;
+}
+
+// ---------------------------------------------------------------- small DOM helpers
+
+function el(tag, attrs = {}, ...children) {
+  const node = document.createElement(tag);
+  for (const [k, v] of Object.entries(attrs)) {
+    if (k === "text") node.textContent = v;
+    else if (k.startsWith("on")) node.addEventListener(k.slice(2), v);
+    else node.setAttribute(k, v);
+  }
+  for (const c of children) node.append(c);
+  return node;
+}
+
+function fmt(v, digits) {
+  if (v === null || v === undefined || Number.isNaN(v)) return "–";
+  return typeof v === "number" && digits !== undefined ? v.toFixed(digits) : String(v);
+}
+
+// ---------------------------------------------------------------- camera tiles
+
+const tiles = new Map();   // name -> {img, fields}
+
+function streamUrl(name) {
+  // a changing query makes the browser open a fresh stream after an error
+  return withToken(cameraPath(name, "stream.mjpg") + "?n=" + Date.now());
+}
+
+function keepStreaming(img, name) {
+  // a stream ends when its camera restarts or the server drops a slow viewer: reopen it
+  img.addEventListener("error", () => setTimeout(() => { img.src = streamUrl(name); }, 1000));
+}
+
+function makeTile(cam) {
+  const name = cam.name;
+  const img = el("img", {
+    "data-testid": "camera-img-" + name,
+    alt: "Live annotated picture of camera " + name,
+  });
+  keepStreaming(img, name);
+  img.src = streamUrl(name);
+  const fields = {};
+  const stats = el("dl", { class: "stats" });
+  for (const [key, label] of [["status", "status"], ["fps", "fps"], ["frames", "frames"], ["reconnects", "reconnects"]]) {
+    fields[key] = el("dd", { "data-testid": "camera-" + key + "-" + name });
+    stats.append(el("dt", { text: label }), fields[key]);
+  }
+  const tile = el("article", { class: "tile", "data-testid": "camera-tile-" + name, "aria-label": "Camera " + name },
+    el("h3", { text: name }), el("div", { class: "picture" }, img), stats);
+  document.getElementById("cameras").append(tile);
+  return { tile, img, fields };
+}
+
+function updateTile(cam) {
+  let t = tiles.get(cam.name);
+  if (!t) {
+    t = makeTile(cam);
+    tiles.set(cam.name, t);
+  }
+  t.fields.status.textContent = fmt(cam.status);
+  t.fields.status.dataset.status = cam.status || "";
+  t.fields.fps.textContent = fmt(cam.fps, 1);
+  t.fields.frames.textContent = fmt(cam.frames);
+  t.fields.reconnects.textContent = fmt(cam.reconnects);
+}
+
+let cameras = [];
+
+async function pollCameras() {
+  const conn = document.getElementById("connection");
+  try {
+    cameras = await api("api/cameras");
+    for (const cam of cameras) {
+      updateTile(cam);
+      ensureCounts(cam.name);
+    }
+    editor.offerCameras(cameras);
+    conn.textContent = "connected: " + cameras.length + " camera" + (cameras.length === 1 ? "" : "s");
+    conn.dataset.state = "ok";
+  } catch (err) {
+    conn.textContent = "server unreachable: " + err.message;
+    conn.dataset.state = "error";
+  }
+}
+
+// ---------------------------------------------------------------- counts
+
+const counts = new Map();   // camera -> {lines: {name: {in, out}}, zones: {name: {occupancy, entered}}}
+
+function ensureCounts(name) {
+  if (!counts.has(name)) {
+    counts.set(name, { lines: {}, zones: {} });
+    refreshCounts(name);
+  }
+}
+
+async function refreshCounts(name) {
+  try {
+    const c = await api(cameraPath(name, "counts"));
+    counts.set(name, { lines: c.lines || {}, zones: c.zones || {} });
+    renderCounts(name);
+  } catch (err) {
+    // the next poll tries again; the feed keeps the local sums going meanwhile
+  }
+}
+
+// The feed's events move the counts at once; the periodic fetch brings them back to the server's totals.
+function countEvent(ev) {
+  const c = counts.get(ev.camera);
+  if (!c) return;
+  if (ev.type === "line_cross" && ev.line) {
+    const l = c.lines[ev.line] || (c.lines[ev.line] = { in: 0, out: 0 });
+    if (ev.direction === "in" || ev.direction === "out") l[ev.direction] += 1;
+  } else if ((ev.type === "zone_enter" || ev.type === "zone_exit") && ev.zone) {
+    const z = c.zones[ev.zone] || (c.zones[ev.zone] = { occupancy: 0, entered: 0 });
+    if (ev.type === "zone_enter") { z.entered += 1; z.occupancy += 1; }
+    else z.occupancy = Math.max(0, z.occupancy - 1);
+  } else {
+    return;
+  }
+  renderCounts(ev.camera);
+}
+
+function renderCounts(name) {
+  const c = counts.get(name);
+  const box = document.getElementById("counts");
+  let table = box.querySelector(`[data-camera="${CSS.escape(name)}"]`);
+  const body = el("tbody");
+  for (const [line, v] of Object.entries(c.lines).sort()) {
+    body.append(el("tr", { "data-testid": "count-line-" + name + "-" + line, "data-kind": "line", "data-name": line, "data-in": v.in, "data-out": v.out },
+      el("th", { scope: "row", text: "line " + line }),
+      el("td", { "data-field": "in", text: fmt(v.in) + " in" }),
+      el("td", { "data-field": "out", text: fmt(v.out) + " out" })));
+  }
+  for (const [zone, v] of Object.entries(c.zones).sort()) {
+    body.append(el("tr", { "data-testid": "count-zone-" + name + "-" + zone, "data-kind": "zone", "data-name": zone,
+      "data-occupancy": v.occupancy, "data-entered": v.entered },
+      el("th", { scope: "row", text: "zone " + zone }),
+      el("td", { "data-field": "occupancy", text: fmt(v.occupancy) + " inside" }),
+      el("td", { "data-field": "entered", text: fmt(v.entered) + " entered" })));
+  }
+  if (!body.children.length) body.append(el("tr", {}, el("td", { colspan: "3", text: "no lines or zones" })));
+  const fresh = el("table", { "data-camera": name, "data-testid": "counts-" + name },
+    el("caption", { text: name }), body);
+  if (table) table.replaceWith(fresh);
+  else box.append(fresh);
+}
+
+// ---------------------------------------------------------------- event feed
+
+function describe(ev) {
+  const parts = [ev.type];
+  if (ev.line) parts.push(ev.line + (ev.direction ? " " + ev.direction : ""));
+  if (ev.zone) parts.push(ev.zone);
+  if (ev.track !== undefined) parts.push("track " + ev.track);
+  if (ev.dwell_s !== undefined) parts.push("dwell " + fmt(ev.dwell_s, 1) + " s");
+  if (ev.duration_s !== undefined) parts.push(fmt(ev.duration_s, 1) + " s");
+  return parts.join(" · ");
+}
+
+function addEvent(ev) {
+  const feed = document.getElementById("feed");
+  const item = el("li", {
+    "data-testid": "event",
+    "data-camera": ev.camera,
+    "data-seq": ev.seq,
+    "data-type": ev.type,
+    "data-frame": ev.frame,
+    // when this page received it (ms since the epoch): the latency the feed shows
+    "data-received-ms": Date.now(),
+  },
+  el("span", { class: "when", text: new Date().toLocaleTimeString() }),
+  el("span", { class: "camera", text: ev.camera }),
+  el("span", { class: "what", text: describe(ev) }),
+  el("span", { class: "frame", text: "frame " + fmt(ev.frame) }));
+  item.dataset.event = JSON.stringify(ev);
+  feed.prepend(item);
+  while (feed.children.length > FEED_MAX) feed.lastElementChild.remove();
+}
+
+function listen() {
+  const source = new EventSource(withToken("api/events"));
+  source.onmessage = (msg) => {
+    let ev;
+    try { ev = JSON.parse(msg.data); } catch (err) { return; }
+    if (!ev || !ev.camera) return;
+    addEvent(ev);
+    countEvent(ev);
+  };
+  // EventSource reconnects by itself; nothing else to do on error
+}
+
+// ---------------------------------------------------------------- editor
+
+// Geometry is kept in the camera's source pixels: the canvas's own resolution is the scene's
+// width × height, so a click maps from displayed to source pixels by the canvas's scale.
+const editor = {
+  camera: null,
+  scene: null,           // as the server sent it (extra keys are sent back unchanged)
+  lines: [],             // [{name, points: [[x, y], [x, y]]}]
+  zones: [],             // [{name, polygon: [[x, y], ...], loiter_s?}]
+  pending: [],           // points of the item being drawn
+  dirty: false,
+
+  init() {
+    this.select = document.getElementById("editor-camera");
+    this.canvas = document.getElementById("editor-canvas");
+    this.picture = document.getElementById("editor-picture");
+    this.select.addEventListener("change", () => this.open(this.select.value));
+    this.canvas.addEventListener("click", (e) => this.click(e));
+    this.canvas.addEventListener("dblclick", (e) => { e.preventDefault(); this.closeZone(); });
+    this.canvas.addEventListener("keydown", (e) => {
+      if (e.key === "Enter") { e.preventDefault(); this.closeZone(); }
+      else if (e.key === "Escape") { this.pending = []; this.draw(); }
+    });
+    this.canvas.addEventListener("mousemove", (e) => { this.hover = this.toSource(e); this.draw(); });
+    this.canvas.addEventListener("mouseleave", () => { this.hover = null; this.draw(); });
+    document.getElementById("editor-save").addEventListener("click", () => this.save());
+    document.getElementById("editor-reload").addEventListener("click", () => this.open(this.camera));
+    for (const r of document.querySelectorAll('input[name="tool"]'))
+      r.addEventListener("change", () => { this.pending = []; this.draw(); });
+    this.picture.addEventListener("error", () => setTimeout(() => {
+      if (this.camera) this.picture.src = streamUrl(this.camera);
+    }, 1000));
+    new ResizeObserver(() => this.draw()).observe(this.canvas);
+  },
+
+  offerCameras(list) {
+    const names = list.map((c) => c.name);
+    const have = [...this.select.options].map((o) => o.value);
+    if (names.join("\n") !== have.join("\n")) {
+      this.select.replaceChildren(...list.map((c) =>
+        el("option", { value: c.name, text: c.name + (c.scene ? "" : " (no scene file)") })));
+      if (this.camera && names.includes(this.camera)) this.select.value = this.camera;
+    }
+    if (!this.camera && names.length) this.open(names[0]);
+  },
+
+  async open(name) {
+    this.camera = name;
+    this.select.value = name;
+    this.pending = [];
+    this.message("");
+    this.error("");
+    this.picture.src = streamUrl(name);
+    try {
+      const scene = await api(cameraPath(name, "scene"));
+      this.scene = scene;
+      this.lines = (scene.lines || []).map((l) => ({ ...l, points: l.points.map((p) => [...p]) }));
+      this.zones = (scene.zones || []).map((z) => ({ ...z, polygon: z.polygon.map((p) => [...p]) }));
+    } catch (err) {
+      this.scene = null;
+      this.lines = [];
+      this.zones = [];
+      this.error(err.message);
+    }
+    this.dirty = false;
+    this.sizeCanvas();
+    this.renderItems();
+    this.draw();
+  },
+
+  // source size: the scene's, else the picture's own
+  size() {
+    const w = (this.scene && this.scene.width) || this.picture.naturalWidth || 640;
+    const h = (this.scene && this.scene.height) || this.picture.naturalHeight || 480;
+    return [w, h];
+  },
+
+  sizeCanvas() {
+    const [w, h] = this.size();
+    if (this.canvas.width !== w) this.canvas.width = w;
+    if (this.canvas.height !== h) this.canvas.height = h;
+    this.canvas.closest(".stage").style.aspectRatio = w + " / " + h;
+  },
+
+  toSource(e) {
+    const rect = this.canvas.getBoundingClientRect();
+    const x = (e.clientX - rect.left) * (this.canvas.width / rect.width);
+    const y = (e.clientY - rect.top) * (this.canvas.height / rect.height);
+    return [Math.round(x * 4) / 4, Math.round(y * 4) / 4];
+  },
+
+  tool() {
+    return document.querySelector('input[name="tool"]:checked').value;
+  },
+
+  nextName(kind) {
+    const field = document.getElementById("editor-name");
+    const typed = field.value.trim();
+    field.value = "";
+    if (typed) return typed;
+    const taken = new Set((kind === "line" ? this.lines : this.zones).map((i) => i.name));
+    for (let i = 1; ; i++) if (!taken.has(kind + i)) return kind + i;
+  },
+
+  click(e) {
+    if (!this.camera) return;
+    this.canvas.focus();
+    const p = this.toSource(e);
+    const last = this.pending[this.pending.length - 1];
+    // the clicks of a double-click land on the same spot: one point
+    if (last && Math.hypot(last[0] - p[0], last[1] - p[1]) < 1) return;
+    this.pending.push(p);
+    if (this.tool() === "line" && this.pending.length === 2) {
+      this.lines.push({ name: this.nextName("line"), points: this.pending });
+      this.pending = [];
+      this.changed();
+    }
+    this.draw();
+  },
+
+  closeZone() {
+    if (this.tool() !== "zone") return;
+    if (this.pending.length < 3) {
+      this.message("a zone needs at least 3 points");
+      return;
+    }
+    this.zones.push({ name: this.nextName("zone"), polygon: this.pending });
+    this.pending = [];
+    this.changed();
+    this.draw();
+  },
+
+  changed() {
+    this.dirty = true;
+    this.message("unsaved changes");
+    this.renderItems();
+  },
+
+  renderItems() {
+    const render = (listId, items, kind) => {
+      const ul = document.getElementById(listId);
+      ul.replaceChildren(...items.map((item, i) => {
+        const input = el("input", {
+          type: "text", value: item.name, "aria-label": "Name of " + kind + " " + (i + 1),
+          "data-testid": "editor-" + kind + "-name-" + i,
+          oninput: (e) => { item.name = e.target.value; this.dirty = true; this.message("unsaved changes"); this.draw(); },
+        });
+        const del = el("button", {
+          type: "button", text: "Delete", "aria-label": "Delete " + kind + " " + item.name,
+          "data-testid": "editor-" + kind + "-delete-" + i,
+          onclick: () => { items.splice(i, 1); this.changed(); this.draw(); },
+        });
+        return el("li", { "data-testid": "editor-" + kind + "-" + i }, input, del);
+      }));
+    };
+    render("editor-lines", this.lines, "line");
+    render("editor-zones", this.zones, "zone");
+  },
+
+  draw() {
+    const ctx = this.canvas.getContext("2d");
+    this.sizeCanvas();
+    const [w] = this.size();
+    const u = Math.max(1, w / 640);          // line widths and text scale with the source size
+    ctx.clearRect(0, 0, this.canvas.width, this.canvas.height);
+    ctx.lineWidth = 2 * u;
+    ctx.font = `${Math.round(14 * u)}px sans-serif`;
+    const path = (pts, close) => {
+      ctx.beginPath();
+      pts.forEach((p, i) => (i ? ctx.lineTo(p[0], p[1]) : ctx.moveTo(p[0], p[1])));
+      if (close) ctx.closePath();
+    };
+    for (const z of this.zones) {
+      ctx.strokeStyle = "#ffb000"; ctx.fillStyle = "rgba(255, 176, 0, 0.15)";
+      path(z.polygon, true); ctx.fill(); ctx.stroke();
+      ctx.fillStyle = "#ffb000"; ctx.fillText(z.name, z.polygon[0][0] + 4 * u, z.polygon[0][1] + 16 * u);
+    }
+    for (const l of this.lines) {
+      ctx.strokeStyle = "#00e0ff"; path(l.points, false); ctx.stroke();
+      ctx.fillStyle = "#00e0ff"; ctx.fillText(l.name, l.points[0][0] + 4 * u, l.points[0][1] - 4 * u);
+    }
+    if (this.pending.length) {
+      ctx.strokeStyle = "#ff3b3b";
+      path(this.hover ? [...this.pending, this.hover] : this.pending, false); ctx.stroke();
+      ctx.fillStyle = "#ff3b3b";
+      for (const p of this.pending) ctx.fillRect(p[0] - 3 * u, p[1] - 3 * u, 6 * u, 6 * u);
+    }
+  },
+
+  async save() {
+    if (!this.camera) return;
+    this.error("");
+    const body = { ...(this.scene || {}), lines: this.lines, zones: this.zones };
+    try {
+      await api(cameraPath(this.camera, "scene"), {
+        method: "PUT",
+        headers: { "Content-Type": "application/json" },
+        body: JSON.stringify(body),
+      });
+      this.dirty = false;
+      this.message("saved: " + this.lines.length + " line(s), " + this.zones.length + " zone(s)");
+      this.canvas.dataset.saved = String(Date.now());
+      const name = this.camera;
+      setTimeout(() => refreshCounts(name), 500);
+    } catch (err) {
+      this.message("");
+      this.error((err.status ? "not saved (" + err.status + "): " : "not saved: ") + err.message);
+    }
+  },
+
+  message(text) {
+    document.getElementById("editor-message").textContent = text;
+  },
+
+  error(text) {
+    const box = document.getElementById("editor-error");
+    box.textContent = text;
+    box.hidden = !text;
+  },
+};
+
+// ---------------------------------------------------------------- start
+
+function start() {
+  editor.init();
+  pollCameras();
+  setInterval(pollCameras, POLL_MS);
+  setInterval(() => { for (const name of counts.keys()) refreshCounts(name); }, COUNTS_POLL_MS);
+  listen();
+}
+
+if (document.readyState === "loading") document.addEventListener("DOMContentLoaded", start);
+else start();
