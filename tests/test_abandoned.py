@@ -228,3 +228,100 @@ def test_track_scene_writes_the_abandoned_event_that_evaluate_events_matches(tmp
     out = json.loads(capsys.readouterr().out)
     ab = out["types"]["abandoned"]
     assert (ab["gt"], ab["tp"], ab["fp"]) == (1, 1, 0)
+
+
+# ------------------------------------------------------------- stationary from static objects
+STAY = {"stationary": {"after_s": 2.0, "radius_px": 5}}
+
+
+def _stays(scene=STAY, *, obj=(145, 180, 20, 20), until=60, change=1.0, track=None):
+    """A static object ``obj`` from frame 11 (static foreground since frame 11) to ``until``;
+    with ``track`` a tracker track standing on ``track`` box from frame 1 to 70."""
+    an = Analytics(parse_scene(scene), FPS)
+    out = []
+    for f in range(1, 141):
+        ids, boxes = ([7], [track]) if track is not None and f <= 70 else ([], [])
+        static = StaticFrame()
+        if 11 <= f <= until:
+            static = StaticFrame((StaticObject(Box(*obj), obj[2] * obj[3], f - 10, change),))
+        out += [(e.type, e.frame, e.track, e.x, e.y, e.duration_s)
+                for e in an.step(f, ids, boxes, static).events if e.type.startswith("stationary")]
+    return out
+
+
+def test_a_static_object_the_tracker_never_follows_is_stationary_after_s():
+    # static since frame 11, 2 s = 20 frames -> frame 31; seen until 60, forgotten once unseen
+    # for more than forget_s = 2 s (frame 81); lasted frames 11..60
+    assert _stays() == [("stationary_start", 31, OBJECT_IDS, 155.0, 200.0, None),
+                        ("stationary_end", 81, OBJECT_IDS, 155.0, 200.0, 4.9)]
+
+
+def test_the_stationary_object_and_its_abandoned_event_share_the_object_id():
+    scene = {**SCENE, **STAY}
+    an = Analytics(parse_scene(scene), FPS)
+    ids = set()
+    for f in range(1, 71):
+        x = 100 + 10 * max(0, f - 10)
+        static = StaticFrame()
+        if f >= 11:
+            static = StaticFrame((StaticObject(Box(145, 180, 20, 20), 400, f - 10, 1.0),))
+        ev = an.step(f, [1] if f <= 40 else [], [(x, 100, 40, OWNER_H)] if f <= 40 else [],
+                     static).events
+        ids |= {(e.type, e.track) for e in ev if e.type in ("stationary_start", "abandoned")}
+    assert ids == {("stationary_start", OBJECT_IDS), ("abandoned", OBJECT_IDS)}
+
+
+@pytest.mark.parametrize("case, kw", [
+    ("the object is not still", {"change": 20.0}),
+    ("the object went before after_s", {"until": 25}),
+])
+def test_no_stationary_object_when(case, kw):
+    assert _stays(**kw) == [], case
+
+
+def test_a_stationary_track_on_the_object_reports_the_place_once():
+    # the track stands on a person-sized object from frame 1: stationary from frame 21 (2 s);
+    # the object under it is the same place. The tracker loses the track after frame 70: the
+    # object carries the stay on under the track's id until it is forgotten (last seen 110)
+    ev = _stays(obj=(141, 101, 28, 99), track=(140, 100, 30, 100), until=110)
+    assert [(k, f, t, d) for k, f, t, _, _, d in ev] == [("stationary_start", 21, 7, None),
+                                                         ("stationary_end", 131, 7, 10.9)]
+
+
+def test_a_bag_left_where_a_stationary_track_stood_is_stationary_once_the_track_is_gone():
+    ev = _stays(track=(140, 100, 30, 100), until=110)
+    assert [(k, f, t) for k, f, t, *_ in ev] == [
+        ("stationary_start", 21, 7), ("stationary_end", 91, 7),
+        ("stationary_start", 91, OBJECT_IDS), ("stationary_end", 131, OBJECT_IDS)]
+
+
+def _stationary_events(spec, scene):
+    cfg = PipelineConfig()
+    src = open_configured_source(spec, cfg.source)
+    an = Analytics(scene, src.info.fps or 25.0)
+    proc = TrackProcessor(cfg, src.info, analytics=an)
+    try:
+        return [e for r in proc.results(src) for e in r.scene.events
+                if e.type.startswith("stationary")]
+    finally:
+        src.close()
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("seed", range(3))
+def test_leftbag_bag_is_stationary_as_the_ground_truth_says(seed, caplog):
+    caplog.set_level(logging.ERROR)
+    s = make_scene("leftbag", seed=seed)
+    gt = [e for e in s.ground_truth_events() if e.type.startswith("stationary")]
+    pred = _stationary_events(s.spec, parse_scene(s.scene_file))
+    assert gt and evaluate_events(gt, pred, tolerance_s=1.0).total.f1 == 1.0, (gt, pred)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["walker", "crossing"])
+def test_no_stationary_object_in_scenes_without_one(name, caplog):
+    caplog.set_level(logging.ERROR)
+    s = make_scene(name, seed=0)
+    assert "stationary" in s.scene_file
+    assert [e for e in _stationary_events(s.spec, parse_scene(s.scene_file))
+            if e.track >= OBJECT_IDS] == []

@@ -2,8 +2,9 @@
 
 Each frame's tracks (ids and boxes) go through the rules in a fixed order: tracks unseen for
 ``forget_s`` are forgotten (they leave their zones and stop being stationary), then line
-crossings, zone membership (enter, exit, loiter), stationary stays, speeding and abandoned
-objects (from the frame's static objects, :mod:`.abandoned`). Events carry
+crossings, zone membership (enter, exit, loiter), stationary stays, speeding, and the rules on
+the frame's static objects (:mod:`.objects`): stationary objects and abandoned objects
+(:mod:`.abandoned`). Events carry
 the frame, its time ``(frame - 1) / fps``, the track's anchor in pixels and, with a camera,
 its foot point on the ground plane in metres.
 """
@@ -22,6 +23,7 @@ from ..types import EVENT_TYPES, Event, SceneFrame, StaticFrame
 from .abandoned import AbandonedRule
 from .lines import LineSet
 from .movement import REARM, SpeedWindow, Stay
+from .objects import BAG_RATIO, StaticObjects, TrackedObject
 from .scene import Scene
 from .zones import ZoneEdges
 
@@ -39,12 +41,13 @@ class _TrackState:
     """What the rules remember of one track; its line and zone state is row ``row`` of the
     engine's :class:`_Table`."""
 
-    __slots__ = ("row", "last_frame", "point", "world", "stay", "speed")
+    __slots__ = ("row", "last_frame", "point", "world", "box", "stay", "speed")
 
     def __init__(self, row: int) -> None:
         self.row = row
         self.last_frame = -1
         self.point = (0.0, 0.0)
+        self.box = np.zeros(4)
         self.world: tuple[float, float] | None = None
         self.stay = Stay()
         self.speed = SpeedWindow()
@@ -80,6 +83,11 @@ class _Table:
         return row
 
 
+#: fraction of the frames since a static object was first seen in which it must have been seen
+#: still before it can be stationary
+STATIONARY_STILL = 0.4
+
+
 def _r(v: float, digits: int) -> float:
     return round(float(v), digits)
 
@@ -104,10 +112,13 @@ class Analytics:
             raise ConfigError("the scene measures in metres and needs a camera calibration "
                               "(--camera)")
         self.scene, self.fps, self.camera = scene, float(fps), camera
-        self.abandoned = None
+        self.objects = self.abandoned = None
+        if scene.abandoned is not None or scene.stationary is not None:
+            self.objects = StaticObjects(self.fps, scene.forget_s * self.fps)
         if scene.abandoned is not None:
-            self.abandoned = AbandonedRule(scene.abandoned, self.fps, scene.forget_s * self.fps,
+            self.abandoned = AbandonedRule(scene.abandoned, self.fps, self.objects,
                                            self._anchors, self._world)
+        self._silent: set[int] = set()   # stationary tracks whose place an object reports
         self._warned_static = False
         self.lines = LineSet([ln.a for ln in scene.lines], [ln.b for ln in scene.lines])
         self.edges = ZoneEdges(scene.zones)
@@ -132,9 +143,10 @@ class Analytics:
 
     @property
     def wants_static(self) -> bool:
-        """Whether the rules need each frame's static objects (``[abandoned]``): the pipeline
-        then keeps its dual background (:class:`~motiontrack.motion.static.DualBackground`)."""
-        return self.abandoned is not None
+        """Whether the rules need each frame's static objects (``[abandoned]``,
+        ``[stationary]``): the pipeline then keeps its dual background
+        (:class:`~motiontrack.motion.static.DualBackground`)."""
+        return self.objects is not None
 
     # ------------------------------------------------------------------------------- frames
     def update(self, frame: int, tracks: Sequence[Any],
@@ -164,6 +176,7 @@ class Analytics:
             ids, boxes = ids[first], boxes[first]
             id_list = ids.tolist()
         events: list[Event] = []
+        gone = [] if self.objects is None else self.objects.step(frame, ids, boxes, static)
         self._forget(frame, events)
         points = self._anchors(boxes)
         world = self._world(boxes)
@@ -177,13 +190,16 @@ class Analytics:
         known = np.fromiter((st.last_frame > 0 for st in states), dtype=bool, count=len(states))
         self._lines(frame, ids, rows, known, points, world, events)
         self._zones(frame, ids, states, rows, known, points, world, events)
-        self._movement(frame, ids, states, points, world, events)
+        self._movement(frame, ids, states, boxes, points, world, events)
+        if self.scene.stationary is not None and self.objects is not None:
+            self._object_stays(frame, ids, boxes, gone, events)
         if self.abandoned is not None:
             self._abandoned(frame, ids, boxes, static, events)
         self.table.point[rows] = points
         for i, st in enumerate(states):
             st.last_frame = frame
             st.point = (float(points[i, 0]), float(points[i, 1]))
+            st.box = boxes[i]
             st.world = None if world is None else (float(world[i, 0]), float(world[i, 1]))
         self.last_frame = frame
         self.frames += 1
@@ -232,7 +248,9 @@ class Analytics:
             "scene": self.scene.source, "fps": self.fps, "frames": self.frames,
             "events": {t: int(self.by_type.get(t, 0)) for t in EVENT_TYPES},
             "lines": self.counts["lines"], "zones": zones,
-            "stationary_at_end": sum(1 for s in self.tracks.values() if s.stay.stationary),
+            "stationary_at_end": (
+                sum(1 for t, s in self.tracks.items() if s.stay.stationary and t not in self._silent)
+                + sum(1 for o in (self.objects.objects if self.objects else ()) if o.stationary == "open")),
         }
 
     # -------------------------------------------------------------------------------- rules
@@ -268,9 +286,10 @@ class Analytics:
                                           zone=self.scene.zones[k].name,
                                           dwell_s=self._seconds(st.last_frame - enter_frame[k])))
                 self._exited(k, st.last_frame - enter_frame[k])
-            if st.stay.stationary:
+            if st.stay.stationary and not self._handed_over(tid, st) and tid not in self._silent:
                 events.append(self._event("stationary_end", frame, tid, st.point, st.world,
                                           duration_s=self._seconds(st.stay.last - st.stay.first)))
+            self._silent.discard(tid)
 
     def _exited(self, k: int, dwell: int) -> None:
         self.occupancy[k] -= 1
@@ -322,7 +341,7 @@ class Analytics:
                                       zone=self.scene.zones[k].name,
                                       dwell_s=self._seconds(frame - enter[i, k])))
 
-    def _movement(self, frame, ids, states, points, world, events) -> None:
+    def _movement(self, frame, ids, states, boxes, points, world, events) -> None:
         stat, speed = self.scene.stationary, self.scene.speed
         if stat is not None:
             pos = world if stat.radius_m is not None else points
@@ -334,9 +353,15 @@ class Analytics:
                 what, lasted = st.stay.step((pos[i, 0], pos[i, 1]), frame, radius,
                                             stat.after_s * self.fps)
                 if what == "start":
+                    if self._object_reports(boxes[i]):
+                        self._silent.add(int(ids[i]))
+                        continue
                     events.append(self._event("stationary_start", frame, ids[i], points[i],
                                               _row(world, i)))
                 elif what == "end":
+                    if int(ids[i]) in self._silent:
+                        self._silent.discard(int(ids[i]))
+                        continue
                     events.append(self._event("stationary_end", frame, ids[i], points[i],
                                               _row(world, i), duration_s=self._seconds(lasted)))
         if speed is not None:
@@ -359,16 +384,88 @@ class Analytics:
                     st.speed.speeding = False
 
 
+    # ----------------------------------------------------------------- stationary objects
+    def _object_stays(self, frame, ids, boxes, gone, events) -> None:
+        """``stationary`` of static objects: ``stationary_start`` once an object has been static
+        foreground for ``after_s``, if it is seen still in this frame, was followed for a second
+        and seen still in 40 % of the frames since (a blob of static pixels that only just formed
+        or a person swaying on the spot is not a still object), unless a stationary track covers
+        it (that track reports the place); ``stationary_end`` when a reported object is
+        forgotten."""
+        after = self.scene.stationary.after_s * self.fps
+        for o in gone:
+            if o.stationary == "open":
+                self._object_event(events, "stationary_end", frame, o, duration_s=self._seconds(
+                    o.last_seen - o.stay_first))
+        for o in self.objects.objects:
+            if o.stationary == "track":
+                st = self.tracks.get(o.merged)
+                if st is not None and st.stay.stationary:
+                    continue
+                o.stationary = o.merged = None     # the track moved on: the object stays alone
+            if (o.stationary is not None or not (o.seen and o.still)
+                    or frame - o.since < after - 1e-9 or frame - o.first_seen < self.fps - 1e-9
+                    or o.still_seen < STATIONARY_STILL * (frame - o.first_seen + 1)):
+                continue
+            tid = self._stationary_track_on(o.box)
+            if tid is None:
+                oid = self.objects.object_id(o, ids, boxes)
+                st = self.tracks.get(oid)
+                if st is not None and st.stay.stationary and oid not in self._silent:
+                    tid = oid
+            if tid is not None:
+                o.stationary, o.merged = "track", tid
+                continue
+            o.stationary, o.stay_first = "open", o.since
+            self._object_event(events, "stationary_start", frame, o)
+
+    def _object_event(self, events, kind: str, frame: int, o: TrackedObject, **fields: Any) -> None:
+        b = o.box[None]
+        events.append(self._event(kind, frame, o.oid, self._anchors(b)[0],
+                                  _row(self._world(b), 0), **fields))
+
+    def _stationary_track_on(self, box: np.ndarray) -> int | None:
+        """A track reporting a stationary stay whose (last) box covers half of ``box``."""
+        for tid, st in self.tracks.items():
+            if st.stay.stationary and tid not in self._silent and _covers(st.box, box):
+                return tid
+        return None
+
+    def _object_reports(self, box: np.ndarray) -> bool:
+        """Whether a reported stationary object lies at least half in ``box``."""
+        return self.objects is not None and any(
+            o.stationary == "open" and _covers(box, o.box) for o in self.objects.objects)
+
+    def _handed_over(self, tid: int, st: _TrackState) -> bool:
+        """A forgotten stationary track whose place a static object of its size (not a bag it
+        left) still holds: the object carries the stay on under the track's id (the tracker
+        lost someone standing still)."""
+        if self.objects is None or self.scene.stationary is None:
+            return False
+        for o in self.objects.objects:
+            if (o.stationary == "track" and o.merged == tid and o.seen
+                    and o.box[3] > BAG_RATIO * st.box[3]):
+                o.stationary, o.oid, o.stay_first, o.merged = "open", tid, st.stay.first, None
+                return True
+        return False
+
     def _abandoned(self, frame, ids, boxes, static, events) -> None:
         if static is None and not self._warned_static:
             self._warned_static = True
             log.warning("abandoned objects are found in the video's static foreground "
                         "(track --scene); from tracks alone there are no abandoned events")
-        for oid, owner, box, static_s in self.abandoned.step(frame, ids, boxes, static):
+        for oid, owner, box, static_s in self.abandoned.step(frame, ids, boxes):
             b = box[None]
             w = self._world(b)
             events.append(self._event("abandoned", frame, oid, self._anchors(b)[0],
                                       _row(w, 0), duration_s=_r(static_s, 3), owner=owner))
+
+
+def _covers(outer: np.ndarray, inner: np.ndarray) -> bool:
+    """Whether box ``outer`` covers at least half of box ``inner`` (``x, y, w, h``)."""
+    ox = min(outer[0] + outer[2], inner[0] + inner[2]) - max(outer[0], inner[0])
+    oy = min(outer[1] + outer[3], inner[1] + inner[3]) - max(outer[1], inner[1])
+    return ox > 0 and oy > 0 and ox * oy >= 0.5 * inner[2] * inner[3]
 
 
 def _row(world: np.ndarray | None, i: int) -> tuple[float, float] | None:
