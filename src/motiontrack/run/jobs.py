@@ -34,7 +34,7 @@ from .analytics_writers import CountsWriter, EventsWriter
 from .event_sinks import EventSinksWriter, deliveries
 from .folders import source_name
 from .heatmaps import HeatmapWriter, scene_geometry
-from .job import Job
+from .job import Job, Writer
 from .processors import (DenseFlowProcessor, FollowProcessor, OverlayProcessor,
                          SparseFlowProcessor, TrackProcessor)
 from .writers import (IntermediateWriter, MaskImagesWriter, MaskVideoWriter, ScoreWriter,
@@ -62,7 +62,7 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
               save: Iterable[str] | str = (), mask_images: str | Path | None = None,
               scoring: str = DEFAULT_SCORING, scene: str | Path | None = None,
               bin_s: float = 60.0, sinks: Sequence[Any] = (),
-              camera_name: str | None = None) -> Job:
+              camera_name: str | None = None, writers: Sequence[Writer] = ()) -> Job:
     """``motiontrack track``: ``tracks.txt``, the annotated video, the mask video and the
     intermediate movies as ``cfg.output`` and ``save`` ask, the mask of every frame as
     ``bin%06d.png`` in the folder ``mask_images``, the live view with ``show``, ``gt.txt`` and
@@ -72,7 +72,8 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
     the tracks of each frame: ``events.jsonl`` and ``counts.csv`` (rows of ``bin_s`` seconds),
     the lines and zones with their counts on the annotated video. ``sinks`` (webhook and MQTT
     targets, :mod:`motiontrack.io.sinks`) receive every event too, named ``camera_name``
-    (default: the source's name, :func:`~motiontrack.run.folders.source_name`)."""
+    (default: the source's name, :func:`~motiontrack.run.folders.source_name`). ``writers``
+    are more outputs, given every frame after the others (``serve``'s live view)."""
     out = Path(out_dir)
     ignores_zero_marked(scoring)   # an unknown name fails before the source opens
     if sinks and scene is None:
@@ -86,6 +87,7 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
         log.info("--save annotated: the annotated video is written anyway")
         streams = tuple(s for s in streams if s != "annotated")
     codec = cfg.output.codec
+    more = list(writers)
     camera = None
     if cfg.measure.camera:
         camera = load_camera(cfg.measure.camera)
@@ -129,7 +131,7 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
                                        functools.partial(score_run, scoring=scoring)))
         if sinks:
             writers.append(EventSinksWriter(deliveries(sinks, camera_name), camera_name))
-        return Job(src, proc, writers, out, force=force, config=(save_config, cfg))
+        return Job(src, proc, [*writers, *more], out, force=force, config=(save_config, cfg))
 
     return _opened(source, cfg.source, build)
 

@@ -1,0 +1,236 @@
+"""The web app of ``motiontrack serve``: the page, the JSON API, the MJPEG and event streams.
+
+Starlette (an ASGI toolkit: routing, requests, streaming responses) served by uvicorn; a
+handful of routes needs nothing more. No path taken from a request reaches the file system:
+cameras are looked up by name in the hub, scene files are the ones the cameras file names, the
+page's assets are a fixed list. Routes are documented in ``docs/serve.md``.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import hmac
+import json
+from importlib import resources
+from pathlib import Path
+from typing import Any, Callable, Mapping
+from urllib.parse import parse_qs
+
+from starlette.applications import Starlette
+from starlette.requests import Request
+from starlette.responses import JSONResponse, Response, StreamingResponse
+from starlette.routing import Route
+
+from ..errors import MotionTrackError
+from .hub import CameraState, Hub
+from .scenes import SceneFiles
+
+__all__ = ["create_app", "MAX_BODY"]
+
+#: largest request body accepted (a scene of hundreds of lines and zones fits)
+MAX_BODY = 64 * 1024
+_ASSETS = {"index.html": "text/html; charset=utf-8", "app.js": "text/javascript; charset=utf-8",
+           "style.css": "text/css; charset=utf-8"}
+#: seconds between keep-alive comments on an idle event stream
+_KEEPALIVE_S = 15.0
+_BOUNDARY = "frame"
+
+
+def _error(status: int, message: str) -> JSONResponse:
+    return JSONResponse({"error": message}, status_code=status)
+
+
+class _TokenCheck:
+    """ASGI middleware: every HTTP request needs ``Authorization: Bearer TOKEN`` or
+    ``?token=TOKEN`` (an ``<img>`` or ``EventSource`` cannot set headers), else 401."""
+
+    def __init__(self, app: Any, token: str) -> None:
+        self.app, self.token = app, token.encode()
+
+    def _allowed(self, scope: dict) -> bool:
+        for k, v in scope.get("headers", ()):
+            if k == b"authorization" and v[:7].lower() == b"bearer ":
+                if hmac.compare_digest(v[7:].strip(), self.token):
+                    return True
+        qs = parse_qs(scope.get("query_string", b"").decode("latin-1"))
+        return any(hmac.compare_digest(t.encode("latin-1", "replace"), self.token)
+                   for t in qs.get("token", []))
+
+    async def __call__(self, scope: dict, receive: Callable, send: Callable) -> None:
+        if scope["type"] == "http" and not self._allowed(scope):
+            resp = JSONResponse({"error": "a token is required: Authorization: Bearer TOKEN or "
+                                          "?token=TOKEN"}, status_code=401,
+                                headers={"WWW-Authenticate": "Bearer"})
+            await resp(scope, receive, send)
+            return
+        await self.app(scope, receive, send)
+
+
+async def _body(request: Request) -> bytes | Response:
+    """The request body, or a 413 response when it is larger than :data:`MAX_BODY`."""
+    length = request.headers.get("content-length")
+    if length is not None and (not length.isdigit() or int(length) > MAX_BODY):
+        return _error(413, f"request body larger than {MAX_BODY} bytes")
+    data = bytearray()
+    async for chunk in request.stream():
+        data += chunk
+        if len(data) > MAX_BODY:
+            return _error(413, f"request body larger than {MAX_BODY} bytes")
+    return bytes(data)
+
+
+def create_app(hub: Hub, token: str | None = None,
+               scenes: Mapping[str, Path | None] | SceneFiles | None = None,
+               stopping: Callable[[], bool] = lambda: False) -> Any:
+    """The ASGI app over ``hub``. ``scenes``: each camera's scene file (None: the camera has
+    none; the editor's PUT then answers 409). ``stopping`` tells the streams to end (the server
+    is shutting down)."""
+    files = scenes if isinstance(scenes, SceneFiles) else SceneFiles(scenes or {})
+
+    def camera(request: Request) -> CameraState | Response:
+        cam = hub.get(request.path_params["name"])
+        return cam if cam is not None else _error(404, "no such camera")
+
+    async def page(request: Request) -> Response:
+        return _asset("index.html")
+
+    async def asset(request: Request) -> Response:
+        name = request.path_params["file"]
+        return _asset(name) if name in _ASSETS else _error(404, "not found")
+
+    async def cameras(request: Request) -> Response:
+        return JSONResponse([c.describe() for c in hub.cameras.values()])
+
+    async def events(request: Request) -> Response:
+        cam = camera(request)
+        if isinstance(cam, Response):
+            return cam
+        raw = request.query_params.get("since", "0")
+        try:
+            since = int(raw)
+        except ValueError:
+            return _error(400, "since must be an integer sequence number")
+        return JSONResponse(cam.events_since(since))
+
+    async def counts(request: Request) -> Response:
+        cam = camera(request)
+        if isinstance(cam, Response):
+            return cam
+        with cam.lock:
+            return JSONResponse(cam.counts)
+
+    async def snapshot(request: Request) -> Response:
+        cam = camera(request)
+        if isinstance(cam, Response):
+            return cam
+        jpeg = cam.jpeg
+        if jpeg is None:
+            return _error(404, "no picture yet")
+        return Response(jpeg, media_type="image/jpeg", headers={"Cache-Control": "no-store"})
+
+    async def stream(request: Request) -> Response:
+        cam = camera(request)
+        if isinstance(cam, Response):
+            return cam
+
+        async def parts():
+            sub = hub.subscribe_frames(cam)
+            try:
+                if cam.jpeg is not None:
+                    yield _part(cam.jpeg)
+                while not stopping():
+                    try:
+                        jpeg = await asyncio.wait_for(sub.queue.get(), 1.0)
+                    except asyncio.TimeoutError:
+                        continue
+                    yield _part(jpeg)
+            finally:
+                hub.unsubscribe_frames(cam, sub)
+
+        return StreamingResponse(parts(), headers={"Cache-Control": "no-store"},
+                                 media_type=f"multipart/x-mixed-replace; boundary={_BOUNDARY}")
+
+    async def event_stream(request: Request) -> Response:
+        async def lines():
+            sub = hub.subscribe_events()
+            idle = 0.0
+            try:
+                yield b": connected\n\n"
+                while not stopping():
+                    try:
+                        item = await asyncio.wait_for(sub.queue.get(), 1.0)
+                    except asyncio.TimeoutError:
+                        idle += 1.0
+                        if idle >= _KEEPALIVE_S:
+                            idle = 0.0
+                            yield b": keep-alive\n\n"
+                        continue
+                    idle = 0.0
+                    yield f"data: {json.dumps(item)}\n\n".encode()
+            finally:
+                hub.unsubscribe_events(sub)
+
+        return StreamingResponse(lines(), media_type="text/event-stream",
+                                 headers={"Cache-Control": "no-store", "X-Accel-Buffering": "no"})
+
+    async def get_scene(request: Request) -> Response:
+        cam = camera(request)
+        if isinstance(cam, Response):
+            return cam
+        try:
+            data = files.read(cam.name)
+        except MotionTrackError as exc:
+            return _error(409 if files.path(cam.name) is None else 500, str(exc))
+        with cam.lock:
+            data["width"] = cam.status.get("width")
+            data["height"] = cam.status.get("height")
+        return JSONResponse(data)
+
+    async def put_scene(request: Request) -> Response:
+        cam = camera(request)
+        if isinstance(cam, Response):
+            return cam
+        body = await _body(request)
+        if isinstance(body, Response):
+            return body
+        if files.path(cam.name) is None:
+            return _error(409, f"camera {cam.name} has no scene file in the cameras file")
+        try:
+            payload = json.loads(body)
+        except (ValueError, UnicodeDecodeError):
+            return _error(400, "the body must be a JSON object")
+        try:
+            saved = files.write(cam.name, payload)
+        except MotionTrackError as exc:
+            return _error(400, str(exc))
+        return JSONResponse(saved)
+
+    routes = [
+        Route("/", page),
+        Route("/static/{file}", asset),
+        Route("/api/cameras", cameras),
+        Route("/api/cameras/{name}/events", events),
+        Route("/api/cameras/{name}/counts", counts),
+        Route("/api/cameras/{name}/snapshot.jpg", snapshot),
+        Route("/api/cameras/{name}/stream.mjpg", stream),
+        Route("/api/cameras/{name}/scene", get_scene, methods=["GET"]),
+        Route("/api/cameras/{name}/scene", put_scene, methods=["PUT"]),
+        Route("/api/events", event_stream),
+    ]
+    app: Any = Starlette(routes=routes)
+    if token:
+        app = _TokenCheck(app, token)
+    return app
+
+
+def _part(jpeg: bytes) -> bytes:
+    return (f"--{_BOUNDARY}\r\nContent-Type: image/jpeg\r\nContent-Length: {len(jpeg)}\r\n\r\n"
+            .encode() + jpeg + b"\r\n")
+
+
+def _asset(name: str) -> Response:
+    try:
+        data = resources.files("motiontrack").joinpath("serve", "static", name).read_bytes()
+    except OSError:
+        return _error(404, "not found")
+    return Response(data, media_type=_ASSETS[name], headers={"Cache-Control": "no-cache"})

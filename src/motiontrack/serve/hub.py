@@ -1,0 +1,193 @@
+"""Server-side state of every camera, and fan-out to the viewers.
+
+Reader threads (:meth:`Hub.attach`) take each camera's messages off its
+:class:`~.channel.Channel` and update a :class:`CameraState`: the latest JPEG, the status, the
+last :data:`EVENTS_KEPT` events each with a per-camera ``seq`` (1, 2, ...), and the counts. Each
+viewer (an MJPEG stream, an event stream) subscribes with a bounded asyncio queue of its own;
+when it is full the oldest item is dropped, so a slow or vanished viewer only loses its own
+pictures and never holds up a camera or another viewer.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import collections
+import itertools
+import queue
+import threading
+from typing import Any, Iterable
+
+__all__ = ["Hub", "CameraState", "Subscriber", "EVENTS_KEPT"]
+
+#: events kept per camera for ``?since=``
+EVENTS_KEPT = 10_000
+
+
+class Subscriber:
+    """One viewer's bounded queue on its event loop; items are offered from any thread."""
+
+    def __init__(self, loop: asyncio.AbstractEventLoop, size: int) -> None:
+        self.loop = loop
+        self.queue: asyncio.Queue = asyncio.Queue(size)
+        self.dropped = 0
+
+    def offer(self, item: Any) -> None:
+        try:
+            self.loop.call_soon_threadsafe(self._put, item)
+        except RuntimeError:   # the loop is closed: the viewer is gone
+            pass
+
+    def _put(self, item: Any) -> None:
+        if self.queue.full():
+            self.queue.get_nowait()
+            self.dropped += 1
+        self.queue.put_nowait(item)
+
+
+class CameraState:
+    """What the server knows about one camera."""
+
+    def __init__(self, name: str, has_scene: bool) -> None:
+        self.name = name
+        self.has_scene = has_scene
+        self.lock = threading.Lock()
+        self.jpeg: bytes | None = None
+        self.frame_index = 0
+        self.status: dict[str, Any] = {"status": "starting", "fps": 0.0, "frames": 0,
+                                       "reconnects": 0}
+        self.events: collections.deque = collections.deque(maxlen=EVENTS_KEPT)
+        self.seq = 0
+        self.counts: dict[str, Any] = {"lines": {}, "zones": {}}
+        self.restarts = 0
+        self.frame_subs: set[Subscriber] = set()
+        self.event_subs: set[Subscriber] = set()
+
+    # -------------------------------------------------------------------- updates
+    def put_frame(self, jpeg: bytes, index: int) -> None:
+        with self.lock:
+            self.jpeg, self.frame_index = jpeg, index
+            subs = list(self.frame_subs)
+        for s in subs:
+            s.offer(jpeg)
+
+    def put_events(self, events: Iterable[dict]) -> list[dict]:
+        out = []
+        with self.lock:
+            for e in events:
+                self.seq += 1
+                item = {**e, "seq": self.seq}
+                self.events.append(item)
+                out.append(item)
+            subs = list(self.event_subs)
+        for s in subs:
+            for item in out:
+                s.offer({"camera": self.name, **item})
+        return out
+
+    def put_status(self, status: dict) -> None:
+        with self.lock:
+            self.status = {**self.status, **status}
+
+    def set_status(self, status: str) -> None:
+        """A status the supervisor knows better than the camera (``restarting``, ``failed``)."""
+        with self.lock:
+            self.status = {**self.status, "status": status}
+
+    def put_counts(self, counts: dict) -> None:
+        with self.lock:
+            self.counts = counts
+
+    # ---------------------------------------------------------------------- reads
+    def events_since(self, since: int, limit: int = EVENTS_KEPT) -> list[dict]:
+        with self.lock:
+            if not self.events or since >= self.seq:
+                return []
+            first = self.events[0]["seq"]
+            start = max(0, since + 1 - first)
+            return list(itertools.islice(self.events, start, start + limit))
+
+    def describe(self) -> dict[str, Any]:
+        with self.lock:
+            s = self.status
+            return {"name": self.name, "status": s.get("status", "starting"),
+                    "fps": s.get("fps", 0.0), "frames": s.get("frames", 0),
+                    "reconnects": s.get("reconnects", 0), "scene": self.has_scene,
+                    "pid": s.get("pid"), "restarts": self.restarts,
+                    "segment": s.get("segment", "")}
+
+
+class Hub:
+    """Every camera's :class:`CameraState`, by name, in the cameras file's order."""
+
+    def __init__(self, cameras: Iterable[tuple[str, bool]]) -> None:
+        self.cameras: dict[str, CameraState] = {n: CameraState(n, s) for n, s in cameras}
+        self._stop = threading.Event()
+
+    def get(self, name: str) -> CameraState | None:
+        return self.cameras.get(name)
+
+    # ------------------------------------------------------------------- readers
+    def attach(self, name: str, channel: Any) -> list[threading.Thread]:
+        """Start the threads that read one camera process's channel (until :meth:`close` or
+        the returned threads' ``done`` event is set)."""
+        cam = self.cameras[name]
+        done = threading.Event()
+
+        def frames() -> None:
+            while not (self._stop.is_set() or done.is_set()):
+                try:
+                    msg = channel.frames.get(timeout=0.25)
+                except queue.Empty:
+                    continue
+                except (EOFError, OSError, ValueError):
+                    return
+                cam.put_frame(msg[1], msg[2])
+
+        def messages() -> None:
+            while not (self._stop.is_set() or done.is_set()):
+                try:
+                    msg = channel.messages.get(timeout=0.25)
+                except queue.Empty:
+                    continue
+                except (EOFError, OSError, ValueError):
+                    return
+                kind = msg[0]
+                if kind == "events":
+                    cam.put_events(msg[1])
+                elif kind == "counts":
+                    cam.put_counts(msg[1])
+                elif kind == "status":
+                    cam.put_status(msg[1])
+
+        threads = [threading.Thread(target=f, name=f"hub-{name}-{f.__name__}", daemon=True)
+                   for f in (frames, messages)]
+        for t in threads:
+            t.done = done   # type: ignore[attr-defined]
+            t.start()
+        return threads
+
+    def close(self) -> None:
+        self._stop.set()
+
+    # --------------------------------------------------------------- subscribers
+    def subscribe_frames(self, cam: CameraState, size: int = 2) -> Subscriber:
+        sub = Subscriber(asyncio.get_running_loop(), size)
+        with cam.lock:
+            cam.frame_subs.add(sub)
+        return sub
+
+    def unsubscribe_frames(self, cam: CameraState, sub: Subscriber) -> None:
+        with cam.lock:
+            cam.frame_subs.discard(sub)
+
+    def subscribe_events(self, size: int = 1000) -> Subscriber:
+        sub = Subscriber(asyncio.get_running_loop(), size)
+        for cam in self.cameras.values():
+            with cam.lock:
+                cam.event_subs.add(sub)
+        return sub
+
+    def unsubscribe_events(self, sub: Subscriber) -> None:
+        for cam in self.cameras.values():
+            with cam.lock:
+                cam.event_subs.discard(sub)
