@@ -333,8 +333,12 @@ def run_camera(spec: CameraSpec, out_dir: Path, channel: Channel, stop: _Flag,
     cam = _Camera(spec, channel)
     beat_stop = threading.Event()
 
+    parent = os.getppid()
+
     def beat() -> None:
         while not beat_stop.wait(STATUS_EVERY):
+            if os.getppid() != parent:   # the server is gone (killed): stop, outputs committed
+                stop.event.set()
             cam.report()
 
     beater = threading.Thread(target=beat, name=f"status-{spec.name}", daemon=True)

@@ -1,0 +1,398 @@
+"""``motiontrack serve``: the JSON API, the streams, the scene editor's writes, the token, the
+camera processes' supervision and their outputs.
+
+The app's request handling (token, sizes, unknown cameras, scene validation) is tested in
+process over a hub without cameras; the live behaviour against a ``motiontrack serve`` process
+on a free 127.0.0.1 port with two looping synthetic cameras (walker and crossing, their scene
+files from ``motiontrack synth-events``).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+pytest.importorskip("starlette")
+pytest.importorskip("uvicorn")
+httpx = pytest.importorskip("httpx")
+
+from motiontrack.cli import main  # noqa: E402
+from motiontrack.errors import ConfigError  # noqa: E402
+from motiontrack.io.events import read_events  # noqa: E402
+from motiontrack.io.mot import read_mot  # noqa: E402
+from motiontrack.io.tomlfile import read_toml  # noqa: E402
+from motiontrack.serve.cameras import parse_cameras  # noqa: E402
+
+CAMERAS = ("walker", "crossing")
+
+
+# ----------------------------------------------------------------------------- cameras file
+@pytest.mark.parametrize("data, message", [
+    ({}, "lists no cameras"),
+    ({"camera": [{"source": "synth:walker"}]}, "camera[1].name is required"),
+    ({"camera": [{"name": "a b", "source": "x"}]}, "camera[1].name must be 1 to 40"),
+    ({"camera": [{"name": "a"}]}, "camera[1].source is required"),
+    ({"camera": [{"name": "a", "source": "x"}, {"name": "a", "source": "y"}]},
+     "camera[2].name 'a' is used by an earlier camera"),
+    ({"camera": [{"name": "a", "source": "x", "loop": "yes"}]}, "camera[1].loop must be"),
+    ({"camera": [{"name": "a", "source": "x", "fps": 0}]}, "camera[1].fps must be"),
+    ({"camera": [{"name": "a", "source": "x", "sorce": "y"}]}, "unknown key 'sorce'"),
+])
+def test_cameras_file_problems_name_the_key(data, message):
+    with pytest.raises(ConfigError, match=message.replace("[", r"\[").replace("]", r"\]")):
+        parse_cameras(data, "/base")
+
+
+def test_cameras_file_paths_are_relative_to_the_file():
+    (cam,) = parse_cameras({"camera": [{"name": "gate", "source": "clips/a.mp4",
+                                        "scene": "gate.toml", "loop": True}]}, "/base")
+    assert cam.source == "/base/clips/a.mp4"
+    assert cam.scene == Path("/base/gate.toml")
+    assert cam.loop is True
+    (cam,) = parse_cameras({"camera": [{"name": "s", "source": "synth:walker"}]}, "/base")
+    assert cam.source == "synth:walker"
+    (cam,) = parse_cameras({"camera": [{"name": "r", "source": "rtsp://h/1"}]}, "/base")
+    assert cam.source == "rtsp://h/1"
+
+
+def test_non_local_bind_without_token_is_refused(tmp_path, capsys, monkeypatch):
+    monkeypatch.delenv("MOTIONTRACK_TOKEN", raising=False)
+    cams = tmp_path / "cameras.toml"
+    cams.write_text('[[camera]]\nname = "a"\nsource = "synth:walker"\n')
+    assert main(["serve", str(cams), "--host", "0.0.0.0", "--port", "1"]) == 2
+    err = capsys.readouterr().err
+    assert "--token" in err and "Traceback" not in err
+
+
+# --------------------------------------------------------------------------- app in process
+def _app(tmp_path, token=None):
+    from motiontrack.serve.app import create_app
+    from motiontrack.serve.hub import Hub
+
+    scene = tmp_path / "scene.toml"
+    scene.write_text('anchor = "center"\n[[line]]\nname = "gate"\npoints = [[0, 0], [10, 10]]\n')
+    hub = Hub([("cam", True), ("plain", False)])
+    return create_app(hub, token, {"cam": scene, "plain": None}), hub, scene
+
+
+class _Client:
+    """Requests to an ASGI app in process (httpx's ASGI transport), one event loop each."""
+
+    def __init__(self, app) -> None:
+        self.app = app
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc) -> None:
+        pass
+
+    def request(self, method: str, url: str, **kw):
+        import asyncio
+
+        async def go():
+            transport = httpx.ASGITransport(app=self.app)
+            async with httpx.AsyncClient(transport=transport, base_url="http://test") as c:
+                return await c.request(method, url, **kw)
+
+        return asyncio.run(go())
+
+    def get(self, url: str, **kw):
+        return self.request("GET", url, **kw)
+
+    def put(self, url: str, **kw):
+        return self.request("PUT", url, **kw)
+
+
+def _client(app):
+    return _Client(app)
+
+
+ROUTES = ["/", "/static/app.js", "/static/style.css", "/api/cameras",
+          "/api/cameras/cam/events?since=0", "/api/cameras/cam/counts",
+          "/api/cameras/cam/snapshot.jpg", "/api/cameras/cam/stream.mjpg",
+          "/api/cameras/cam/scene", "/api/events"]
+
+
+def test_token_is_required_on_every_route(tmp_path):
+    app, _, _ = _app(tmp_path, token="s3cret")
+    with _client(app) as c:
+        for route in ROUTES:
+            assert c.get(route).status_code == 401, route
+            assert c.get(route, headers={"Authorization": "Bearer wrong"}).status_code == 401
+        assert c.put("/api/cameras/cam/scene", json={}).status_code == 401
+        ok = c.get("/api/cameras", headers={"Authorization": "Bearer s3cret"})
+        assert ok.status_code == 200 and [x["name"] for x in ok.json()] == ["cam", "plain"]
+        assert c.get("/api/cameras?token=s3cret").status_code == 200
+        assert c.get("/?token=s3cret").status_code == 200
+
+
+def test_unknown_camera_is_404_and_no_path_reaches_the_files(tmp_path):
+    app, _, _ = _app(tmp_path)
+    with _client(app) as c:
+        for route in ("/api/cameras/nope/counts", "/api/cameras/nope/events",
+                      "/api/cameras/nope/snapshot.jpg", "/api/cameras/nope/scene",
+                      "/api/cameras/nope/stream.mjpg", "/static/..%2Fapp.py",
+                      "/static/cameras.py"):
+            assert c.get(route).status_code == 404, route
+        assert c.get("/api/cameras/cam/snapshot.jpg").status_code == 404   # no picture yet
+        assert c.get("/api/cameras/cam/events?since=x").status_code == 400
+
+
+def test_oversized_body_is_413(tmp_path):
+    app, _, scene = _app(tmp_path)
+    before = scene.read_text()
+    with _client(app) as c:
+        r = c.put("/api/cameras/cam/scene", content=b"{" + b" " * (64 * 1024) + b"}")
+        assert r.status_code == 413
+    assert scene.read_text() == before
+
+
+def test_scene_put_is_validated_and_keeps_other_settings(tmp_path):
+    app, _, scene = _app(tmp_path)
+    with _client(app) as c:
+        got = c.get("/api/cameras/cam/scene").json()
+        assert got["lines"] == [{"name": "gate", "points": [[0, 0], [10, 10]]}]
+        bad = [{"lines": [{"name": "x", "points": [[0, 0]]}]},               # one point
+               {"zones": [{"name": "z", "polygon": [[0, 0], [1, 1], [0, 1], [1, 0]]}]},  # bow tie
+               {"lines": [{"name": "x", "points": [[0, 0], [1, None]]}]},
+               {"lines": "gate"}, [1, 2]]
+        for body in bad:
+            r = c.put("/api/cameras/cam/scene", json=body)
+            assert r.status_code == 400 and r.json()["error"], body
+        assert c.put("/api/cameras/cam/scene", content=b"not json").status_code == 400
+        assert read_toml(scene)["line"][0]["name"] == "gate"   # untouched
+        new = {"lines": [{"name": "gate", "points": [[0, 0], [10, 10]]},
+                         {"name": "door", "points": [[5, 0], [5, 9]]}],
+               "zones": [{"name": "hall", "polygon": [[0, 0], [9, 0], [9, 9]], "loiter_s": 4}],
+               "width": 640, "height": 480}
+        r = c.put("/api/cameras/cam/scene", json=new)
+        assert r.status_code == 200
+        data = read_toml(scene)
+        assert [ln["name"] for ln in data["line"]] == ["gate", "door"]
+        assert data["zone"][0]["loiter_s"] == 4
+        assert data["anchor"] == "center"               # the file's other settings stay
+        assert "width" not in data
+        assert [p.name for p in tmp_path.iterdir()] == ["scene.toml"]   # no temporary left
+        assert c.put("/api/cameras/plain/scene", json=new).status_code == 409
+
+
+# ------------------------------------------------------------------------- a live server
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+class Server:
+    def __init__(self, root: Path, *extra: str) -> None:
+        self.root, self.port = root, _free_port()
+        self.url = f"http://127.0.0.1:{self.port}"
+        for name in CAMERAS:
+            assert main(["synth-events", f"synth:{name}", "-o", str(root / name)]) == 0
+        text = "".join(f'[[camera]]\nname = "{n}"\nsource = "synth:{n}"\n'
+                       f'scene = "{n}/scene.toml"\nloop = true\n\n' for n in CAMERAS)
+        (root / "cameras.toml").write_text(text)
+        self.out = root / "out"
+        env = {**os.environ, "PYTHONUNBUFFERED": "1"}
+        env.pop("MOTIONTRACK_TOKEN", None)
+        self.log = open(root / "serve.log", "w")
+        self.proc = subprocess.Popen(
+            [sys.executable, "-m", "motiontrack", "serve", str(root / "cameras.toml"), "--port",
+             str(self.port), "--out", str(self.out), *extra],
+            cwd=root, stdout=self.log, stderr=subprocess.STDOUT, env=env)
+        self.client = httpx.Client(base_url=self.url, timeout=10)
+        self.wait(lambda: (lambda cams: len(cams) == len(CAMERAS) and all(
+            c["status"] == "running" and c["frames"] > 5 for c in cams))(self.cameras()),
+            60, "both cameras running")
+
+    def cameras(self) -> list[dict]:
+        try:
+            return self.client.get("/api/cameras").json()
+        except httpx.TransportError:
+            assert self.proc.poll() is None, self.logs()
+            return []
+
+    def camera(self, name: str) -> dict:
+        return next(c for c in self.cameras() if c["name"] == name)
+
+    def wait(self, cond, timeout: float, what: str):
+        end = time.monotonic() + timeout
+        while time.monotonic() < end:
+            got = cond()
+            if got:
+                return got
+            time.sleep(0.2)
+        raise AssertionError(f"not within {timeout} s: {what}\n{self.logs()}")
+
+    def logs(self) -> str:
+        self.log.flush()
+        return (self.root / "serve.log").read_text()[-3000:]
+
+    def stop(self) -> int:
+        if self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGTERM)
+        try:
+            return self.proc.wait(15)
+        finally:
+            self.client.close()
+            self.log.close()
+
+
+@pytest.fixture(scope="module")
+def server(tmp_path_factory):
+    srv = Server(tmp_path_factory.mktemp("serve"))
+    yield srv
+    try:
+        srv.stop()
+    finally:
+        if srv.proc.poll() is None:
+            srv.proc.kill()
+            srv.proc.wait(10)
+
+
+def _mjpeg_frames(client, url: str, n: int, timeout: float = 10.0) -> list[bytes]:
+    frames, buf = [], b""
+    end = time.monotonic() + timeout
+    with client.stream("GET", url) as r:
+        assert r.status_code == 200
+        assert r.headers["content-type"].startswith("multipart/x-mixed-replace; boundary=frame")
+        for chunk in r.iter_bytes():
+            buf += chunk
+            while True:
+                head = buf.find(b"\r\n\r\n")
+                if not buf.startswith(b"--frame\r\n") or head < 0:
+                    break
+                length = int([h for h in buf[:head].split(b"\r\n")
+                              if h.lower().startswith(b"content-length:")][0].split(b":")[1])
+                if len(buf) < head + 4 + length + 2:
+                    break
+                frames.append(buf[head + 4:head + 4 + length])
+                buf = buf[head + 4 + length + 2:]
+            if len(frames) >= n or time.monotonic() > end:
+                break
+    return frames
+
+
+@pytest.mark.slow
+def test_live_pictures_snapshot_and_mjpeg(server):
+    import cv2
+
+    for name in CAMERAS:
+        r = server.client.get(f"/api/cameras/{name}/snapshot.jpg")
+        assert r.status_code == 200 and r.headers["content-type"] == "image/jpeg"
+        img = cv2.imdecode(np.frombuffer(r.content, np.uint8), cv2.IMREAD_COLOR)
+        assert img is not None and img.shape[2] == 3 and img.shape[0] > 100
+    frames = _mjpeg_frames(server.client, "/api/cameras/walker/stream.mjpg", 3)
+    assert len(frames) >= 3
+    assert all(cv2.imdecode(np.frombuffer(f, np.uint8), cv2.IMREAD_COLOR) is not None
+               for f in frames)
+    cam = server.camera("walker")
+    assert cam["fps"] > 5 and cam["reconnects"] == 0 and cam["scene"] is True
+
+
+@pytest.mark.slow
+def test_live_events_since_sse_and_counts(server):
+    # walker's person enters the plaza at frame 95 and crosses the gate at frame 139 (25 fps)
+    events = server.wait(lambda: server.client.get("/api/cameras/walker/events?since=0").json()
+                         if len(server.client.get("/api/cameras/walker/events?since=0").json()) >= 2
+                         else None, 30, "two walker events")
+    seqs = [e["seq"] for e in events]
+    assert seqs == list(range(1, len(seqs) + 1))
+    assert {e["type"] for e in events} >= {"zone_enter", "line_cross"}
+    assert all("frame" in e and "t" in e and "track" in e and "wall" in e for e in events)
+    later = server.client.get(f"/api/cameras/walker/events?since={seqs[0]}").json()
+    assert [e["seq"] for e in later][:len(seqs) - 1] == seqs[1:]
+    counts = server.client.get("/api/cameras/walker/counts").json()
+    gate = counts["lines"]["gate"]
+    crossings = sum(e["type"] == "line_cross" for e in
+                    server.client.get("/api/cameras/walker/events?since=0").json())
+    assert gate["in"] + gate["out"] >= crossings >= 1
+    assert counts["zones"]["plaza"]["entered"] >= 1
+
+    seen: dict[str, list[int]] = {}
+    end = time.monotonic() + 25
+    with server.client.stream("GET", "/api/events", timeout=30) as r:
+        assert r.headers["content-type"].startswith("text/event-stream")
+        for line in r.iter_lines():
+            if line.startswith("data: "):
+                e = json.loads(line[6:])
+                seen.setdefault(e["camera"], []).append(e["seq"])
+            if sum(len(v) for v in seen.values()) >= 3 or time.monotonic() > end:
+                break
+    assert sum(len(v) for v in seen.values()) >= 3, seen
+    for cam, s in seen.items():
+        assert cam in CAMERAS and s == sorted(s) and len(set(s)) == len(s)
+
+
+@pytest.mark.slow
+def test_live_scene_edit_is_applied_without_restart(server):
+    c = server.client
+    scene = server.root / "walker" / "scene.toml"
+    r = c.put("/api/cameras/walker/scene", json={"lines": [{"name": "bad", "points": [[1, 1]]}]})
+    assert r.status_code == 400 and "points" in r.json()["error"]
+    view = c.get("/api/cameras/walker/scene").json()
+    assert view["width"] == 640 and view["height"] == 480
+    pid = server.camera("walker")["pid"]
+    view["lines"].append({"name": "middle", "points": [[100, 300], [540, 300]]})
+    r = c.put("/api/cameras/walker/scene", json=view)
+    assert r.status_code == 200
+    assert [ln["name"] for ln in read_toml(scene)["line"]] == ["gate", "middle"]
+    counts = server.wait(lambda: (lambda k: k if "middle" in k["lines"] else None)(
+        c.get("/api/cameras/walker/counts").json()), 10, "the new line in the counts")
+    assert counts["lines"]["middle"] == {"in": 0, "out": 0} or sum(
+        counts["lines"]["middle"].values()) >= 0
+    assert "gate" in counts["lines"]
+    assert server.camera("walker")["pid"] == pid        # the same process: no restart
+
+
+@pytest.mark.slow
+def test_live_killed_camera_process_restarts_and_pictures_resume(server):
+    before = server.camera("crossing")
+    os.kill(before["pid"], signal.SIGKILL)
+    after = server.wait(lambda: (lambda x: x if x["pid"] != before["pid"]
+                                 and x["status"] == "running" and x["frames"] > 3 else None)(
+        server.camera("crossing")), 40, "crossing running again in a new process")
+    assert after["restarts"] >= 1
+    frames = _mjpeg_frames(server.client, "/api/cameras/crossing/stream.mjpg", 2)
+    assert len(frames) >= 2
+    assert server.camera("walker")["status"] == "running"   # the other camera kept running
+
+
+@pytest.mark.slow
+def test_sigterm_stops_cameras_and_commits_their_outputs(tmp_path):
+    srv = Server(tmp_path, "--rotate-s", "4")
+    try:
+        srv.wait(lambda: len(list((srv.out / "walker").iterdir())) >= 2, 20, "a rotated segment")
+        t0 = time.monotonic()
+        code = srv.stop()
+        took = time.monotonic() - t0
+    finally:
+        if srv.proc.poll() is None:
+            srv.proc.kill()
+    assert code == 0, srv.logs()
+    assert took < 10
+    for name in CAMERAS:
+        segments = sorted((srv.out / name).iterdir())
+        assert len(segments) >= 2 if name == "walker" else len(segments) >= 1
+        for seg in segments:
+            files = {p.name for p in seg.iterdir()}
+            assert {"tracks.txt", "events.jsonl", "summary.json", "counts.csv"} <= files, seg
+            assert not [f for f in files if f.endswith(".part") or f.startswith(".")
+                        and f != ".motiontrack.lock"], files
+            ev = read_events(seg / "events.jsonl")
+            assert ev.fps == 25.0
+            read_mot(seg / "tracks.txt")
+            summary = json.loads((seg / "summary.json").read_text())
+            assert summary["frames"] > 0
+        last = json.loads((segments[-1] / "summary.json").read_text())
+        assert last["interrupted"] is True
