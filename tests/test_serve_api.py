@@ -396,3 +396,32 @@ def test_sigterm_stops_cameras_and_commits_their_outputs(tmp_path):
             assert summary["frames"] > 0
         last = json.loads((segments[-1] / "summary.json").read_text())
         assert last["interrupted"] is True
+
+
+@pytest.mark.slow
+def test_cameras_stop_and_commit_when_the_server_is_killed(tmp_path):
+    srv = Server(tmp_path)
+    pids = [c["pid"] for c in srv.cameras()]
+    srv.proc.kill()
+    srv.proc.wait(10)
+    srv.client.close()
+    srv.log.close()
+
+    def gone(pid: int) -> bool:
+        try:
+            os.kill(pid, 0)
+        except ProcessLookupError:
+            return True
+        return False
+
+    end = time.monotonic() + 15
+    while time.monotonic() < end and not all(gone(p) for p in pids):
+        time.sleep(0.2)
+    left = [p for p in pids if not gone(p)]
+    for p in left:
+        os.kill(p, signal.SIGKILL)
+    assert not left, "camera processes outlived the server"
+    for name in CAMERAS:
+        (seg,) = (srv.out / name).iterdir()
+        read_events(seg / "events.jsonl")
+        assert json.loads((seg / "summary.json").read_text())["interrupted"] is True
