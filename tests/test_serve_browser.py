@@ -1,0 +1,378 @@
+"""The live page of ``motiontrack serve`` in a real browser.
+
+A ``motiontrack serve`` process runs on a free 127.0.0.1 port with two looping synthetic cameras
+(scene files from ``motiontrack synth-events``) and a token; Debian's Chromium, headless, driven
+by Selenium through ``chromedriver``, opens the page with ``?token=``, so every request the page
+makes (stylesheet, script, API, MJPEG streams, Server-Sent Events, the editor's PUT) must pass the
+token on or fail with 401.
+
+Without ``chromium``/``chromedriver`` (Debian packages ``chromium`` and ``chromium-driver``;
+``.ci/run`` installs them) or Selenium the tests skip, except under
+``MOTIONTRACK_REQUIRE_DATA=1``, where they fail — as the tests that need real data do
+(tests/conftest.py).
+
+Screenshots a person can look at are written under each test's temporary folder
+(``pytest --basetemp DIR`` keeps them in a known place).
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import os
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import time
+import urllib.error
+import urllib.request
+from pathlib import Path
+
+import pytest
+
+from motiontrack.io.tomlfile import parse_toml
+from motiontrack.types import EVENT_TYPES
+
+pytestmark = pytest.mark.slow
+
+TOKEN = "browser-test-token"
+#: the two cameras: name -> synthetic scene (both cross their `gate` line in each loop)
+CAMERAS = {"north": "synth:crossing?seed=1", "south": "synth:walker?seed=2"}
+#: the longest a frame's event may take to reach the page's feed (seconds)
+EVENT_LATENCY_S = 2.0
+
+
+def _unavailable(msg: str) -> None:
+    """Skip, or fail under MOTIONTRACK_REQUIRE_DATA=1 (where everything the suite needs must be
+    present)."""
+    if os.environ.get("MOTIONTRACK_REQUIRE_DATA") == "1":
+        pytest.fail(msg + " and MOTIONTRACK_REQUIRE_DATA=1")
+    pytest.skip(msg)
+
+
+def _browser_paths() -> tuple[str, str]:
+    chromium = shutil.which("chromium") or shutil.which("chromium-browser")
+    driver = shutil.which("chromedriver") or (
+        "/usr/bin/chromedriver" if os.access("/usr/bin/chromedriver", os.X_OK) else None)
+    if not chromium or not driver:
+        _unavailable("chromium and chromedriver not found (Debian: apt-get install chromium "
+                     "chromium-driver)")
+    for module, extra in (("selenium", "dev"), ("starlette", "serve"), ("uvicorn", "serve")):
+        if importlib.util.find_spec(module) is None:
+            _unavailable(f"{module} is not installed (pip install -e '.[{extra}]')")
+    return chromium, driver
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def _get(base: str, path: str, timeout: float = 5.0):
+    req = urllib.request.Request(base + path, headers={"Authorization": f"Bearer {TOKEN}"})
+    with urllib.request.urlopen(req, timeout=timeout) as r:
+        body = r.read()
+        return json.loads(body) if "json" in r.headers.get("Content-Type", "") else body
+
+
+def _wait(what: str, check, timeout: float, interval: float = 0.2, server=None):
+    """Poll ``check()`` until it returns something truthy; fail naming ``what`` (and the server's
+    last log lines) after ``timeout`` seconds."""
+    end = time.monotonic() + timeout
+    last = None
+    while time.monotonic() < end:
+        try:
+            last = check()
+        except (OSError, ValueError) as e:   # server not up yet, a request cut short
+            last = e
+        if last and not isinstance(last, Exception):
+            return last
+        time.sleep(interval)
+    log = server.log_tail() if server is not None else ""
+    pytest.fail(f"{what} within {timeout:g} s (last: {last!r}){log}")
+
+
+class Server:
+    """`motiontrack serve` in a subprocess."""
+
+    def __init__(self, folder: Path):
+        self.folder = folder
+        self.port = _free_port()
+        self.base = f"http://127.0.0.1:{self.port}/"
+        self.scenes: dict[str, Path] = {}
+        tables = []
+        for name, spec in CAMERAS.items():
+            subprocess.run([sys.executable, "-m", "motiontrack", "synth-events", spec, "-o",
+                            str(folder / name), "-q"], check=True, timeout=120)
+            self.scenes[name] = folder / name / "scene.toml"
+            tables.append(f'[[camera]]\nname = "{name}"\nsource = "{spec}"\n'
+                          f'scene = "{name}/scene.toml"\nloop = true\n')
+        (folder / "cameras.toml").write_text("\n".join(tables))
+        self.log = open(folder / "serve.log", "wb")
+        self.proc = subprocess.Popen(
+            [sys.executable, "-m", "motiontrack", "serve", str(folder / "cameras.toml"),
+             "--port", str(self.port), "--out", str(folder / "out"), "--token", TOKEN],
+            cwd=folder, stdout=self.log, stderr=subprocess.STDOUT)
+
+    def log_tail(self) -> str:
+        self.log.flush()
+        text = (self.folder / "serve.log").read_text(errors="replace")
+        return "\nserve's last output:\n" + "\n".join(text.splitlines()[-25:])
+
+    def cameras(self) -> dict[str, dict]:
+        return {c["name"]: c for c in _get(self.base, "api/cameras")}
+
+    def wait_running(self) -> None:
+        def running():
+            if self.proc.poll() is not None:
+                pytest.fail(f"motiontrack serve exited with {self.proc.returncode}"
+                            + self.log_tail())
+            cams = self.cameras()
+            return (set(cams) == set(CAMERAS)
+                    and all(c["status"] == "running" and c["frames"] > 0 for c in cams.values()))
+        _wait("both cameras running", running, timeout=90, server=self)
+
+    def stop(self) -> None:
+        if self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGTERM)
+            try:
+                self.proc.wait(30)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait(10)
+        self.log.close()
+
+
+@pytest.fixture(scope="module")
+def server(tmp_path_factory):
+    _browser_paths()   # skip before starting anything when there is no browser
+    srv = Server(tmp_path_factory.mktemp("serve"))
+    try:
+        srv.wait_running()
+        yield srv
+    finally:
+        srv.stop()
+
+
+@pytest.fixture(scope="module")
+def browser(server):
+    from selenium import webdriver
+    from selenium.webdriver.chrome.service import Service
+
+    chromium, driver_path = _browser_paths()
+    options = webdriver.ChromeOptions()
+    options.binary_location = chromium
+    for arg in ("--headless=new", "--no-sandbox", "--disable-dev-shm-usage", "--disable-gpu",
+                "--window-size=1400,1900", "--hide-scrollbars"):
+        options.add_argument(arg)
+    options.set_capability("goog:loggingPrefs", {"browser": "ALL"})
+    driver = webdriver.Chrome(service=Service(driver_path), options=options)
+    driver.set_page_load_timeout(30)
+    try:
+        yield driver
+    finally:
+        driver.quit()
+
+
+@pytest.fixture
+def page(server, browser):
+    """The page, opened with the token, once both camera tiles show."""
+    browser.get(f"{server.base}?token={TOKEN}")
+    for name in CAMERAS:
+        _wait(f"the tile of camera {name}",
+              lambda n=name: browser.find_elements("css selector",
+                                                   f'[data-testid="camera-tile-{n}"]'),
+              timeout=15, server=server)
+    yield browser
+    errors = [e for e in browser.get_log("browser") if e["level"] == "SEVERE"]
+    # a stream cut short while the page is left is not the page's fault; anything else is
+    errors = [e for e in errors if "stream.mjpg" not in e["message"]]
+    assert not errors, f"errors in the browser console: {errors}"
+    # nothing the page did may have brought a camera down
+    for name, cam in server.cameras().items():
+        assert cam["status"] == "running" and cam["restarts"] == 0, (cam, server.log_tail())
+
+
+def _js(driver, script: str, *args):
+    return driver.execute_script(script, *args)
+
+
+def _img_state(driver, name: str) -> dict:
+    return _js(driver, """
+        const img = document.querySelector(`[data-testid="camera-img-${arguments[0]}"]`);
+        return {w: img.naturalWidth, h: img.naturalHeight, complete: img.complete};
+    """, name)
+
+
+def test_both_camera_pictures_update_with_their_numbers(server, page, tmp_path):
+    shots = {}
+    for name in CAMERAS:
+        _wait(f"camera {name}'s picture decoded", lambda n=name: _img_state(page, n)["w"] > 0,
+              timeout=15, server=server)
+        img = page.find_element("css selector", f'[data-testid="camera-img-{name}"]')
+        # each picture a second apart: the synthetic scenes carry sensor noise, so two frames
+        # never look alike, and a frozen stream gives the same pixels twice
+        first = img.screenshot_as_png
+        frames_before = int(page.find_element("css selector",
+                                              f'[data-testid="camera-frames-{name}"]').text)
+        time.sleep(1.0)
+        second = img.screenshot_as_png
+        (tmp_path / f"{name}-1.png").write_bytes(first)
+        (tmp_path / f"{name}-2.png").write_bytes(second)
+        shots[name] = (first, second)
+        assert first != second, f"camera {name}'s picture did not change in 1 s"
+        state = _img_state(page, name)
+        assert (state["w"], state["h"]) == (640, 480), state
+        # the numbers: frames go up with the poll of /api/cameras, the status is the server's
+        _wait(f"camera {name}'s frame count rising",
+              lambda n=name: int(page.find_element(
+                  "css selector", f'[data-testid="camera-frames-{n}"]').text) > frames_before,
+              timeout=5, server=server)
+        assert page.find_element("css selector",
+                                 f'[data-testid="camera-status-{name}"]').text == "running"
+        fps = float(page.find_element("css selector", f'[data-testid="camera-fps-{name}"]').text)
+        assert fps > 0
+        assert page.find_element("css selector",
+                                 f'[data-testid="camera-reconnects-{name}"]').text == "0"
+    assert shots["north"][0] != shots["south"][0], "the two tiles show the same picture"
+    page.save_screenshot(str(tmp_path / "page.png"))
+
+
+def _feed(driver) -> list[dict]:
+    """The feed's lines, top to bottom: the event and when the page received it (ms)."""
+    return _js(driver, """
+        return [...document.querySelectorAll('[data-testid="event"]')].map(li => ({
+            ev: JSON.parse(li.dataset.event), received_ms: Number(li.dataset.receivedMs)}));
+    """)
+
+
+def _frame_read_time(ev: dict) -> float:
+    """When the camera process read the frame that caused ``ev``: its ``wall`` (epoch seconds,
+    the live API's stamp; the browser runs on the same machine, so on the same clock)."""
+    assert "wall" in ev, f"a live event without its frame's wall-clock time: {ev}"
+    return float(ev["wall"])
+
+
+def test_events_reach_the_feed_within_two_seconds_of_their_frame(server, page, tmp_path):
+    opened = time.time()
+
+    def fresh_events_of_both():
+        # only events of frames read after the page opened: events the server keeps from
+        # before are not this page's latency
+        evs = [e for e in _feed(page) if _frame_read_time(e["ev"]) > opened]
+        return evs if {e["ev"]["camera"] for e in evs} == set(CAMERAS) else None
+
+    # each loop of a synthetic camera (10 s at 25 fps) has its line crossings and zone entries
+    events = _wait("events of both cameras in the feed", fresh_events_of_both, timeout=40,
+                   interval=0.5, server=server)
+    page.save_screenshot(str(tmp_path / "feed.png"))
+    latencies = [item["received_ms"] / 1000.0 - _frame_read_time(item["ev"]) for item in events]
+    (tmp_path / "latency.json").write_text(json.dumps(
+        [{**item["ev"], "latency_s": round(lat, 3)} for item, lat in zip(events, latencies)],
+        indent=1))
+    for item, latency in zip(events, latencies):
+        ev = item["ev"]
+        assert -0.05 <= latency <= EVENT_LATENCY_S, (ev, latency)
+        assert ev["type"] in EVENT_TYPES and ev["camera"] in CAMERAS, ev
+    # newest first: each camera's sequence numbers fall down the list
+    for name in CAMERAS:
+        seqs = [e["ev"]["seq"] for e in _feed(page) if e["ev"]["camera"] == name]
+        assert seqs == sorted(seqs, reverse=True), seqs
+    # the API has the same events under the same sequence numbers
+    ev = events[0]["ev"]
+    listed = _get(server.base, f"api/cameras/{ev['camera']}/events?since={ev['seq'] - 1}")
+    assert listed and listed[0]["seq"] == ev["seq"] and listed[0]["type"] == ev["type"]
+
+
+def _click_source_points(driver, points) -> None:
+    """Click the editor's canvas at points given in the camera's source pixels."""
+    from selenium.webdriver.common.action_chains import ActionChains
+
+    canvas = driver.find_element("css selector", '[data-testid="editor-canvas"]')
+    size = _js(driver, """
+        const c = arguments[0], r = c.getBoundingClientRect();
+        return {w: c.width, h: c.height, cw: r.width, ch: r.height};
+    """, canvas)
+    driver.execute_script("arguments[0].scrollIntoView({block: 'center'})", canvas)
+    for x, y in points:
+        # Selenium's offsets are from the element's centre, in CSS pixels
+        dx = x * size["cw"] / size["w"] - size["cw"] / 2
+        dy = y * size["ch"] / size["h"] - size["ch"] / 2
+        ActionChains(driver).move_to_element_with_offset(canvas, int(round(dx)),
+                                                         int(round(dy))).click().perform()
+        time.sleep(0.1)
+
+
+def _count_row(driver, camera: str, line: str) -> dict | None:
+    return _js(driver, """
+        const row = document.querySelector(
+            `table[data-camera="${arguments[0]}"] tr[data-kind="line"][data-name="${arguments[1]}"]`);
+        return row ? {in: Number(row.dataset.in), out: Number(row.dataset.out)} : null;
+    """, camera, line)
+
+
+def test_a_line_drawn_in_the_editor_is_saved_and_counted(server, page, tmp_path):
+    from selenium.webdriver.support.ui import Select
+
+    name = "north"
+    scene = _get(server.base, f"api/cameras/{name}/scene")
+    w, h = scene["width"], scene["height"]
+    Select(page.find_element("css selector", '[data-testid="editor-camera"]')).select_by_value(name)
+    _wait("the editor showing the scene's lines",
+          lambda: len(page.find_elements("css selector", '[data-testid^="editor-line-name-"]'))
+          == len(scene["lines"]) and _js(page, "return document.querySelector("
+                                             "'[data-testid=\"editor-canvas\"]').width") == w,
+          timeout=10, server=server)
+
+    # a name the scene already has: the server refuses the scene and the page shows its words
+    page.find_element("css selector", '[data-testid="editor-name"]').send_keys("gate")
+    _click_source_points(page, [(0.25 * w, 0.3 * h), (0.25 * w, 0.98 * h)])
+    page.find_element("css selector", '[data-testid="editor-save"]').click()
+    error = page.find_element("css selector", '[data-testid="editor-error"]')
+    _wait("the server's error shown", lambda: error.is_displayed() and "gate" in error.text,
+          timeout=10, server=server)
+    assert "400" in error.text
+    # the refused PUT is the one error this page may log (reading the log empties it)
+    logged = [e["message"] for e in page.get_log("browser") if e["level"] == "SEVERE"]
+    assert all("/scene" in m and "400" in m for m in logged), logged
+    assert "door" not in server.scenes[name].read_text()
+    page.find_element("css selector", '[data-testid="editor-reload"]').click()
+    _wait("the unsaved line discarded",
+          lambda: len(page.find_elements("css selector", '[data-testid^="editor-line-name-"]'))
+          == len(scene["lines"]), timeout=10, server=server)
+
+    # a vertical line left of the middle, over the feet of both walkers: both cross it each loop
+    a, b = (0.4 * w, 0.3 * h), (0.4 * w, 0.98 * h)
+    page.find_element("css selector", '[data-testid="editor-name"]').send_keys("door")
+    _click_source_points(page, [a, b])
+    names = [e.get_attribute("value") for e in
+             page.find_elements("css selector", '[data-testid^="editor-line-name-"]')]
+    assert names == [line["name"] for line in scene["lines"]] + ["door"]
+    page.find_element("css selector", '[data-testid="editor-save"]').click()
+    _wait("the scene saved",
+          lambda: page.find_element("css selector",
+                                    '[data-testid="editor-message"]').text.startswith("saved"),
+          timeout=10, server=server)
+    assert not page.find_element("css selector", '[data-testid="editor-error"]').is_displayed()
+
+    # the camera's scene file now has the line, in source pixels (one displayed pixel of error)
+    saved = parse_toml(server.scenes[name].read_text(), "scene.toml")
+    door = [line for line in saved["line"] if line["name"] == "door"]
+    assert len(door) == 1
+    px = w / _js(page, "return document.querySelector('[data-testid=\"editor-canvas\"]')"
+                       ".getBoundingClientRect().width")
+    for got, want in zip(door[0]["points"], (a, b)):
+        assert got == pytest.approx(want, abs=1.5 * px)
+    assert [z["name"] for z in saved["zone"]] == [z["name"] for z in scene["zones"]]
+
+    # applied without a restart: the line shows in the counts and people crossing it count
+    _wait("the new line counted on the page",
+          lambda: (c := _count_row(page, name, "door")) and c["in"] + c["out"] > 0,
+          timeout=45, interval=0.5, server=server)
+    counts = _get(server.base, f"api/cameras/{name}/counts")
+    assert counts["lines"]["door"]["in"] + counts["lines"]["door"]["out"] > 0
+    assert server.cameras()[name]["status"] == "running"
+    page.save_screenshot(str(tmp_path / "editor.png"))
