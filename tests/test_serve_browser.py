@@ -376,3 +376,46 @@ def test_a_line_drawn_in_the_editor_is_saved_and_counted(server, page, tmp_path)
     assert counts["lines"]["door"]["in"] + counts["lines"]["door"]["out"] > 0
     assert server.cameras()[name]["status"] == "running"
     page.save_screenshot(str(tmp_path / "editor.png"))
+
+
+def test_a_zone_drawn_closes_with_enter_and_a_deleted_item_leaves_the_scene_file(server, page):
+    from selenium.webdriver.common.keys import Keys
+    from selenium.webdriver.support.ui import Select
+
+    name = "south"
+    scene = _get(server.base, f"api/cameras/{name}/scene")
+    w, h = scene["width"], scene["height"]
+    Select(page.find_element("css selector", '[data-testid="editor-camera"]')).select_by_value(name)
+    _wait("the editor showing the scene's zones",
+          lambda: len(page.find_elements("css selector", '[data-testid^="editor-zone-name-"]'))
+          == len(scene["zones"]), timeout=10, server=server)
+    page.find_element("css selector", '[data-testid="tool-zone"]').click()
+    page.find_element("css selector", '[data-testid="editor-name"]').send_keys("kerb")
+    corners = [(0.05 * w, 0.6 * h), (0.25 * w, 0.6 * h), (0.25 * w, 0.9 * h), (0.05 * w, 0.9 * h)]
+    _click_source_points(page, corners)
+    page.find_element("css selector", '[data-testid="editor-canvas"]').send_keys(Keys.ENTER)
+    names = [e.get_attribute("value") for e in
+             page.find_elements("css selector", '[data-testid^="editor-zone-name-"]')]
+    assert names == [z["name"] for z in scene["zones"]] + ["kerb"]
+    # the scene's line goes: its Delete button is labelled with its name
+    gate = page.find_element("css selector", '[aria-label="Delete line gate"]')
+    gate.click()
+    page.find_element("css selector", '[data-testid="editor-save"]').click()
+    _wait("the scene saved",
+          lambda: page.find_element("css selector",
+                                    '[data-testid="editor-message"]').text.startswith("saved"),
+          timeout=10, server=server)
+
+    saved = parse_toml(server.scenes[name].read_text(), "scene.toml")
+    assert saved.get("line", []) == []
+    kerb = [z for z in saved["zone"] if z["name"] == "kerb"]
+    assert len(kerb) == 1
+    px = w / _js(page, "return document.querySelector('[data-testid=\"editor-canvas\"]')"
+                       ".getBoundingClientRect().width")
+    assert len(kerb[0]["polygon"]) == 4
+    for got, want in zip(kerb[0]["polygon"], corners):
+        assert got == pytest.approx(want, abs=1.5 * px)
+    # the camera runs the new scene: the zone is counted, the line no longer
+    _wait("the counts following the saved scene",
+          lambda: (c := _get(server.base, f"api/cameras/{name}/counts"))
+          and "kerb" in c["zones"] and "gate" not in c["lines"], timeout=15, server=server)
