@@ -65,7 +65,7 @@ def test_existing_outputs_need_force(tmp_path, capsys):
     (["track", SCENE, "--set", "regions.max_size=3"], "must be in [0.0, 1.0]"),
     (["track", SCENE, "--set", "tracker.nope=1"], "unknown config key 'tracker.nope'"),
     (["track", SCENE, "--gt", "/no/gt.txt"], "not found"),
-    (["track", SCENE, "--show"], "headless"),
+    (["track", SCENE, "--show", "--port", "70000"], "--port must be in 0..65535"),
 ])
 def test_bad_input_is_one_line_and_nonzero(tmp_path, capsys, args, message):
     code = main(args + ["-o", str(tmp_path / "o")])

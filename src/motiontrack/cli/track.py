@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import logging
+import sys
 
 log = logging.getLogger("motiontrack")
 
@@ -51,7 +52,12 @@ def register(sub: argparse._SubParsersAction) -> None:
                                    "on the annotated video (docs/analytics.md)")
     p.add_argument("--bin-s", type=float, default=60.0,
                    help="with --scene: seconds per row of counts.csv (default 60)")
-    p.add_argument("--show", action="store_true", help="live window (q quits, space pauses)")
+    p.add_argument("--show", action="store_true",
+                   help="live view: a window (q quits, space pauses) with OpenCV's GUI build; with "
+                        "the headless build the serve page of this source on 127.0.0.1 "
+                        "(docs/serve.md), kept open after the run until Ctrl-C")
+    p.add_argument("--port", type=int, default=0,
+                   help="with --show and headless OpenCV: the page's port (default: a free one)")
     add_sink_options(p, "the source's name, as the run folder's")
     p.add_argument("--force", action="store_true", help="overwrite existing outputs")
     p.set_defaults(func=cmd_track)
@@ -74,18 +80,35 @@ def _build_config(args):
     return cfg
 
 
-def _viewer():
-    """A frame callback for --show, or an error explaining how to get a GUI."""
+def _has_gui() -> bool:
     import cv2
-
-    from ..errors import ConfigError
 
     info = cv2.getBuildInformation()
     gui_line = next((ln for ln in info.splitlines() if ln.strip().startswith("GUI:")), "GUI: NONE")
-    if "NONE" in gui_line.upper():
-        raise ConfigError("--show needs an OpenCV build with a GUI; this one is headless. Install "
-                          "the GUI build with `pip uninstall opencv-contrib-python-headless && pip "
-                          "install opencv-contrib-python`, or watch the annotated video instead")
+    return "NONE" not in gui_line.upper()
+
+
+def _live_view(args):
+    """--show without a GUI: the serve page of this source, served while the job runs."""
+    from ..errors import ConfigError
+    from ..run.folders import source_name
+
+    if not 0 <= args.port < 65536:
+        raise ConfigError(f"--port must be in 0..65535 (0: a free one), got {args.port}")
+    try:
+        from ..serve.view import LiveView, view_name
+    except ImportError as exc:
+        raise ConfigError(f"--show needs a GUI build of OpenCV or the web extras ({exc.name} is "
+                          "missing): pip install 'motiontrack[serve]'") from None
+    view = LiveView(view_name(source_name(args.source)), port=args.port)
+    print(f"live view: {view.url}  (Ctrl-C stops)", file=sys.stderr, flush=True)
+    view.open_browser()
+    return view
+
+
+def _viewer():
+    """A frame callback for --show in a window (OpenCV's GUI build)."""
+    import cv2
 
     state = {"paused": False}
 
@@ -119,15 +142,37 @@ def cmd_track(args) -> int:
         det = read_mot(args.detections, kind="det")
         if args.min_score is not None:
             det = det.select(det.scores >= args.min_score)
-    job = track_job(args.source, cfg, output_folder(args, "track"), force=args.force, gt=gt, detections=det,
-                    show=_viewer() if args.show else None, save=args.save,
-                    mask_images=args.mask_images, scoring=args.scoring, scene=args.scene,
-                    bin_s=args.bin_s, sinks=sinks, camera_name=args.camera_name)
-    log.info("source %s", job.info.describe())
-    with frame_loop(job.expected_frames()) as loop:
-        summary = job.run(progress=loop.update, should_stop=loop.stop)
-    _print_summary(summary)
+    window = args.show and _has_gui()
+    view = _live_view(args) if args.show and not window else None
+    try:
+        job = track_job(args.source, cfg, output_folder(args, "track"), force=args.force, gt=gt,
+                        detections=det, show=_viewer() if window else None, save=args.save,
+                        mask_images=args.mask_images, scoring=args.scoring, scene=args.scene,
+                        bin_s=args.bin_s, sinks=sinks, camera_name=args.camera_name,
+                        writers=[view.writer()] if view else ())
+        log.info("source %s", job.info.describe())
+        with frame_loop(job.expected_frames()) as loop:
+            summary = job.run(progress=loop.update, should_stop=loop.stop)
+        _print_summary(summary)
+        if view is not None and not loop.stop():
+            _keep_open(view)
+    finally:
+        if view is not None:
+            view.close()
     return 0
+
+
+def _keep_open(view) -> None:
+    """The run is over: the page keeps its last picture, events and counts until Ctrl-C."""
+    import time
+
+    from ._common import GracefulStop
+
+    print(f"run finished; the live view stays at {view.url} until Ctrl-C", file=sys.stderr,
+          flush=True)
+    with GracefulStop() as stop:
+        while not stop.stop():
+            time.sleep(0.1)
 
 
 def _print_summary(s) -> None:

@@ -1,0 +1,139 @@
+"""``track --show`` with OpenCV's headless build: the serve page of the one source on 127.0.0.1,
+fed by the track job, which keeps its outputs and its Ctrl-C rules."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+pytest.importorskip("starlette")
+pytest.importorskip("uvicorn")
+httpx = pytest.importorskip("httpx")
+
+from motiontrack.io.mot import read_mot  # noqa: E402
+
+
+def _headless() -> bool:
+    info = cv2.getBuildInformation()
+    line = next((ln for ln in info.splitlines() if ln.strip().startswith("GUI:")), "GUI: NONE")
+    return "NONE" in line.upper()
+
+
+pytestmark = pytest.mark.skipif(not _headless(), reason="OpenCV's GUI build shows a window")
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+class Track:
+    """``motiontrack track SOURCE --show --port P`` in a subprocess without a display."""
+
+    def __init__(self, tmp_path: Path, source: str) -> None:
+        self.port, self.out = _free_port(), tmp_path / "run"
+        self.err = open(tmp_path / "stderr.txt", "w+")
+        env = {**os.environ, "PYTHONUNBUFFERED": "1"}
+        for k in ("DISPLAY", "WAYLAND_DISPLAY"):   # no browser is opened
+            env.pop(k, None)
+        self.proc = subprocess.Popen(
+            [sys.executable, "-m", "motiontrack", "track", source, "--show", "--port",
+             str(self.port), "--no-video", "-o", str(self.out)],
+            stdout=subprocess.PIPE, stderr=self.err, env=env, text=True)
+        self.client = httpx.Client(base_url=f"http://127.0.0.1:{self.port}", timeout=5)
+
+    def stderr(self) -> str:
+        self.err.flush()
+        return Path(self.err.name).read_text()
+
+    def poll(self, cond, timeout: float, what: str):
+        end = time.monotonic() + timeout
+        while time.monotonic() < end:
+            assert self.proc.poll() is None, self.stderr()
+            try:
+                got = cond()
+            except httpx.TransportError:
+                got = None
+            if got:
+                return got
+            time.sleep(0.05)
+        raise AssertionError(f"not within {timeout} s: {what}\n{self.stderr()}")
+
+    def camera(self) -> dict:
+        (cam,) = self.client.get("/api/cameras").json()
+        return cam
+
+    def interrupt(self) -> tuple[int, str]:
+        self.proc.send_signal(signal.SIGINT)
+        out, _ = self.proc.communicate(timeout=30)
+        return self.proc.returncode, out
+
+    def close(self) -> None:
+        if self.proc.poll() is None:
+            self.proc.kill()
+            self.proc.wait(10)
+        self.client.close()
+        self.err.close()
+
+
+@pytest.fixture
+def track(tmp_path):
+    runs = []
+
+    def start(source: str) -> Track:
+        runs.append(Track(tmp_path, source))
+        return runs[-1]
+
+    yield start
+    for t in runs:
+        t.close()
+
+
+@pytest.mark.slow
+def test_headless_show_serves_the_page_of_the_running_source(track):
+    t = track("synth:walker?n_frames=5000")
+    cam = t.poll(lambda: (lambda c: c if c["status"] == "running" and c["frames"] > 10 else None)
+                 (t.camera()), 60, "the camera running")
+    assert cam["name"] == "synth-walker" and cam["fps"] > 0 and cam["scene"] is False
+    r = t.client.get("/api/cameras/synth-walker/snapshot.jpg")
+    assert r.status_code == 200 and r.headers["content-type"] == "image/jpeg"
+    img = cv2.imdecode(np.frombuffer(r.content, np.uint8), cv2.IMREAD_COLOR)
+    assert img.shape == (480, 640, 3)
+    page = t.client.get("/")
+    assert page.status_code == 200 and "text/html" in page.headers["content-type"]
+    assert f"live view: http://127.0.0.1:{t.port}/" in t.stderr()
+    frames_then = t.camera()["frames"]
+    t.poll(lambda: t.camera()["frames"] > frames_then, 10, "frames still counting")
+
+    code, out = t.interrupt()
+    assert code in (0, 130), t.stderr()
+    summary = json.loads((t.out / "summary.json").read_text())
+    assert summary["status"] == "interrupted" and 10 < summary["frames"] < 5000
+    tracks = read_mot(t.out / "tracks.txt")
+    assert len(tracks) > 0 and tracks.frames.max() <= summary["frames"]
+    assert "Traceback" not in t.stderr()
+
+
+@pytest.mark.slow
+def test_headless_show_keeps_the_page_after_the_run_until_ctrl_c(track):
+    t = track("synth:walker?n_frames=40")
+    t.poll(lambda: "run finished" in t.stderr(), 60, "the run finished")
+    cam = t.camera()
+    assert (cam["status"], cam["frames"]) == ("ended", 40)
+    assert t.client.get("/api/cameras/synth-walker/snapshot.jpg").status_code == 200
+    code, out = t.interrupt()
+    assert code == 0, t.stderr()
+    assert "frames    40" in out
+    summary = json.loads((t.out / "summary.json").read_text())
+    assert (summary["status"], summary["frames"]) == ("complete", 40)
