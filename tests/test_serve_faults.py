@@ -221,6 +221,10 @@ def _viewer(url: str, want: int, got: list, errors: list, ready: threading.Barri
                         break
                     jpeg = buf[head + 4:head + 4 + length]
                     assert cv2.imdecode(np.frombuffer(jpeg, np.uint8), cv2.IMREAD_COLOR) is not None
+                    # each part says when its frame was read: seconds ago, not minutes
+                    wall = float([h for h in buf[:head].split(b"\r\n") if h.lower().startswith(
+                        b"x-frame-wall:")][0].split(b":")[1])
+                    assert 0 <= time.time() - wall < 5
                     buf = buf[head + 4 + length + 2:]
                     n += 1
                 if n >= want:

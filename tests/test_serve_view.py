@@ -110,6 +110,7 @@ def test_headless_show_serves_the_page_of_the_running_source(track):
     assert r.status_code == 200 and r.headers["content-type"] == "image/jpeg"
     img = cv2.imdecode(np.frombuffer(r.content, np.uint8), cv2.IMREAD_COLOR)
     assert img.shape == (480, 640, 3)
+    assert 0 <= time.time() - float(r.headers["x-frame-wall"]) < 5   # when its frame was read
     page = t.client.get("/")
     assert page.status_code == 200 and "text/html" in page.headers["content-type"]
     assert f"live view: http://127.0.0.1:{t.port}/" in t.stderr()

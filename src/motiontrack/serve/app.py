@@ -34,6 +34,8 @@ _ASSETS = {"index.html": "text/html; charset=utf-8", "app.js": "text/javascript;
 #: seconds between keep-alive comments on an idle event stream
 _KEEPALIVE_S = 15.0
 _BOUNDARY = "frame"
+#: header of a picture (snapshot, MJPEG part) with its frame's read time, epoch seconds
+_WALL_HEADER = "X-Frame-Wall"
 
 
 def _error(status: int, message: str) -> JSONResponse:
@@ -123,10 +125,14 @@ def create_app(hub: Hub, token: str | None = None,
         cam = camera(request)
         if isinstance(cam, Response):
             return cam
-        jpeg = cam.jpeg
+        with cam.lock:
+            jpeg, wall = cam.jpeg, cam.wall
         if jpeg is None:
             return _error(404, "no picture yet")
-        return Response(jpeg, media_type="image/jpeg", headers={"Cache-Control": "no-store"})
+        headers = {"Cache-Control": "no-store"}
+        if wall is not None:
+            headers[_WALL_HEADER] = f"{wall:.4f}"
+        return Response(jpeg, media_type="image/jpeg", headers=headers)
 
     async def stream(request: Request) -> Response:
         cam = camera(request)
@@ -136,14 +142,16 @@ def create_app(hub: Hub, token: str | None = None,
         async def parts():
             sub = hub.subscribe_frames(cam)
             try:
-                if cam.jpeg is not None:
-                    yield _part(cam.jpeg)
+                with cam.lock:
+                    latest = (cam.jpeg, cam.wall)
+                if latest[0] is not None:
+                    yield _part(*latest)
                 while not stopping():
                     try:
-                        jpeg = await asyncio.wait_for(sub.queue.get(), 1.0)
+                        jpeg, wall = await asyncio.wait_for(sub.queue.get(), 1.0)
                     except asyncio.TimeoutError:
                         continue
-                    yield _part(jpeg)
+                    yield _part(jpeg, wall)
             finally:
                 hub.unsubscribe_frames(cam, sub)
 
@@ -223,9 +231,12 @@ def create_app(hub: Hub, token: str | None = None,
     return app
 
 
-def _part(jpeg: bytes) -> bytes:
-    return (f"--{_BOUNDARY}\r\nContent-Type: image/jpeg\r\nContent-Length: {len(jpeg)}\r\n\r\n"
-            .encode() + jpeg + b"\r\n")
+def _part(jpeg: bytes, wall: float | None = None) -> bytes:
+    """One MJPEG part; ``wall`` (when its frame was read) goes in :data:`_WALL_HEADER`, for
+    latency measurements."""
+    stamp = f"{_WALL_HEADER}: {wall:.4f}\r\n" if wall is not None else ""
+    return (f"--{_BOUNDARY}\r\nContent-Type: image/jpeg\r\nContent-Length: {len(jpeg)}\r\n"
+            f"{stamp}\r\n".encode() + jpeg + b"\r\n")
 
 
 def _asset(name: str) -> Response:

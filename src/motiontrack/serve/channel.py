@@ -3,8 +3,9 @@ camera.
 
 Messages:
 
-* ``("frame", jpeg_bytes, frame_index, fps)`` — the latest annotated picture; dropped when the
-  server has not taken the previous ones (a picture is worth showing only while it is new);
+* ``("frame", jpeg_bytes, frame_index, fps, wall)`` — the latest annotated picture (``wall``:
+  when its frame was read, epoch seconds, or None); dropped when the server has not taken the
+  previous ones (a picture is worth showing only while it is new);
 * ``("events", [event_json, ...])``, ``("counts", {...})``, ``("status", {...})`` — on a larger
   queue; when even that is full the message is dropped and counted (:attr:`Channel.dropped`),
   and the next status message reports the count.
@@ -34,10 +35,10 @@ class Channel:
         self.messages = ctx.Queue(MESSAGE_QUEUE)
         self.dropped = 0
 
-    def frame(self, jpeg: bytes, index: int, fps: float) -> bool:
+    def frame(self, jpeg: bytes, index: int, fps: float, wall: float | None = None) -> bool:
         """Offer a picture; False when it was dropped."""
         try:
-            self.frames.put_nowait(("frame", jpeg, int(index), float(fps)))
+            self.frames.put_nowait(("frame", jpeg, int(index), float(fps), wall))
             return True
         except queue.Full:
             return False

@@ -53,6 +53,8 @@ class CameraState:
         self.lock = threading.Lock()
         self.jpeg: bytes | None = None
         self.frame_index = 0
+        #: when the latest picture's frame was read (epoch seconds), or None
+        self.wall: float | None = None
         self.status: dict[str, Any] = {"status": "starting", "fps": 0.0, "frames": 0,
                                        "reconnects": 0}
         self.events: collections.deque = collections.deque(maxlen=EVENTS_KEPT)
@@ -63,12 +65,12 @@ class CameraState:
         self.event_subs: set[Subscriber] = set()
 
     # -------------------------------------------------------------------- updates
-    def put_frame(self, jpeg: bytes, index: int) -> None:
+    def put_frame(self, jpeg: bytes, index: int, wall: float | None = None) -> None:
         with self.lock:
-            self.jpeg, self.frame_index = jpeg, index
+            self.jpeg, self.frame_index, self.wall = jpeg, index, wall
             subs = list(self.frame_subs)
         for s in subs:
-            s.offer(jpeg)
+            s.offer((jpeg, wall))
 
     def put_events(self, events: Iterable[dict]) -> list[dict]:
         out = []
@@ -141,7 +143,7 @@ class Hub:
                     continue
                 except (EOFError, OSError, ValueError):
                     return
-                cam.put_frame(msg[1], msg[2])
+                cam.put_frame(msg[1], msg[2], msg[4])
 
         def messages() -> None:
             while not (self._stop.is_set() or done.is_set()):

@@ -44,8 +44,8 @@ class _ToHub:
     def __init__(self, state: CameraState) -> None:
         self.state = state
 
-    def frame(self, jpeg: bytes, index: int, fps: float) -> bool:
-        self.state.put_frame(jpeg, index)
+    def frame(self, jpeg: bytes, index: int, fps: float, wall: float | None = None) -> bool:
+        self.state.put_frame(jpeg, index, wall)
         return True
 
     def events(self, events: list[dict]) -> None:
@@ -76,22 +76,22 @@ class _ViewWriter(Writer):
                                "height": ctx.info.height, "pid": os.getpid()})
 
     def write(self, result: FrameResult) -> None:
-        cam, now = self.cam, time.monotonic()
+        cam, now, wall = self.cam, time.monotonic(), time.time()
         cam.frame_done(now)
         if result.scene is not None:
-            cam.scene_frame(result.scene, time.time())
+            cam.scene_frame(result.scene, wall)
         if now - cam.last_picture >= 1.0 / VIEW_FPS:
             cam.last_picture = now
-            self._picture(result)
+            self._picture(result, wall)
         if now - self._reported >= STATUS_EVERY:
             self._reported = now
             self._report("running")
 
-    def _picture(self, result: FrameResult) -> None:
+    def _picture(self, result: FrameResult, wall: float | None = None) -> None:
         ok, buf = cv2.imencode(".jpg", self._ctx.annotated(result),
                                [cv2.IMWRITE_JPEG_QUALITY, JPEG_QUALITY])
         if ok:
-            self.cam.channel.frame(buf.tobytes(), self.cam.frames, self.cam.fps)
+            self.cam.channel.frame(buf.tobytes(), self.cam.frames, self.cam.fps, wall)
 
     def _report(self, status: str) -> None:
         self.state.put_status({"status": status, "fps": round(self.cam.fps, 2),

@@ -132,7 +132,7 @@ class Segments(Source):
         self.walls: collections.deque = collections.deque(maxlen=64)
 
     def wall(self, index: int) -> float | None:
-        for i, t in reversed(self.walls):
+        for i, t in reversed(list(self.walls)):   # a copy: the reader thread appends
             if i == index:
                 return t
         return None
@@ -175,14 +175,15 @@ class LiveWriter(Writer):
     def write(self, result: FrameResult) -> None:
         cam, now = self.cam, time.monotonic()
         cam.frame_done(now)
+        wall = self.segments.wall(result.index)
         if result.scene is not None:
-            cam.scene_frame(result.scene, self.segments.wall(result.index))
+            cam.scene_frame(result.scene, wall)
         if now - cam.last_picture >= 1.0 / VIEW_FPS:
             cam.last_picture = now
             ok, buf = cv2.imencode(".jpg", self._ctx.annotated(result),
                                    [cv2.IMWRITE_JPEG_QUALITY, JPEG_QUALITY])
             if ok:
-                cam.channel.frame(buf.tobytes(), cam.frames, cam.fps)
+                cam.channel.frame(buf.tobytes(), cam.frames, cam.fps, wall)
         if now - self._checked >= 0.5:
             self._checked = now
             reason = self._due(now)
