@@ -265,6 +265,20 @@ def read_manifest(path: str | Path) -> tuple[SequenceSpec, ...]:
         gt = "pets09-s2l1/gt_mot15.txt"  # optional for synth: sources
         group = "outdoor, medium crowd"  # optional: the sequence type (thesis table 4.1)
     """
+    out = []
+    for i, entry in enumerate(read_manifest_entries(path), 1):
+        try:
+            out.append(SequenceSpec(**entry))
+        except ConfigError as exc:
+            raise InputError(f"{printable(Path(path))}: sequence {i}: {printable(exc)}") from None
+    return tuple(out)
+
+
+def read_manifest_entries(path: str | Path, files: Sequence[str] = ()) -> list[dict[str, Any]]:
+    """The ``[[sequence]]`` tables of a manifest as dicts of ``name``, ``source``, ``gt``,
+    ``group`` and, when given, the keys ``files`` (more file names per entry, such as ``scene``
+    and ``camera`` for ``motiontrack batch``), paths made absolute (relative ones are relative to
+    the manifest). Whether a sequence needs ground truth is the caller's rule."""
     p = Path(path)
     data = read_toml(p, "sequences manifest")
     shown = printable(p)
@@ -272,28 +286,31 @@ def read_manifest(path: str | Path) -> tuple[SequenceSpec, ...]:
     if not isinstance(items, list) or not items:
         raise InputError(f"{shown}: expected one or more [[sequence]] tables")
     out = []
+    valid = ("name", "source", "gt", "group", *files)
     for i, it in enumerate(items, 1):
         if not isinstance(it, dict):
             raise InputError(f"{shown}: sequence {i} is not a table")
-        unknown = sorted(set(it) - {"name", "source", "gt", "group"})
+        unknown = sorted(set(it) - set(valid))
         if unknown:
             raise InputError(f"{shown}: sequence {i}: unknown key(s) "
-                             f"{printable(', '.join(unknown))}; valid: name, source, gt, group")
+                             f"{printable(', '.join(unknown))}; valid: {', '.join(valid)}")
         if not isinstance(it.get("source"), str):
             raise InputError(f"{shown}: sequence {i} needs source = \"...\"")
-        for key in ("name", "gt", "group"):
+        for key in ("name", "gt", "group", *files):
             if key in it and not isinstance(it[key], str):
                 raise InputError(f"{shown}: sequence {i}: {key} must be a string, got {it[key]!r}")
         try:
             src = it["source"] if it["source"].startswith("synth:") else _abs(it["source"], p.parent)
-            out.append(SequenceSpec(name=it.get("name") or _default_name(it["source"]), source=src,
-                                    gt=_abs(it.get("gt"), p.parent), group=it.get("group", "")))
-        except (ConfigError, ValueError) as exc:  # ValueError: a NUL in a path
+            entry = {"name": it.get("name") or _default_name(it["source"]), "source": src,
+                     "gt": _abs(it.get("gt"), p.parent), "group": it.get("group", "")}
+            entry.update({k: _abs(it[k], p.parent) for k in files if k in it})
+        except ValueError as exc:  # a NUL in a path
             raise InputError(f"{shown}: sequence {i}: {printable(exc)}") from None
-    names = [s.name for s in out]
+        out.append(entry)
+    names = [s["name"] for s in out]
     if len(set(names)) != len(names):
         raise InputError(f"{shown}: sequence names must be unique, got {names}")
-    return tuple(out)
+    return out
 
 
 # ------------------------------------------------------------------------------- the study
