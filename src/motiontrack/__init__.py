@@ -16,7 +16,7 @@ from .types import Annotations, Box, Frame, FrameResult, Region, Track, TrackSta
 __version__ = "0.1.0"
 
 __all__ = [
-    "Annotations", "Box", "Frame", "FrameResult", "Region", "Track", "TrackState", "track",
+    "Annotations", "Box", "Frame", "FrameResult", "Region", "Track", "TrackState", "batch", "track",
     "__version__",
 ]
 
@@ -42,3 +42,24 @@ def track(source: Any, config: "PipelineConfig | str | None" = None, **kwargs: A
     from .pipeline import run
 
     return run(source, config, **kwargs)
+
+
+def batch_videos(sources: Any, config: "PipelineConfig | str | None" = None, client: Any = None,
+                 *, out: Any = "batch-results", **kwargs: Any) -> "list[dict[str, Any]]":
+    """Track every video of ``sources`` (files, folders, globs, manifest ``.toml`` files,
+    ``synth:`` scenes) into ``out/<name>/`` and return the rows of ``out/index.csv``.
+
+    ``client`` is a ``distributed.Client`` to run on; without one a local cluster of
+    ``jobs=N`` worker processes is started (``cluster="tcp://host:8786"``: an existing
+    scheduler). More options: :func:`motiontrack.batch.run_batch`."""
+    from .batch import run_batch
+    from .config import load_config
+
+    cfg = load_config(config) if config is None or isinstance(config, str) else config
+    srcs = [sources] if isinstance(sources, str) else list(sources)
+    return run_batch(srcs, out, cfg, client=client, **kwargs)
+
+
+# importing the subpackage motiontrack.batch replaces this name with the package, which is
+# callable the same way
+batch = batch_videos

@@ -1,0 +1,61 @@
+"""``motiontrack batch SOURCES... -o RESULTS``: one track run per video on a Dask cluster."""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import sys
+
+log = logging.getLogger("motiontrack")
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "batch", help="track many videos on a local or remote Dask cluster, with an index of results",
+        description="Run `track` on every video of SOURCES (files, folders, globs such as "
+                    "'videos/**/*.mp4', manifest .toml files, synth: scenes) into RESULTS/<name>/, "
+                    "and write RESULTS/index.csv with one row per video (docs/batch.md).")
+    p.add_argument("sources", nargs="+", metavar="SOURCES",
+                   help="video files, folders, quoted globs ('videos/**/*.mp4'), manifest .toml "
+                        "files of [[sequence]] tables, synth: scenes")
+    p.add_argument("-o", "--out", required=True, metavar="RESULTS", help="results folder")
+    p.add_argument("--preset", help="shipped settings to start from (see `motiontrack list`)")
+    p.add_argument("--config", help="TOML config file (applied after --preset)")
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="STAGE.PARAM=VALUE",
+                   help="override one config field (repeatable)")
+    where = p.add_mutually_exclusive_group()
+    where.add_argument("-j", "--jobs", type=int, default=1,
+                       help="worker processes of a local Dask cluster (default 1)")
+    where.add_argument("--cluster", metavar="ADDR",
+                       help="address of a running Dask scheduler, e.g. tcp://host:8786")
+    p.add_argument("--resume", action="store_true",
+                   help="keep the videos whose results are complete with this config; redo the rest")
+    p.add_argument("--retries", type=int, default=2,
+                   help="times a video is run again when its worker dies (default 2)")
+    p.set_defaults(func=cmd_batch)
+
+
+def cmd_batch(args) -> int:
+    from tqdm import tqdm
+
+    from ..batch import run_batch
+    from ..config import load_config
+    from ._common import sigterm_as_interrupt
+
+    cfg = load_config(args.config, args.overrides, preset=args.preset)
+    with sigterm_as_interrupt(), tqdm(total=None, unit="video", disable=None, file=sys.stderr,
+                                      dynamic_ncols=True) as bar:
+        def progress(c) -> None:
+            bar.total = c["total"]
+            bar.n = c["done"] + c["failed"]
+            bar.set_postfix(done=c["done"], failed=c["failed"], running=c["running"],
+                            refresh=False)
+            bar.refresh()
+
+        rows = run_batch(args.sources, args.out, cfg, jobs=args.jobs, cluster=args.cluster,
+                         resume=args.resume, retries=args.retries, progress=progress)
+    failed = [r for r in rows if r.get("status") != "done"]
+    print(f"{len(rows) - len(failed)} done, {len(failed)} failed; index: {args.out}/index.csv")
+    for r in failed:
+        print(f"  {r['name']}: {r.get('error', '')}", file=sys.stderr)
+    return 1 if failed else 0

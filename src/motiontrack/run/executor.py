@@ -1,0 +1,106 @@
+"""Many pipeline runs on Dask distributed: one function, ``map_tasks``, for every driver.
+
+A task is one call ``fn(item)`` (one video: trackers carry state from frame to frame, so a video is
+never split). ``dask_client`` opens the client: a local cluster of ``jobs`` worker processes, one
+thread each (the runs are the parallelism), or an existing scheduler at ``cluster``.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import uuid
+from typing import Any, Callable, Iterator, Sequence
+
+from ..errors import ConfigError, InputError, printable
+
+log = logging.getLogger(__name__)
+
+__all__ = ["dask_client", "map_tasks"]
+
+
+def _worker_init() -> None:
+    """One OpenCV thread per worker process: the tasks are the parallelism."""
+    import cv2
+
+    cv2.setNumThreads(1)
+
+
+@contextlib.contextmanager
+def dask_client(jobs: int = 1, cluster: str | None = None) -> Iterator[Any]:
+    """A ``distributed.Client``: connected to the scheduler at ``cluster`` (``tcp://host:8786``),
+    or to a local cluster of ``jobs`` worker processes started here and stopped on exit."""
+    if jobs < 1:
+        raise ConfigError(f"-j must be >= 1, got {jobs}")
+    try:
+        import dask
+        from distributed import Client, LocalCluster
+    except ImportError:
+        raise ConfigError("batch runs need Dask distributed: pip install 'dask[distributed]'") from None
+    if cluster:
+        try:
+            client = Client(cluster, timeout=30)
+        except (OSError, TimeoutError) as exc:
+            raise InputError(f"cannot connect to the Dask scheduler at {printable(cluster)}: "
+                             f"{printable(exc)}") from None
+        local = None
+    else:
+        # a worker that dies fails its task at once (KilledWorker): map_tasks retries it and
+        # counts the attempt, instead of the scheduler re-running it uncounted
+        with dask.config.set({"distributed.scheduler.allowed-failures": 0}):
+            local = LocalCluster(n_workers=jobs, processes=True, threads_per_worker=1,
+                                 dashboard_address=":0")   # never a busy fixed port
+        client = Client(local)
+    try:
+        client.run(_worker_init)
+        yield client
+    finally:
+        client.close()
+        if local is not None:
+            local.close()
+
+
+def map_tasks(client: Any, fn: Callable[..., Any], items: Sequence[Any], *, retries: int = 0,
+              on_result: Callable[[int, Any, int], None] | None = None,
+              key: str = "motiontrack") -> list[Any]:
+    """``fn(item, attempt)`` for every item on ``client``'s workers; results in item order.
+
+    ``on_result(index, result, attempts)`` is called as each task finishes (completion order).
+    A task whose worker died (``KilledWorker``, a lost connection) is submitted again, up to
+    ``retries`` more times; beyond that its error is raised. Exceptions ``fn`` raises are
+    raised here (a driver that must not stop catches them inside ``fn``). On any error or
+    ``KeyboardInterrupt`` the tasks not finished are cancelled.
+    """
+    from distributed import as_completed
+    from distributed.scheduler import KilledWorker
+
+    key = f"{key}-{uuid.uuid4().hex[:8]}"   # a client's finished keys are never re-used
+    lost = (KilledWorker, OSError)   # CommClosedError is an OSError
+    results: list[Any] = [None] * len(items)
+    attempts = [1] * len(items)
+    futures = {client.submit(fn, item, 1, key=f"{key}-{i}-1", pure=False): i
+               for i, item in enumerate(items)}
+    pending = as_completed(list(futures))
+    try:
+        for fut in pending:
+            i = futures.pop(fut)
+            try:
+                res = fut.result()
+            except lost as exc:
+                if attempts[i] > retries:
+                    raise
+                attempts[i] += 1
+                log.warning("task %d lost its worker (%s): attempt %d", i, printable(exc),
+                            attempts[i])
+                again = client.submit(fn, items[i], attempts[i], key=f"{key}-{i}-{attempts[i]}",
+                                      pure=False)
+                futures[again] = i
+                pending.add(again)
+                continue
+            results[i] = res
+            if on_result is not None:
+                on_result(i, res, attempts[i])
+    except BaseException:
+        client.cancel(list(futures))
+        raise
+    return results

@@ -1,0 +1,138 @@
+"""motiontrack batch: many videos on a local Dask cluster of 2 worker processes."""
+
+from __future__ import annotations
+
+import csv
+import os
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("distributed")
+
+import motiontrack  # noqa: E402
+from motiontrack.batch import expand_sources, run_batch  # noqa: E402
+from motiontrack.cli import main  # noqa: E402
+from motiontrack.config import PipelineConfig, apply_overrides  # noqa: E402
+from motiontrack.run.executor import dask_client  # noqa: E402
+from motiontrack.run.jobs import track_job  # noqa: E402
+
+SCENES = ["synth:walker?n_frames=30", "synth:crossing?n_frames=30", "synth:walker?n_frames=25&seed=3"]
+
+
+def _cfg():
+    return apply_overrides(PipelineConfig(), ["output.video=false"])
+
+
+def _index(results: Path) -> dict[str, dict[str, str]]:
+    with open(results / "index.csv", newline="", encoding="utf-8") as fh:
+        return {r["name"]: r for r in csv.DictReader(fh)}
+
+
+@pytest.fixture(scope="module")
+def client():
+    with dask_client(jobs=2) as cl:
+        yield cl
+
+
+@pytest.fixture(scope="module")
+def first_batch(tmp_path_factory, client):
+    """The scenes plus a missing file and a corrupt file (random bytes named .avi)."""
+    base = tmp_path_factory.mktemp("batch")
+    corrupt = base / "corrupt.avi"
+    corrupt.write_bytes(os.urandom(20000))
+    sources = [*SCENES, str(base / "missing.avi"), str(corrupt)]
+    rows = run_batch(sources, base / "results", _cfg(), client=client)
+    return base, sources, rows
+
+
+def test_sources_expand_to_unique_names_folders_sorted_and_recursive_globs(tmp_path):
+    (tmp_path / "b" / "deep").mkdir(parents=True)
+    for rel in ("b/z.mp4", "b/a.avi", "b/notes.txt", "b/deep/a.avi"):
+        (tmp_path / rel).write_bytes(b"x")
+    folder = expand_sources([str(tmp_path / "b")])
+    assert [v.name for v in folder] == ["a", "z"]          # videos only, sorted, not recursive
+    deep = expand_sources([str(tmp_path / "b" / "**" / "*.avi")])
+    assert [Path(v.source).relative_to(tmp_path).as_posix() for v in deep] == ["b/a.avi",
+                                                                             "b/deep/a.avi"]
+    assert [v.name for v in deep] == ["a", "a-2"]
+
+
+def test_manifest_entries_give_name_gt_scene_and_camera(tmp_path):
+    (tmp_path / "m.toml").write_text(
+        '[[sequence]]\nname = "one"\nsource = "v.avi"\ngt = "gt.txt"\nscene = "s.toml"\n'
+        'camera = "cam.xml"\n', encoding="utf-8")
+    (v,) = expand_sources([str(tmp_path / "m.toml")])
+    assert (v.name, v.source, v.gt, v.scene, v.camera) == (
+        "one", str(tmp_path / "v.avi"), str(tmp_path / "gt.txt"), str(tmp_path / "s.toml"),
+        str(tmp_path / "cam.xml"))
+
+
+@pytest.mark.slow
+def test_batch_tracks_are_byte_identical_to_track_alone(first_batch, tmp_path):
+    base, _, rows = first_batch
+    done = [r for r in rows if r["status"] == "done"]
+    assert len(done) == len(SCENES)
+    for src, row in zip(SCENES, done):
+        alone = tmp_path / row["name"]
+        track_job(src, _cfg(), alone).run()
+        batch_tracks = (base / "results" / row["name"] / "tracks.txt").read_bytes()
+        assert batch_tracks == (alone / "tracks.txt").read_bytes()
+        assert row["frames"] == int(src.split("n_frames=")[1].split("&")[0])
+        assert 0 <= row["HOTA"] <= 1   # synth: scenes carry their ground truth
+
+
+@pytest.mark.slow
+def test_missing_and_corrupt_files_are_failed_rows_and_the_rest_done(first_batch):
+    base, _, rows = first_batch
+    index = _index(base / "results")
+    assert [r["name"] for r in rows] == list(index)
+    assert index["missing"]["status"] == "failed" and "not found" in index["missing"]["error"]
+    assert index["corrupt"]["status"] == "failed" and index["corrupt"]["error"]
+    assert {index[n]["status"] for n in index if n not in ("missing", "corrupt")} == {"done"}
+    # only finished videos have folders; no partial folders are left
+    assert sorted(p.name for p in (base / "results").iterdir()) == sorted(
+        [*(n for n in index if index[n]["status"] == "done"), "index.csv"])
+
+
+@pytest.mark.slow
+def test_resume_redoes_only_the_removed_video(tmp_path, client):
+    results = tmp_path / "results"
+    run_batch(SCENES, results, _cfg(), client=client)
+    first = _index(results)
+    names = list(first)
+    mtimes = {n: (results / n / "tracks.txt").stat().st_mtime_ns for n in names}
+    import shutil
+    shutil.rmtree(results / names[1])
+    rows = run_batch(SCENES, results, _cfg(), client=client, resume=True)
+    again = _index(results)
+    assert [r["status"] for r in rows] == ["done"] * 3
+    for n in (names[0], names[2]):   # kept: same files, same index row
+        assert (results / n / "tracks.txt").stat().st_mtime_ns == mtimes[n]
+        assert again[n] == first[n]
+    assert (results / names[1] / "tracks.txt").is_file()
+    assert again[names[1]]["wall_s"] != "" and again[names[1]]["status"] == "done"
+
+
+@pytest.mark.slow
+def test_resume_with_another_config_redoes_everything(tmp_path, client):
+    results = tmp_path / "results"
+    run_batch(SCENES[:1], results, _cfg(), client=client)
+    before = (results / "synth-walker" / "tracks.txt").stat().st_mtime_ns
+    first_hash = _index(results)["synth-walker"]["config_hash"]
+    other = apply_overrides(_cfg(), ["regions.min_size=0.002"])
+    rows = run_batch(SCENES[:1], results, other, client=client, resume=True)
+    assert rows[0]["config_hash"] == _index(results)["synth-walker"]["config_hash"]
+    assert (results / "synth-walker" / "tracks.txt").stat().st_mtime_ns != before
+    assert rows[0]["config_hash"] != first_hash
+
+
+@pytest.mark.slow
+def test_python_api_and_cli_write_the_index(tmp_path, client, capsys):
+    rows = motiontrack.batch([SCENES[0]], _cfg(), client, out=tmp_path / "api")
+    assert [r["status"] for r in rows] == ["done"]
+    code = main(["batch", SCENES[0], "-o", str(tmp_path / "cli"), "-j", "1",
+                 "--set", "output.video=false"])
+    assert code == 0
+    assert _index(tmp_path / "cli")["synth-walker"]["status"] == "done"
+    assert "1 done, 0 failed" in capsys.readouterr().out
