@@ -16,7 +16,6 @@ import socket
 import sys
 import threading
 import time
-from typing import Any
 
 import cv2
 
