@@ -136,3 +136,61 @@ def test_python_api_and_cli_write_the_index(tmp_path, client, capsys):
     assert code == 0
     assert _index(tmp_path / "cli")["synth-walker"]["status"] == "done"
     assert "1 done, 0 failed" in capsys.readouterr().out
+
+
+def _batch_killing_the_walker_worker(results: Path, sources: list[str], retries: int):
+    """run_batch on a fresh cluster of 2 workers; the worker running the first video's first
+    attempt is killed (SIGKILL) once that video's partial folder appears."""
+    import signal
+    import threading
+    import time
+
+    killed: list[int] = []
+
+    def kill_the_walker_worker(cl):
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline and not killed:
+            if (results / ".synth-walker.partial").exists():
+                for addr, keys in cl.processing().items():
+                    if any(str(k).endswith("-0-1") for k in keys):
+                        pid = cl.run(os.getpid, workers=[addr])[addr]
+                        os.kill(pid, signal.SIGKILL)
+                        killed.append(pid)
+            time.sleep(0.05)
+
+    with dask_client(jobs=2) as cl:
+        watcher = threading.Thread(target=kill_the_walker_worker, args=(cl,), daemon=True)
+        watcher.start()
+        rows = run_batch(sources, results, _cfg(), client=cl, retries=retries)
+        watcher.join()
+    assert killed, "the walker's worker was never seen processing it"
+    return rows
+
+
+@pytest.mark.slow
+def test_a_worker_killed_mid_video_has_the_video_run_again_and_counted(tmp_path):
+    results = tmp_path / "results"
+    sources = ["synth:walker?n_frames=150", "synth:crossing?n_frames=30"]
+    rows = _batch_killing_the_walker_worker(results, sources, retries=2)
+    index = _index(results)
+    assert index["synth-walker"]["status"] == "done"
+    assert index["synth-walker"]["attempts"] == "2"
+    assert index["synth-crossing"]["attempts"] == "1"
+    assert [r["status"] for r in rows] == ["done", "done"]
+    assert not (results / ".synth-walker.partial").exists()
+    alone = tmp_path / "alone"
+    track_job(sources[0], _cfg(), alone).run()
+    assert (results / "synth-walker" / "tracks.txt").read_bytes() == \
+        (alone / "tracks.txt").read_bytes()
+
+
+@pytest.mark.slow
+def test_a_worker_death_beyond_the_retries_is_a_failed_row_and_the_batch_goes_on(tmp_path):
+    results = tmp_path / "results"
+    sources = ["synth:walker?n_frames=150", "synth:crossing?n_frames=30"]
+    rows = _batch_killing_the_walker_worker(results, sources, retries=0)
+    index = _index(results)
+    assert [r["status"] for r in rows] == ["failed", "done"]
+    assert index["synth-walker"]["attempts"] == "1"
+    assert "worker died" in index["synth-walker"]["error"]
+    assert sorted(p.name for p in results.iterdir()) == ["index.csv", "synth-crossing"]

@@ -114,6 +114,18 @@ def run_video(task: BatchTask, attempt: int = 1) -> dict[str, Any]:
     return row
 
 
+def _lost_row(task: BatchTask, exc: BaseException, attempts: int) -> dict[str, Any]:
+    """The ``failed`` row of a video whose worker died on every attempt."""
+    import cv2
+
+    v = task.video
+    shutil.rmtree(Path(task.results) / f".{v.name}.partial", ignore_errors=True)
+    return {"name": v.name, "source": v.source, "status": "failed",
+            "error": f"its worker died on each of {attempts} attempts ({_one_line(exc)})",
+            "attempts": attempts, "config_hash": task.config_hash,
+            "motiontrack_version": __version__, "opencv_version": cv2.__version__}
+
+
 def _complete(results: Path, name: str, chash: str) -> bool:
     """Whether ``RESULTS/<name>`` holds a complete run made with the config ``chash``."""
     try:
@@ -211,6 +223,7 @@ def run_batch(sources: Sequence[str], results: str | Path, config: PipelineConfi
             if progress is not None:
                 progress(dict(counts))
             map_tasks(cl, run_video, tasks, retries=retries, on_result=finished,
+                      on_lost=lambda i, exc, n: _lost_row(tasks[i], exc, n),
                       key="motiontrack-batch")
         return [rows[v.name] for v in videos]
 

@@ -36,7 +36,8 @@ def dask_client(jobs: int = 1, cluster: str | None = None) -> Iterator[Any]:
         import dask
         from distributed import Client, LocalCluster
     except ImportError:
-        raise ConfigError("batch runs need Dask distributed: pip install 'dask[distributed]'") from None
+        raise ConfigError("running on Dask needs Dask distributed: "
+                          "pip install 'dask[distributed]'") from None
     if cluster:
         try:
             client = Client(cluster, timeout=30)
@@ -62,12 +63,14 @@ def dask_client(jobs: int = 1, cluster: str | None = None) -> Iterator[Any]:
 
 def map_tasks(client: Any, fn: Callable[..., Any], items: Sequence[Any], *, retries: int = 0,
               on_result: Callable[[int, Any, int], None] | None = None,
+              on_lost: Callable[[int, BaseException, int], Any] | None = None,
               key: str = "motiontrack") -> list[Any]:
     """``fn(item, attempt)`` for every item on ``client``'s workers; results in item order.
 
     ``on_result(index, result, attempts)`` is called as each task finishes (completion order).
     A task whose worker died (``KilledWorker``, a lost connection) is submitted again, up to
-    ``retries`` more times; beyond that its error is raised. Exceptions ``fn`` raises are
+    ``retries`` more times; beyond that its result is ``on_lost(index, error, attempts)``, or
+    the error is raised without ``on_lost``. Exceptions ``fn`` raises are
     raised here (a driver that must not stop catches them inside ``fn``). On any error or
     ``KeyboardInterrupt`` the tasks not finished are cancelled.
     """
@@ -88,7 +91,13 @@ def map_tasks(client: Any, fn: Callable[..., Any], items: Sequence[Any], *, retr
                 res = fut.result()
             except lost as exc:
                 if attempts[i] > retries:
-                    raise
+                    if on_lost is None:
+                        raise
+                    res = on_lost(i, exc, attempts[i])
+                    results[i] = res
+                    if on_result is not None:
+                        on_result(i, res, attempts[i])
+                    continue
                 attempts[i] += 1
                 log.warning("task %d lost its worker (%s): attempt %d", i, printable(exc),
                             attempts[i])

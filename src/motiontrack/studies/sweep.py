@@ -63,6 +63,7 @@ from ..io.atomic import (OutputLock, atomic_write_bytes, atomic_write_text, chec
 from ..io.mot import read_mot
 from ..io.tomlfile import read_toml
 from ..pipeline import completes_tracks, fill_gap_frames, open_configured_source
+from ..run.executor import dask_client, map_tasks
 from ..run.job import Job
 from ..run.processors import TrackProcessor
 from ..run.writers import IntermediateWriter, RegionsWriter, TracksWriter
@@ -636,6 +637,11 @@ def _worker_init() -> None:
     cv2.setNumThreads(1)
 
 
+def _execute_attempt(spec: RunSpec, attempt: int) -> dict[str, Any]:
+    """:func:`execute_run` as a task of :func:`~motiontrack.run.executor.map_tasks`."""
+    return execute_run(spec)
+
+
 def execute(specs: Sequence[RunSpec], jobs: int = 1, cluster: str | None = None,
             progress: Callable[[int], None] | None = None,
             on_result: Callable[[int, dict[str, Any]], None] | None = None) -> list[dict[str, Any]]:
@@ -672,25 +678,9 @@ def execute(specs: Sequence[RunSpec], jobs: int = 1, cluster: str | None = None,
             progress(1)
 
     if cluster:
-        try:
-            from distributed import Client, as_completed as dask_completed
-        except ImportError:
-            raise ConfigError("--cluster needs Dask distributed: pip install 'dask[distributed]'") from None
-        try:
-            client = Client(cluster, timeout=30)
-        except (OSError, TimeoutError) as exc:
-            raise InputError(f"cannot connect to the Dask scheduler at {cluster}: {exc}") from None
-        try:
-            client.run(_worker_init)
-            futures = client.map(execute_run, list(specs), pure=False)
-            index = {fut.key: i for i, fut in enumerate(futures)}
-            for fut in dask_completed(futures):
-                done(index[fut.key], fut.result())
-        except KeyboardInterrupt:
-            client.cancel(futures)
-            raise
-        finally:
-            client.close()
+        with dask_client(cluster=cluster) as client:   # the executor batch runs on
+            map_tasks(client, _execute_attempt, list(specs),
+                      on_result=lambda i, res, _attempts: done(i, res), key="motiontrack-sweep")
     elif jobs == 1:
         for i, s in enumerate(specs):
             done(i, execute_run(s))
