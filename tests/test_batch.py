@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import json
 import os
 from pathlib import Path
 
@@ -14,6 +15,7 @@ import motiontrack  # noqa: E402
 from motiontrack.batch import expand_sources, run_batch  # noqa: E402
 from motiontrack.cli import main  # noqa: E402
 from motiontrack.config import PipelineConfig, apply_overrides  # noqa: E402
+from motiontrack.io.mot import read_mot  # noqa: E402
 from motiontrack.run.executor import dask_client  # noqa: E402
 from motiontrack.run.jobs import track_job  # noqa: E402
 
@@ -92,7 +94,31 @@ def test_missing_and_corrupt_files_are_failed_rows_and_the_rest_done(first_batch
     assert {index[n]["status"] for n in index if n not in ("missing", "corrupt")} == {"done"}
     # only finished videos have folders; no partial folders are left
     assert sorted(p.name for p in (base / "results").iterdir()) == sorted(
-        [*(n for n in index if index[n]["status"] == "done"), "index.csv"])
+        [*(n for n in index if index[n]["status"] == "done"), "combined.json", "index.csv"])
+
+
+@pytest.mark.slow
+def test_combined_metrics_are_the_videos_combined_as_trackeval_does(tmp_path, client, capsys):
+    from motiontrack.evaluate import mot
+    from motiontrack.io.sources import open_source
+
+    scenes = ["synth:crossing?n_frames=60", "synth:walker?n_frames=60&seed=3"]
+    results = tmp_path / "results"
+    code = main(["batch", *scenes, "-o", str(results), "-j", "2", "--set", "output.video=false"])
+    assert code == 0
+    index = _index(results)
+    combined = json.loads((results / "combined.json").read_text(encoding="utf-8"))
+    assert combined["sequences"] == sorted(index)
+    per = []
+    for name in sorted(index):   # each scene scored on its own ground truth, then combined
+        with open_source(index[name]["source"]) as src:
+            gt = src.ground_truth()
+        pred = read_mot(results / name / "tracks.txt", kind="results")
+        per.append(mot.evaluate_sequence(gt.select(gt.frames <= 60), pred))
+    expected = mot.flatten(mot.combine_sequences(per))
+    assert combined["metrics"] == pytest.approx(expected)
+    assert combined["metrics"]["TP"] > 0
+    assert f"HOTA {expected['HOTA']:.4f}" in capsys.readouterr().out
 
 
 @pytest.mark.slow
@@ -193,4 +219,5 @@ def test_a_worker_death_beyond_the_retries_is_a_failed_row_and_the_batch_goes_on
     assert [r["status"] for r in rows] == ["failed", "done"]
     assert index["synth-walker"]["attempts"] == "1"
     assert "worker died" in index["synth-walker"]["error"]
-    assert sorted(p.name for p in results.iterdir()) == ["index.csv", "synth-crossing"]
+    assert sorted(p.name for p in results.iterdir()) == ["combined.json", "index.csv",
+                                                         "synth-crossing"]

@@ -24,6 +24,7 @@ from ..config import PipelineConfig, apply_overrides, from_dict, to_dict
 from ..errors import ConfigError, printable
 from ..io.atomic import OutputLock, atomic_write_text
 from ..run.executor import dask_client, map_tasks
+from .combined import write_combined
 from .sources import Video, expand_sources
 
 log = logging.getLogger(__name__)
@@ -214,7 +215,7 @@ def run_batch(sources: Sequence[str], results: str | Path, config: PipelineConfi
         save()
         tasks = [BatchTask(v, str(out.resolve()), to_dict(cfg), chash) for v in todo]
         if not tasks:
-            return [rows[v.name] for v in videos]
+            return _finish(out, [rows[v.name] for v in videos])
         manager = dask_client(jobs, cluster) if client is None else _given(client)
         with manager as cl:
             workers = max(1, sum(w.get("nthreads", 1)
@@ -225,7 +226,13 @@ def run_batch(sources: Sequence[str], results: str | Path, config: PipelineConfi
             map_tasks(cl, run_video, tasks, retries=retries, on_result=finished,
                       on_lost=lambda i, exc, n: _lost_row(tasks[i], exc, n),
                       key="motiontrack-batch")
-        return [rows[v.name] for v in videos]
+        return _finish(out, [rows[v.name] for v in videos])
+
+
+def _finish(out: Path, rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """The final rows, after writing the combined metrics of the videos with ground truth."""
+    write_combined(out, rows)
+    return rows
 
 
 class _given:

@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import argparse
+import json
 import logging
 import sys
+from pathlib import Path
 
 log = logging.getLogger("motiontrack")
 
@@ -39,6 +41,7 @@ def cmd_batch(args) -> int:
     from tqdm import tqdm
 
     from ..batch import run_batch
+    from ..batch.combined import COMBINED_FILE
     from ..config import load_config
     from ._common import sigterm_as_interrupt
 
@@ -56,6 +59,13 @@ def cmd_batch(args) -> int:
                          resume=args.resume, retries=args.retries, progress=progress)
     failed = [r for r in rows if r.get("status") != "done"]
     print(f"{len(rows) - len(failed)} done, {len(failed)} failed; index: {args.out}/index.csv")
+    combined = Path(args.out) / COMBINED_FILE
+    if combined.is_file():
+        c = json.loads(combined.read_text(encoding="utf-8"))
+        m = c["metrics"]
+        print(f"combined over {len(c['sequences'])} videos with ground truth: "
+              + "  ".join(f"{k} {m[k]:.4f}" for k in ("HOTA", "MOTA", "IDF1") if k in m)
+              + f"; {combined}")
     for r in failed:
         print(f"  {r['name']}: {r.get('error', '')}", file=sys.stderr)
     return 1 if failed else 0
