@@ -16,7 +16,16 @@ with the scene of ``motiontrack synth-events``, looping):
    camera process read that frame), frame → event the arrival of an SSE event minus its ``wall``
    field (same machine clock).
 
+With ``--browsers`` the viewers are real browsers instead (and the latency run is left out):
+headless Chromium driven by Selenium 4 (Debian ``chromium`` and ``chromedriver``), one browser
+process each, showing the page (its MJPEG picture, the event feed over Server-Sent Events and
+the once-a-second poll of the camera list) — 0, 1 and 5 by default. All browsers start once; in
+a window with ``n`` browsers the first ``n`` show the page and the others ``about:blank``. Besides
+the server's CPU the browsers' own (every process under their drivers) is reported: on a small
+machine it is what competes with the camera.
+
 Run: .venv/bin/python benchmarks/serve.py [--seconds 5] [--rounds 3] [--viewers 0,1,5,20]
+     .venv/bin/python benchmarks/serve.py --browsers [--seconds 5] [--rounds 3] [--viewers 0,1,5]
 """
 
 from __future__ import annotations
@@ -24,6 +33,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import shutil
 import signal
 import socket
 import statistics
@@ -153,6 +163,110 @@ def processing_rates(root: Path, viewers: list[int], seconds: float, rounds: int
             for n, r in rates.items()}
 
 
+def _cpu_seconds(pids: set[int]) -> float:
+    """CPU seconds used by ``pids`` and all their descendants (Linux; 0 elsewhere)."""
+    parents: dict[int, int] = {}
+    times: dict[int, float] = {}
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except OSError:     # the process has gone
+            continue
+        pid = int(stat.parent.name)
+        parents[pid] = int(fields[1])
+        times[pid] = (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+    tree, grew = set(pids), True
+    while grew:
+        new = {p for p, pp in parents.items() if pp in tree and p not in tree}
+        tree |= new
+        grew = bool(new)
+    return sum(times.get(p, 0.0) for p in tree)
+
+
+class Browsers:
+    """``n`` headless Chromium browsers (Selenium 4, Debian's ``chromium`` + ``chromedriver``)."""
+
+    def __init__(self, n: int, url: str) -> None:
+        try:
+            from selenium import webdriver
+            from selenium.webdriver.chrome.service import Service
+        except ImportError:
+            raise SystemExit("--browsers needs selenium (pip install -e '.[dev]')") from None
+        chromium = shutil.which("chromium") or shutil.which("chromium-browser")
+        driver = shutil.which("chromedriver") or (
+            "/usr/bin/chromedriver" if os.access("/usr/bin/chromedriver", os.X_OK) else None)
+        if not chromium or not driver:
+            raise SystemExit("--browsers needs chromium and chromedriver "
+                             "(Debian: apt-get install chromium chromium-driver)")
+        self.url = url
+        self.drivers = []
+        try:
+            for _ in range(n):
+                options = webdriver.ChromeOptions()
+                options.binary_location = chromium
+                for arg in ("--headless=new", "--no-sandbox", "--disable-dev-shm-usage",
+                            "--disable-gpu", "--window-size=1280,900"):
+                    options.add_argument(arg)
+                d = webdriver.Chrome(service=Service(driver), options=options)
+                d.set_page_load_timeout(60)
+                d.get("about:blank")
+                self.drivers.append(d)
+        except BaseException:
+            self.close()
+            raise
+
+    def show(self, n: int) -> None:
+        """The page in the first ``n`` browsers (each once its picture shows), the others blank."""
+        for i, d in enumerate(self.drivers):
+            d.get(self.url if i < n else "about:blank")
+        for d in self.drivers[:n]:
+            end = time.monotonic() + 30
+            while not d.execute_script(
+                    "const i = document.querySelector('[data-testid=\"camera-img-cam\"]');"
+                    "return !!i && i.naturalWidth > 0;"):
+                if time.monotonic() > end:
+                    raise SystemExit("a browser did not show the camera's picture in 30 s")
+                time.sleep(0.2)
+
+    def cpu(self) -> float:
+        """CPU seconds all browser processes (and their drivers) have used."""
+        return _cpu_seconds({d.service.process.pid for d in self.drivers})
+
+    def close(self) -> None:
+        for d in self.drivers:
+            try:
+                d.quit()
+            except Exception:   # a browser already gone: nothing left to stop
+                pass
+        self.drivers = []
+
+
+def browser_rates(root: Path, counts: list[int], seconds: float, rounds: int) -> dict:
+    srv = Serve(root / "browsers", fps=1000)
+    rates: dict[int, list[float]] = {n: [] for n in counts}
+    cpu: dict[int, list[float]] = {n: [] for n in counts}
+    bcpu: dict[int, list[float]] = {n: [] for n in counts}
+    browsers = None
+    try:
+        browsers = Browsers(max(counts), srv.url + "/")
+        for _ in range(rounds):
+            for n in counts:
+                browsers.show(n)
+                time.sleep(1.0)                       # streams and event feed connected
+                f0, c0, b0, t0 = srv.frames(), srv.cpu(), browsers.cpu(), time.monotonic()
+                time.sleep(seconds)
+                f1, c1, b1, t1 = srv.frames(), srv.cpu(), browsers.cpu(), time.monotonic()
+                rates[n].append((f1 - f0) / (t1 - t0))
+                cpu[n].append((c1 - c0) / (t1 - t0))
+                bcpu[n].append((b1 - b0) / (t1 - t0))
+    finally:
+        if browsers is not None:
+            browsers.close()
+        srv.stop()
+    return {n: {"fps": statistics.median(r), "server_cpu": statistics.median(cpu[n]),
+                "browser_cpu": statistics.median(bcpu[n])} for n, r in rates.items()}
+
+
 def _mjpeg_latencies(url: str, seconds: float, out: list[float]) -> None:
     buf, end = b"", time.monotonic() + seconds
     with httpx.Client(timeout=10) as c, c.stream("GET", url) as r:
@@ -216,9 +330,27 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--seconds", type=float, default=5.0, help="measuring window (s)")
     ap.add_argument("--rounds", type=int, default=3)
-    ap.add_argument("--viewers", default="0,1,5,20", help="viewer counts, comma-separated")
+    ap.add_argument("--viewers", help="viewer counts, comma-separated (default 0,1,5,20; "
+                                      "with --browsers 0,1,5)")
+    ap.add_argument("--browsers", action="store_true",
+                    help="viewers are headless Chromium browsers showing the page")
     args = ap.parse_args()
-    viewers = [int(v) for v in args.viewers.split(",")]
+    viewers = [int(v) for v in (args.viewers or ("0,1,5" if args.browsers else "0,1,5,20"))
+               .split(",")]
+    if args.browsers:
+        with tempfile.TemporaryDirectory() as tmp:
+            (Path(tmp) / "browsers").mkdir()
+            rates = browser_rates(Path(tmp), viewers, args.seconds, args.rounds)
+        base = rates[viewers[0]]["fps"]
+        print(f"processing rate of one unpaced camera (synth:crossing + scene) with headless "
+              f"Chromium showing the page, median of {args.rounds} windows of {args.seconds:g} s")
+        print(f"{'browsers':>8} {'fps':>7} {'ratio':>6} {'server CPU %':>13} "
+              f"{'browsers CPU %':>15}")
+        for n in viewers:
+            r = rates[n]
+            print(f"{n:>8} {r['fps']:>7.1f} {r['fps'] / base:>6.3f} "
+                  f"{100 * r['server_cpu']:>13.1f} {100 * r['browser_cpu']:>15.1f}")
+        return
     with tempfile.TemporaryDirectory() as tmp:
         root = Path(tmp)
         (root / "rate").mkdir()

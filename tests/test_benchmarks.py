@@ -39,3 +39,29 @@ def test_detections_benchmark_reports_every_row(data):
     perfect = [float(v) for v in rows[0][4].split()]
     # perfect detections: every reported box is a person
     assert rows[0][:4] == ("0.00", "0.00", "0.00", "0.0") and perfect[4] == 1.0, out
+
+
+@pytest.mark.slow
+def test_serve_benchmark_with_browsers_reports_each_browser_count():
+    import importlib.util
+    import os
+    import shutil
+
+    if not (shutil.which("chromium") and (shutil.which("chromedriver")
+                                          or os.access("/usr/bin/chromedriver", os.X_OK))
+            and importlib.util.find_spec("selenium") and importlib.util.find_spec("uvicorn")):
+        if os.environ.get("MOTIONTRACK_REQUIRE_DATA") == "1":
+            pytest.fail("chromium, chromedriver, selenium or uvicorn missing and "
+                        "MOTIONTRACK_REQUIRE_DATA=1")
+        pytest.skip("chromium, chromedriver, selenium or uvicorn missing")
+    out = subprocess.run([sys.executable, str(REPO / "benchmarks" / "serve.py"), "--browsers",
+                          "--seconds", "1", "--rounds", "1", "--viewers", "0,1"],
+                         capture_output=True, text=True, timeout=240, check=True).stdout
+    rows = {int(n): [float(v) for v in rest.split()] for n, rest in
+            re.findall(r"^\s+(\d+)((?:\s+\d+\.\d+){4})$", out, re.M)}
+    assert sorted(rows) == [0, 1], out
+    fps, ratio, _, browsers_cpu = rows[0]
+    assert fps > 0 and ratio == 1.0, out
+    # a browser showing the page decodes its MJPEG picture: its processes use CPU
+    assert rows[1][0] > 0 and rows[1][3] > browsers_cpu, out
+    assert "frame -> picture" not in out, out    # the latency run is the socket mode's
