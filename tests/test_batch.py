@@ -70,6 +70,31 @@ def test_manifest_entries_give_name_gt_scene_and_camera(tmp_path):
         str(tmp_path / "cam.xml"))
 
 
+def test_index_parquet_holds_the_rows_of_index_csv_typed(tmp_path):
+    pq = pytest.importorskip("pyarrow.parquet")
+    from motiontrack.batch.runner import write_index
+
+    rows = [{"name": "a", "source": "/v/a.avi", "status": "done", "frames": 30, "fps": 41.5,
+             "tracks": 2, "wall_s": 0.9, "worker": "0", "attempts": 1, "HOTA": 0.5,
+             "MOTA": 0.25, "IDF1": 0.75},
+            {"name": "b", "source": "/v/b.avi", "status": "failed", "error": "SourceError: x",
+             "attempts": "2"}]
+    write_index(rows, tmp_path / "index.csv")
+    table = pq.read_table(tmp_path / "index.parquet")
+    assert table.column_names == list(motiontrack.batch.INDEX_COLUMNS)
+    assert str(table.schema.field("frames").type) == "int64"
+    assert str(table.schema.field("HOTA").type) == "double"
+    with open(tmp_path / "index.csv", newline="", encoding="utf-8") as fh:
+        from_csv = list(csv.DictReader(fh))
+    from_parquet = [{k: "" if v is None else v for k, v in r.items()} for r in table.to_pylist()]
+    assert len(from_parquet) == len(from_csv) == 2
+    for c, p in zip(from_csv, from_parquet):
+        assert {k: (float(v) if k in ("fps", "wall_s", "HOTA", "MOTA", "IDF1", "frames",
+                                       "tracks", "attempts") and v != "" else v)
+                for k, v in c.items()} == p
+    assert from_parquet[1]["attempts"] == 2 and from_parquet[1]["frames"] == ""
+
+
 @pytest.mark.slow
 def test_batch_tracks_are_byte_identical_to_track_alone(first_batch, tmp_path):
     base, _, rows = first_batch
@@ -94,7 +119,8 @@ def test_missing_and_corrupt_files_are_failed_rows_and_the_rest_done(first_batch
     assert {index[n]["status"] for n in index if n not in ("missing", "corrupt")} == {"done"}
     # only finished videos have folders; no partial folders are left
     assert sorted(p.name for p in (base / "results").iterdir()) == sorted(
-        [*(n for n in index if index[n]["status"] == "done"), "combined.json", "index.csv"])
+        [*(n for n in index if index[n]["status"] == "done"), "combined.json", "index.csv",
+         "index.parquet"])
 
 
 @pytest.mark.slow
@@ -220,4 +246,4 @@ def test_a_worker_death_beyond_the_retries_is_a_failed_row_and_the_batch_goes_on
     assert index["synth-walker"]["attempts"] == "1"
     assert "worker died" in index["synth-walker"]["error"]
     assert sorted(p.name for p in results.iterdir()) == ["combined.json", "index.csv",
-                                                         "synth-crossing"]
+                                                         "index.parquet", "synth-crossing"]

@@ -22,7 +22,7 @@ from typing import Any, Callable, Mapping, Sequence
 from .. import __version__
 from ..config import PipelineConfig, apply_overrides, from_dict, to_dict
 from ..errors import ConfigError, printable
-from ..io.atomic import OutputLock, atomic_write_text
+from ..io.atomic import OutputLock, atomic_write_bytes, atomic_write_text
 from ..run.executor import dask_client, map_tasks
 from .combined import write_combined
 from .sources import Video, expand_sources
@@ -153,6 +153,37 @@ def write_index(rows: Sequence[Mapping[str, Any]], path: Path) -> None:
     for r in rows:
         w.writerow({k: r.get(k, "") for k in INDEX_COLUMNS})
     atomic_write_text(path, buf.getvalue())
+    try:
+        import pyarrow  # noqa: F401 - the Parquet copy is optional
+    except ImportError:
+        return
+    atomic_write_bytes(path.with_suffix(".parquet"), _parquet(rows))
+
+
+_INTS = ("frames", "tracks", "attempts")
+_FLOATS = ("fps", "wall_s", *METRICS)
+
+
+def _parquet(rows: Sequence[Mapping[str, Any]]) -> bytes:
+    """The index rows as Parquet: counts as int64, rates and metrics as float64, the rest as
+    strings; an empty cell is null."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    def cell(k: str, v: Any) -> Any:
+        if v is None or v == "":
+            return None
+        if k in _INTS:
+            return int(float(v))
+        return float(v) if k in _FLOATS else str(v)
+
+    types = {k: pa.int64() if k in _INTS else pa.float64() if k in _FLOATS else pa.string()
+             for k in INDEX_COLUMNS}
+    table = pa.table({k: pa.array([cell(k, r.get(k)) for r in rows], type=types[k])
+                      for k in INDEX_COLUMNS})
+    sink = io.BytesIO()
+    pq.write_table(table, sink)
+    return sink.getvalue()
 
 
 def _check_names(videos: Sequence[Video]) -> None:
