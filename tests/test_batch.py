@@ -15,6 +15,7 @@ import motiontrack  # noqa: E402
 from motiontrack.batch import expand_sources, run_batch  # noqa: E402
 from motiontrack.cli import main  # noqa: E402
 from motiontrack.config import PipelineConfig, apply_overrides  # noqa: E402
+from motiontrack.errors import ConfigError  # noqa: E402
 from motiontrack.io.mot import read_mot  # noqa: E402
 from motiontrack.run.executor import dask_client  # noqa: E402
 from motiontrack.run.jobs import track_job  # noqa: E402
@@ -145,6 +146,27 @@ def test_combined_metrics_are_the_videos_combined_as_trackeval_does(tmp_path, cl
     assert combined["metrics"] == pytest.approx(expected)
     assert combined["metrics"]["TP"] > 0
     assert f"HOTA {expected['HOTA']:.4f}" in capsys.readouterr().out
+
+
+@pytest.mark.slow
+def test_a_video_longer_than_the_timeout_is_a_timeout_row_and_the_batch_goes_on(tmp_path,
+                                                                                 client):
+    results = tmp_path / "results"
+    long, short = "synth:walker?n_frames=3000", "synth:crossing?n_frames=5"
+    rows = run_batch([long, short], results, _cfg(), client=client, timeout_s=2.0)
+    index = _index(results)
+    assert index["synth-walker"]["status"] == "timeout"
+    assert "--timeout-s 2" in index["synth-walker"]["error"]
+    assert 2.0 <= float(index["synth-walker"]["wall_s"]) < 30
+    assert not (results / ".synth-walker.partial").exists()
+    assert not (results / "synth-walker").exists()
+    assert [r["status"] for r in rows] == ["timeout", "done"]
+    # the worker is free again: the next batch on the same cluster runs at once
+    again = run_batch([long.replace("3000", "10")], tmp_path / "again", _cfg(), client=client,
+                      timeout_s=60)
+    assert [r["status"] for r in again] == ["done"]
+    with pytest.raises(ConfigError, match="--timeout-s"):
+        run_batch([short], tmp_path / "bad", _cfg(), client=client, timeout_s=0)
 
 
 @pytest.mark.slow

@@ -52,6 +52,11 @@ class BatchTask:
     results: str
     config: Mapping[str, Any]
     config_hash: str
+    timeout_s: float | None = None
+
+
+class VideoTimeout(Exception):
+    """A video ran longer than the batch's ``--timeout-s``."""
 
 
 def _worker_name() -> str:
@@ -90,7 +95,21 @@ def run_video(task: BatchTask, attempt: int = 1) -> dict[str, Any]:
         cfg = apply_overrides(from_dict(PipelineConfig, dict(task.config)), overrides)
         gt = read_annotations(v.gt, mot_kind="gt") if v.gt else None
         job = track_job(v.source, cfg, partial, force=True, gt=gt, scene=v.scene)
-        summary = job.run()
+        deadline = None if task.timeout_s is None else t0 + task.timeout_s
+        late: list[bool] = []
+
+        def over_time() -> bool:
+            if time.perf_counter() > deadline:
+                late.append(True)
+            return bool(late)
+
+        # polled after each frame: the run stops itself, so its worker is free at once
+        try:
+            summary = job.run(should_stop=None if deadline is None else over_time)
+        except KeyboardInterrupt:
+            if not late:
+                raise
+            raise VideoTimeout(f"ran longer than --timeout-s {task.timeout_s:g}") from None
         meta = json.loads((partial / "summary.json").read_text(encoding="utf-8"))
         # the paths the summary names are those of the finished folder
         meta["outputs"] = {k: str(final / Path(p).name) for k, p in meta.get("outputs", {}).items()}
@@ -109,8 +128,10 @@ def run_video(task: BatchTask, attempt: int = 1) -> dict[str, Any]:
         row.update({k: summary.accuracy[k] for k in METRICS if k in (summary.accuracy or {})})
     except Exception as exc:   # noqa: BLE001 - one bad video never stops the batch
         shutil.rmtree(partial, ignore_errors=True)
+        if isinstance(exc, VideoTimeout):
+            row["status"] = "timeout"
         row["error"] = _one_line(exc)
-        log.warning("%s failed: %s", v.name, row["error"])
+        log.warning("%s %s: %s", v.name, row["status"], row["error"])
     row["wall_s"] = round(time.perf_counter() - t0, 3)
     return row
 
@@ -196,15 +217,19 @@ def _check_names(videos: Sequence[Video]) -> None:
 
 def run_batch(sources: Sequence[str], results: str | Path, config: PipelineConfig | None = None,
               *, jobs: int = 1, cluster: str | None = None, client: Any = None,
-              resume: bool = False, retries: int = 2,
+              resume: bool = False, retries: int = 2, timeout_s: float | None = 3600,
               progress: Callable[[Mapping[str, int]], None] | None = None) -> list[dict[str, Any]]:
     """Track every video of ``sources`` into ``results`` and return the index rows.
 
     Runs on ``client`` when given, else on the scheduler at ``cluster``, else on a local
     cluster of ``jobs`` worker processes. With ``resume``, videos whose folder holds a complete
-    run with this config keep it (and their index row). ``progress`` is called with counts
-    ``done``, ``failed``, ``running``, ``total`` whenever a video finishes.
+    run with this config keep it (and their index row). A video still running after
+    ``timeout_s`` seconds (None: no limit) stops and is a ``timeout`` row. ``progress`` is called
+    with counts ``done``, ``failed`` (timeouts included), ``running``, ``total`` whenever a video
+    finishes.
     """
+    if timeout_s is not None and not timeout_s > 0:
+        raise ConfigError(f"--timeout-s must be > 0, got {timeout_s}")
     if retries < 0:
         raise ConfigError(f"--retries must be >= 0, got {retries}")
     if jobs < 1:
@@ -244,7 +269,7 @@ def run_batch(sources: Sequence[str], results: str | Path, config: PipelineConfi
                 progress(dict(counts))
 
         save()
-        tasks = [BatchTask(v, str(out.resolve()), to_dict(cfg), chash) for v in todo]
+        tasks = [BatchTask(v, str(out.resolve()), to_dict(cfg), chash, timeout_s) for v in todo]
         if not tasks:
             return _finish(out, [rows[v.name] for v in videos])
         manager = dask_client(jobs, cluster) if client is None else _given(client)

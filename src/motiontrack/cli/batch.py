@@ -34,6 +34,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="keep the videos whose results are complete with this config; redo the rest")
     p.add_argument("--retries", type=int, default=2,
                    help="times a video is run again when its worker dies (default 2)")
+    p.add_argument("--timeout-s", type=float, default=3600, metavar="S",
+                   help="a video still running after S seconds stops and is a `timeout` row "
+                        "(default 3600)")
     p.set_defaults(func=cmd_batch)
 
 
@@ -56,7 +59,8 @@ def cmd_batch(args) -> int:
             bar.refresh()
 
         rows = run_batch(args.sources, args.out, cfg, jobs=args.jobs, cluster=args.cluster,
-                         resume=args.resume, retries=args.retries, progress=progress)
+                         resume=args.resume, retries=args.retries, timeout_s=args.timeout_s,
+                         progress=progress)
     failed = [r for r in rows if r.get("status") != "done"]
     print(f"{len(rows) - len(failed)} done, {len(failed)} failed; index: {args.out}/index.csv")
     combined = Path(args.out) / COMBINED_FILE
