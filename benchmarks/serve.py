@@ -163,8 +163,14 @@ def processing_rates(root: Path, viewers: list[int], seconds: float, rounds: int
             for n, r in rates.items()}
 
 
-def _cpu_seconds(pids: set[int]) -> float:
-    """CPU seconds used by ``pids`` and all their descendants (Linux; 0 elsewhere)."""
+def _cpu_used(before: dict[int, float], after: dict[int, float]) -> float:
+    """CPU seconds the processes of ``after`` used since ``before``; a process that ended in
+    between takes its time with it (so this is a lower bound, never negative)."""
+    return sum(t - before.get(p, 0.0) for p, t in after.items())
+
+
+def _cpu_by_process(pids: set[int]) -> dict[int, float]:
+    """CPU seconds of each of ``pids`` and all their descendants (Linux; empty elsewhere)."""
     parents: dict[int, int] = {}
     times: dict[int, float] = {}
     for stat in Path("/proc").glob("[0-9]*/stat"):
@@ -180,7 +186,7 @@ def _cpu_seconds(pids: set[int]) -> float:
         new = {p for p, pp in parents.items() if pp in tree and p not in tree}
         tree |= new
         grew = bool(new)
-    return sum(times.get(p, 0.0) for p in tree)
+    return {p: times[p] for p in tree if p in times}
 
 
 class Browsers:
@@ -228,9 +234,9 @@ class Browsers:
                     raise SystemExit("a browser did not show the camera's picture in 30 s")
                 time.sleep(0.2)
 
-    def cpu(self) -> float:
-        """CPU seconds all browser processes (and their drivers) have used."""
-        return _cpu_seconds({d.service.process.pid for d in self.drivers})
+    def cpu(self) -> dict[int, float]:
+        """CPU seconds of each browser process (and of their drivers)."""
+        return _cpu_by_process({d.service.process.pid for d in self.drivers})
 
     def close(self) -> None:
         for d in self.drivers:
@@ -258,7 +264,7 @@ def browser_rates(root: Path, counts: list[int], seconds: float, rounds: int) ->
                 f1, c1, b1, t1 = srv.frames(), srv.cpu(), browsers.cpu(), time.monotonic()
                 rates[n].append((f1 - f0) / (t1 - t0))
                 cpu[n].append((c1 - c0) / (t1 - t0))
-                bcpu[n].append((b1 - b0) / (t1 - t0))
+                bcpu[n].append(_cpu_used(b0, b1) / (t1 - t0))
     finally:
         if browsers is not None:
             browsers.close()

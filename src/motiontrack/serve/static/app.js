@@ -61,6 +61,10 @@ function streamUrl(name) {
   return withToken(cameraPath(name, "stream.mjpg") + "?n=" + Date.now());
 }
 
+function snapshotUrl(name) {
+  return withToken(cameraPath(name, "snapshot.jpg") + "?n=" + Date.now());
+}
+
 function keepStreaming(img, name) {
   // a stream ends when its camera restarts or the server drops a slow viewer: reopen it
   img.addEventListener("error", () => setTimeout(() => { img.src = streamUrl(name); }, 1000));
@@ -254,9 +258,11 @@ const editor = {
     document.getElementById("editor-reload").addEventListener("click", () => this.open(this.camera));
     for (const r of document.querySelectorAll('input[name="tool"]'))
       r.addEventListener("change", () => { this.pending = []; this.draw(); });
-    this.picture.addEventListener("error", () => setTimeout(() => {
-      if (this.camera) this.picture.src = streamUrl(this.camera);
-    }, 1000));
+    // the editor shows a snapshot a second, not a second MJPEG stream: drawing needs the scene,
+    // not motion, and every stream costs the camera's machine a decoder per open page
+    setInterval(() => {
+      if (this.camera && !document.hidden) this.picture.src = snapshotUrl(this.camera);
+    }, 1000);
     new ResizeObserver(() => this.draw()).observe(this.canvas);
   },
 
@@ -277,7 +283,7 @@ const editor = {
     this.pending = [];
     this.message("");
     this.error("");
-    this.picture.src = streamUrl(name);
+    this.picture.src = snapshotUrl(name);
     try {
       const scene = await api(cameraPath(name, "scene"));
       this.scene = scene;
