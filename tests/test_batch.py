@@ -269,3 +269,27 @@ def test_a_worker_death_beyond_the_retries_is_a_failed_row_and_the_batch_goes_on
     assert "worker died" in index["synth-walker"]["error"]
     assert sorted(p.name for p in results.iterdir()) == ["combined.json", "index.csv",
                                                          "index.parquet", "synth-crossing"]
+
+
+def _sleep_or_return(item, attempt):
+    import time
+
+    if item == "hang":
+        time.sleep(600)
+    return item
+
+
+@pytest.mark.slow
+def test_a_task_that_never_returns_is_cancelled_and_its_worker_restarted():
+    from motiontrack.run.executor import map_tasks
+
+    with dask_client(jobs=2) as cl:
+        done = []
+        res = map_tasks(cl, _sleep_or_return, ["hang", "quick"], hard_timeout_s=2.0,
+                        on_timeout=lambda i, n: f"timeout {i} after {n}",
+                        on_result=lambda i, r, n: done.append(i))
+        assert res == ["timeout 0 after 1", "quick"]
+        assert sorted(done) == [0, 1]
+        # both workers are back: two tasks run at the same time again
+        assert map_tasks(cl, _sleep_or_return, ["a", "b"]) == ["a", "b"]
+        assert len(cl.scheduler_info()["workers"]) == 2

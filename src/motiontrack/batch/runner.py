@@ -148,6 +148,15 @@ def _lost_row(task: BatchTask, exc: BaseException, attempts: int) -> dict[str, A
             "motiontrack_version": __version__, "opencv_version": cv2.__version__}
 
 
+def _hung_row(task: BatchTask, attempts: int) -> dict[str, Any]:
+    """The ``timeout`` row of a video whose run did not stop itself (stuck inside a frame), so
+    that its worker was restarted."""
+    row = _lost_row(task, TimeoutError(), attempts)
+    row.update(status="timeout", error=f"VideoTimeout: ran longer than --timeout-s "
+                                         f"{task.timeout_s:g} and did not stop; worker restarted")
+    return row
+
+
 def _complete(results: Path, name: str, chash: str) -> bool:
     """Whether ``RESULTS/<name>`` holds a complete run made with the config ``chash``."""
     try:
@@ -281,7 +290,10 @@ def run_batch(sources: Sequence[str], results: str | Path, config: PipelineConfi
                 progress(dict(counts))
             map_tasks(cl, run_video, tasks, retries=retries, on_result=finished,
                       on_lost=lambda i, exc, n: _lost_row(tasks[i], exc, n),
-                      key="motiontrack-batch")
+                      key="motiontrack-batch",
+                      hard_timeout_s=None if timeout_s is None
+                      else timeout_s + max(10.0, timeout_s / 10),
+                      on_timeout=lambda i, n: _hung_row(tasks[i], n))
         return _finish(out, [rows[v.name] for v in videos])
 
 

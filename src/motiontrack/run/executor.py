@@ -64,7 +64,8 @@ def dask_client(jobs: int = 1, cluster: str | None = None) -> Iterator[Any]:
 def map_tasks(client: Any, fn: Callable[..., Any], items: Sequence[Any], *, retries: int = 0,
               on_result: Callable[[int, Any, int], None] | None = None,
               on_lost: Callable[[int, BaseException, int], Any] | None = None,
-              key: str = "motiontrack") -> list[Any]:
+              key: str = "motiontrack", hard_timeout_s: float | None = None,
+              on_timeout: Callable[[int, int], Any] | None = None) -> list[Any]:
     """``fn(item, attempt)`` for every item on ``client``'s workers; results in item order.
 
     ``on_result(index, result, attempts)`` is called as each task finishes (completion order).
@@ -73,6 +74,10 @@ def map_tasks(client: Any, fn: Callable[..., Any], items: Sequence[Any], *, retr
     the error is raised without ``on_lost``. Exceptions ``fn`` raises are
     raised here (a driver that must not stop catches them inside ``fn``). On any error or
     ``KeyboardInterrupt`` the tasks not finished are cancelled.
+
+    With ``hard_timeout_s``, a task still executing that long after a worker started it (a
+    thread cannot be stopped) is cancelled and its worker process restarted; its result is
+    ``on_timeout(index, attempts)``.
     """
     from distributed import as_completed
     from distributed.scheduler import KilledWorker
@@ -84,32 +89,103 @@ def map_tasks(client: Any, fn: Callable[..., Any], items: Sequence[Any], *, retr
     futures = {client.submit(fn, item, 1, key=f"{key}-{i}-1", pure=False): i
                for i, item in enumerate(items)}
     pending = as_completed(list(futures))
+    timed_out: set[str] = set()
+    watchdog = (_Watchdog(client, futures, hard_timeout_s, timed_out)
+                if hard_timeout_s is not None else contextlib.nullcontext())
     try:
-        for fut in pending:
-            i = futures.pop(fut)
-            try:
-                res = fut.result()
-            except lost as exc:
-                if attempts[i] > retries:
-                    if on_lost is None:
-                        raise
-                    res = on_lost(i, exc, attempts[i])
-                    results[i] = res
-                    if on_result is not None:
-                        on_result(i, res, attempts[i])
-                    continue
-                attempts[i] += 1
-                log.warning("task %d lost its worker (%s): attempt %d", i, printable(exc),
-                            attempts[i])
-                again = client.submit(fn, items[i], attempts[i], key=f"{key}-{i}-{attempts[i]}",
-                                      pure=False)
-                futures[again] = i
-                pending.add(again)
-                continue
-            results[i] = res
-            if on_result is not None:
-                on_result(i, res, attempts[i])
+        with watchdog:
+            _collect(client, fn, items, futures, pending, results, attempts, retries, lost,
+                     on_result, on_lost, on_timeout, timed_out, key)
     except BaseException:
         client.cancel(list(futures))
         raise
     return results
+
+
+def _collect(client, fn, items, futures, pending, results, attempts, retries, lost,
+             on_result, on_lost, on_timeout, timed_out, key) -> None:
+    """The loop of :func:`map_tasks` over the futures as they complete."""
+    from distributed.client import FutureCancelledError
+
+    for fut in pending:
+        i = futures.pop(fut)
+        try:
+            if fut.key in timed_out:
+                raise FutureCancelledError(fut.key, "timed out")
+            res = fut.result()
+        except FutureCancelledError:
+            if fut.key not in timed_out or on_timeout is None:
+                raise
+            res = results[i] = on_timeout(i, attempts[i])
+            if on_result is not None:
+                on_result(i, res, attempts[i])
+            continue
+        except lost as exc:
+            if attempts[i] > retries:
+                if on_lost is None:
+                    raise
+                res = on_lost(i, exc, attempts[i])
+                results[i] = res
+                if on_result is not None:
+                    on_result(i, res, attempts[i])
+                continue
+            attempts[i] += 1
+            log.warning("task %d lost its worker (%s): attempt %d", i, printable(exc),
+                        attempts[i])
+            again = client.submit(fn, items[i], attempts[i], key=f"{key}-{i}-{attempts[i]}",
+                                  pure=False)
+            futures[again] = i
+            pending.add(again)
+            continue
+        results[i] = res
+        if on_result is not None:
+            on_result(i, res, attempts[i])
+
+
+class _Watchdog:
+    """A thread that polls the tasks executing on the workers and, for one running longer than
+    ``limit`` seconds, cancels its future and restarts its worker (the only way to stop it)."""
+
+    def __init__(self, client: Any, futures: dict, limit: float, timed_out: set) -> None:
+        import threading
+
+        self.client, self.futures, self.limit, self.timed_out = client, futures, limit, timed_out
+        self.stop = threading.Event()
+        self.thread = threading.Thread(target=self._watch, daemon=True, name="task-watchdog")
+
+    def __enter__(self) -> "_Watchdog":
+        self.thread.start()
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        self.stop.set()
+        self.thread.join()
+
+    def _watch(self) -> None:
+        import time
+
+        seen: dict[str, float] = {}
+        while not self.stop.wait(0.5):
+            try:
+                stacks = self.client.call_stack()
+            except Exception:   # noqa: BLE001 - a worker going away; poll again
+                continue
+            now = time.monotonic()
+            for addr, running in stacks.items():
+                for k in running:
+                    started = seen.setdefault(k, now)
+                    if now - started > self.limit and k not in self.timed_out:
+                        try:
+                            fut = next((f for f in list(self.futures) if f.key == k), None)
+                        except RuntimeError:   # the dict changed meanwhile: next poll
+                            continue
+                        if fut is None:
+                            continue
+                        log.warning("task %s ran longer than %g s: restarting its worker",
+                                    k, self.limit)
+                        self.timed_out.add(k)
+                        self.client.cancel([fut], force=True)
+                        try:
+                            self.client.restart_workers([addr])
+                        except Exception as exc:   # noqa: BLE001 - it may be gone already
+                            log.warning("could not restart worker %s: %s", addr, exc)
