@@ -25,3 +25,13 @@ def test_assignment_solver_is_scipys_without_importing_scipy_optimize():
             a = linear_sum_assignment(m, maximize=maximize)
             b = scipy_lsa(m, maximize=maximize)
             assert [x.tolist() for x in a] == [x.tolist() for x in b]
+
+
+def test_the_track_command_loads_no_scipy_package_beyond_the_solver():
+    """Importing scipy.optimize or scipy.ndimage costs a third to half a second of every
+    command's start; the pipeline needs neither."""
+    code = ("import sys, motiontrack.run.jobs, motiontrack.cli.track; "
+            "print(sorted(m for m in sys.modules if m.startswith('scipy')))")
+    out = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True,
+                         text=True).stdout.strip()
+    assert out == "['scipy.optimize._lsap']"

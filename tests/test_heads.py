@@ -211,3 +211,14 @@ def test_auto_split_leaves_a_scene_of_wide_objects_alone():
 def test_auto_split_can_be_switched_off():
     for settings in (["people.auto_split=false"], ["people.split=false"], ["people.heads=false"]):
         assert all(len(r) == 4 for r in _auto_split(_street(people=True), settings))
+
+
+def test_running_highest_top_is_the_minimum_over_the_window_with_the_edges_open():
+    from motiontrack.people.heads import _running_max_top
+
+    top = np.array([5.0, 3.0, 9.0, 9.0, 1.0, 7.0, 8.0])
+    assert _running_max_top(top, 1).tolist() == [3, 3, 3, 1, 1, 1, 7]
+    assert _running_max_top(top, 2).tolist() == [3, 3, 1, 1, 1, 1, 1]
+    assert _running_max_top(top, 10).tolist() == [1] * 7
+    assert _running_max_top(top, 0).tolist() == top.tolist()
+    assert _running_max_top(np.zeros(0), 3).tolist() == []

@@ -31,7 +31,7 @@ from dataclasses import dataclass
 from typing import Sequence
 
 import numpy as np
-from scipy.ndimage import minimum_filter1d
+from numpy.lib.stride_tricks import sliding_window_view
 
 from ..imaging import pixel_window
 from ..types import Box, Region
@@ -90,7 +90,10 @@ def _running_max_top(top: np.ndarray, r: int) -> np.ndarray:
     """Highest (smallest) top within ``r`` columns either side: ``min(top[x-r:x+r+1])``."""
     if r <= 0 or len(top) == 0:
         return top.copy()
-    return minimum_filter1d(top, 2 * r + 1, mode="constant", cval=np.inf)
+    # numpy's sliding windows, not scipy.ndimage's minimum_filter1d: the same minima without
+    # the third of a second scipy.ndimage adds to every command's start
+    padded = np.concatenate((np.full(r, np.inf), top, np.full(r, np.inf)))
+    return sliding_window_view(padded, 2 * r + 1).min(axis=1)
 
 
 def detect_heads(mask: np.ndarray, box: Box | None = None, scale: float = 1.0,

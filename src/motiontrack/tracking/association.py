@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
-from scipy.optimize import linear_sum_assignment
+from ..assignment import linear_sum_assignment
 
 __all__ = ["iou_matrix", "center_distance_matrix", "association_cost", "assign", "assign_in_stages"]
 
