@@ -3,6 +3,7 @@ here): each is run on a few frames and its output checked for what it must repor
 
 from __future__ import annotations
 
+import json
 import re
 import subprocess
 import sys
@@ -65,3 +66,71 @@ def test_serve_benchmark_with_browsers_reports_each_browser_count():
     # a browser showing the page decodes its MJPEG picture: its processes use CPU
     assert rows[1][0] > 0 and rows[1][3] > browsers_cpu, out
     assert "frame -> picture" not in out, out    # the latency run is the socket mode's
+
+
+@pytest.mark.slow
+def test_throughput_benchmark_measures_every_whole_process_row(data, tmp_path):
+    data("pets09-s2l1", "video.avi")
+    report = tmp_path / "throughput.json"
+    out = subprocess.run([sys.executable, str(REPO / "benchmarks" / "throughput.py"), "--data",
+                          str(data_root()), "--frames", "20", "--rounds", "1",
+                          "--tutorial-fourccs", "MJPG,mp4v", "--json", str(report)],
+                         capture_output=True, text=True, timeout=300, check=True).stdout
+    doc = json.loads(report.read_text())
+    rows = doc["rows"]
+    assert list(rows) == ["decode only", "tutorial", "tutorial + video MJPG",
+                          "tutorial + video mp4v", "track", "track --no-video",
+                          "track --preset people", "track --preset people --no-video"], out
+    assert doc["frames"] == 20 and doc["tutorial_video_fourcc"] in ("MJPG", "mp4v"), out
+    for name, row in rows.items():
+        (run,) = row["runs"]
+        assert run["frames"] == 20 and run["wall_s"] > 0 and run["peak_rss_mb"] > 0, name
+        assert run["cpu_s"] > 0 and run["fps"] == pytest.approx(20 / run["wall_s"]), name
+        # every row but the decoding one writes boxes, scored against the ground truth
+        assert (row["accuracy"] is None) == (name == "decode only"), name
+    # the tutorial writes the same boxes with and without its video; so does track
+    assert rows["tutorial"]["accuracy"] == rows["tutorial + video mp4v"]["accuracy"]
+    assert rows["track"]["accuracy"] == rows["track --no-video"]["accuracy"]
+    assert rows["track"]["x_tutorial"]["reference"] == f"tutorial + video {doc['tutorial_video_fourcc']}"
+    assert rows["track --no-video"]["x_tutorial"]["reference"] == "tutorial"
+    assert [t["met"] in (True, False) for t in doc["targets"]] == [True] * 5
+    assert out.count("met   ") + out.count("MISSED") == 5, out
+
+
+def test_tutorial_script_writes_its_boxes_and_annotated_video(data, tmp_path):
+    import cv2
+
+    from motiontrack.io.mot import read_mot
+
+    video = data("pets09-s2l1", "video.avi")
+    boxes, annotated = tmp_path / "boxes.txt", tmp_path / "tutorial.avi"
+    out = subprocess.run([sys.executable, str(REPO / "benchmarks" / "tutorial.py"), str(video),
+                          "--frames", "15", "--out", str(boxes), "--video", str(annotated)],
+                         capture_output=True, text=True, timeout=120, check=True).stdout
+    assert out.startswith("frames 15 in "), out
+    found = read_mot(boxes, kind="results")
+    # MOG2 marks moving people from the second frame on; each box is an id of its own
+    assert len(found.frames) > 15 and set(found.frames) <= set(range(1, 16))
+    assert len(set(found.ids)) == len(found.ids)
+    cap = cv2.VideoCapture(str(annotated))
+    n = 0
+    while cap.read()[0]:
+        n += 1
+    assert n == 15
+
+
+@pytest.mark.slow
+def test_memory_benchmark_reports_rss_at_every_tenth_of_the_run(tmp_path):
+    report = tmp_path / "memory.json"
+    out = subprocess.run([sys.executable, str(REPO / "benchmarks" / "memory.py"), "--frames", "60",
+                          "--scene", "walker", "--interval", "0.2", "--json", str(report)],
+                         capture_output=True, text=True, timeout=300, check=True).stdout
+    doc = json.loads(report.read_text())
+    assert doc["frames"] == 60 and doc["peak_rss_mb"] > 50, out
+    # the progress bar was read: the marks are at the frames of each tenth
+    assert doc["frames_done_from"] == "progress bar", out
+    assert [m["percent"] for m in doc["marks"]] == list(range(10, 101, 10)), out
+    assert all(m["frames"] >= 6 * (k + 1) for k, m in enumerate(doc["marks"])), out
+    assert all(s["rss_mb"] <= doc["peak_rss_mb"] + 1 for s in doc["samples"]), out
+    assert re.search(r"^peak RSS \d+\.\d MB \(target < 300 MB: (met|MISSED)\)$", out, re.M), out
+    assert "RSS slope over the second half: " in out, out
