@@ -47,6 +47,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import shutil
 import statistics
 import sys
@@ -309,17 +310,20 @@ def opencv_writes(fourcc: str) -> bool:
     """Whether ``cv2.VideoWriter`` of this installation opens ``fourcc`` in its container."""
     if len(fourcc) != 4:
         return False
-    # OpenCV warns that WebM has no tag for VP80 and writes it anyway: the runs show it once
-    level = cv2.utils.logging.getLogLevel()
-    cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_ERROR)
+    # OpenCV's FFmpeg backend warns on stderr (fd 2) that WebM has no tag for VP80, and writes it
+    # anyway: the probe keeps it off the report
+    sys.stderr.flush()
+    saved = os.dup(2)
     try:
-        with tempfile.TemporaryDirectory() as d:
+        with open(os.devnull, "w") as null, tempfile.TemporaryDirectory() as d:
+            os.dup2(null.fileno(), 2)
             w = cv2.VideoWriter(str(Path(d) / f"probe{tutorial.FOURCC_EXTENSIONS.get(fourcc, '.avi')}"),
                                 cv2.VideoWriter_fourcc(*fourcc), 10.0, (64, 48))
             ok = w.isOpened()
             w.release()
     finally:
-        cv2.utils.logging.setLogLevel(level)
+        os.dup2(saved, 2)
+        os.close(saved)
     return ok
 
 
