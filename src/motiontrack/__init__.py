@@ -11,8 +11,6 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
-from .types import Annotations, Box, Frame, FrameResult, Region, Track, TrackState
-
 __version__ = "0.1.0"
 
 __all__ = [
@@ -20,9 +18,28 @@ __all__ = [
     "__version__",
 ]
 
+#: the names of :mod:`motiontrack.types` offered here, imported on first use: importing the
+#: package (every command does, ``--help`` included) then costs no NumPy
+_TYPES = frozenset({"Annotations", "Box", "Frame", "FrameResult", "Region", "Track", "TrackState"})
+
 if TYPE_CHECKING:  # pragma: no cover
     from .config import PipelineConfig
     from .pipeline import TrackRun
+    from .types import Annotations, Box, Frame, FrameResult, Region, Track, TrackState
+
+
+def __getattr__(name: str) -> Any:
+    if name in _TYPES:
+        from . import types
+
+        value = getattr(types, name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *_TYPES})
 
 
 def track(source: Any, config: "PipelineConfig | str | None" = None, **kwargs: Any) -> "TrackRun":

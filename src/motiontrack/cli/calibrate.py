@@ -7,12 +7,13 @@ import logging
 import math
 import sys
 from pathlib import Path
-from typing import TextIO
-
-import numpy as np
+from typing import TYPE_CHECKING, TextIO
 
 from ..errors import (ConfigError, InputError, check_output_path, excerpt, finite_number, location,
                       require_file)
+
+if TYPE_CHECKING:  # NumPy loads when a calibration command runs, not with every command
+    import numpy as np
 
 log = logging.getLogger(__name__)
 
@@ -127,6 +128,7 @@ def _read_image(path: Path, gray: bool = False) -> np.ndarray:
 
 def cmd_chessboard(args: argparse.Namespace) -> int:
     import cv2
+    import numpy as np
 
     from ..calibrate.chessboard import calibrate_chessboard, parse_pattern, write_opencv_yaml
 
@@ -166,6 +168,7 @@ def grid_overlay(camera, image: np.ndarray, step: float | None = None,
                  extent: tuple[float, float, float, float] | None = None) -> np.ndarray:
     """Undistorted copy of ``image`` with the ground grid ``Z = 0`` (metres) drawn on it."""
     import cv2
+    import numpy as np
 
     out = camera.undistort(image)
     if out.ndim == 2:
@@ -270,6 +273,8 @@ def read_lines_csv(path: Path) -> list[tuple[str, str, float, np.ndarray]]:
     ``value`` is NaN for axis ``-`` (straight only); every number is finite. Errors name the
     line and column and quote at most a short excerpt of the offending field.
     """
+    import numpy as np
+
     from ..calibrate.ground import read_csv_fields
 
     groups: dict[str, tuple[str, float, list]] = {}
@@ -309,6 +314,8 @@ MAX_HALF_WIDTH_PX = 200.0
 
 
 def cmd_lines(args: argparse.Namespace) -> int:
+    import numpy as np
+
     from ..calibrate.camera import load_camera
     from ..calibrate.lines import (SensorGeometry, estimate_kappa1, fit_coplanar_tsai,
                                    intersect_grid, refine_line_points)
@@ -365,6 +372,8 @@ def cmd_lines(args: argparse.Namespace) -> int:
 
 
 def cmd_ground(args: argparse.Namespace) -> int:
+    import numpy as np
+
     from ..calibrate.ground import fit_homography, fit_pose, read_point_pairs, write_ground_toml
     from ..calibrate.tsai import MAX_IMAGE_SIDE
 

@@ -15,14 +15,15 @@ import logging
 import math
 import sys
 from pathlib import Path
-
-import numpy as np
+from typing import TYPE_CHECKING
 
 from ..errors import ConfigError, InputError
 from ..io.atomic import atomic_write_text, check_writable, is_stdout
 from ..evaluate.scoring import DEFAULT_SCORING, SCORING_SUMMARY, ignores_zero_marked
-from ..types import Annotations
 from ._common import add_scoring_option, frame_range
+
+if TYPE_CHECKING:  # NumPy and the data model load when the command runs, not with every command
+    from ..types import Annotations
 
 log = logging.getLogger(__name__)
 
@@ -102,6 +103,8 @@ def _read(path: Path, role: str) -> Annotations:
     if not path.is_file():
         raise InputError(f"{role} file not found: {path}")
     if role == "result" and not path.read_bytes().strip():
+        from ..types import Annotations
+
         return Annotations.empty()
     mot_kind = "gt" if role == "ground-truth" else "results"
     from ..io.annotations import read_annotations
@@ -221,6 +224,8 @@ def format_table(results: dict[str, dict], label: str = "tracker") -> str:
 
 
 def _jsonable(v):
+    import numpy as np
+
     if isinstance(v, (np.integer,)):
         return int(v)
     if isinstance(v, (float, np.floating)):

@@ -8,7 +8,6 @@ import json
 import sys
 
 from ..errors import ConfigError, InputError
-from ..evaluate.gtstats import DEFAULT_PERCENTILE
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -23,9 +22,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("gt", nargs="+", help="ground-truth file(s), any supported format (pooled)")
     p.add_argument("--image-size", required=True, metavar="WxH", help="frame size, e.g. 768x576")
     p.add_argument("--sample-std", action="store_true", help="use the sample std (N-1) instead of N")
-    p.add_argument("--percentile", type=float, default=DEFAULT_PERCENTILE, metavar="Q",
-                   help="the recommendation's low percentile; the high one is 100 - Q "
-                        f"(default {DEFAULT_PERCENTILE:g})")
+    p.add_argument("--percentile", type=float, action=_PercentileOption, metavar="Q")
     p.add_argument("--write-config", metavar="FILE",
                    help="write the recommended limits as a TOML config for `track --config FILE`")
     p.add_argument("--json", metavar="PATH",
@@ -34,6 +31,39 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--force", action="store_true",
                    help="overwrite an existing --json or --write-config file")
     p.set_defaults(func=cmd_gt_stats)
+
+
+class _PercentileOption(argparse.Action):
+    """``--percentile Q``, whose default (named in its help) is
+    :data:`~motiontrack.evaluate.gtstats.DEFAULT_PERCENTILE`, read only when ``gt-stats`` parses
+    its arguments or shows its help: that module loads NumPy, which no other command's start
+    needs."""
+
+    def __init__(self, option_strings, dest, default=None, **kwargs) -> None:
+        kwargs.pop("help", None)
+        super().__init__(option_strings, dest, **kwargs)
+
+    @property
+    def default(self) -> float:
+        from ..evaluate.gtstats import DEFAULT_PERCENTILE
+
+        return DEFAULT_PERCENTILE
+
+    @default.setter
+    def default(self, value) -> None:   # argparse sets it; the value is the library's
+        pass
+
+    @property
+    def help(self) -> str:
+        return ("the recommendation's low percentile; the high one is 100 - Q "
+                f"(default {self.default:g})")
+
+    @help.setter
+    def help(self, value) -> None:
+        pass
+
+    def __call__(self, parser, namespace, values, option_string=None) -> None:
+        setattr(namespace, self.dest, values)
 
 
 def cmd_gt_stats(args) -> int:

@@ -7,8 +7,6 @@ import logging
 from dataclasses import replace
 from pathlib import Path
 
-import numpy as np
-
 log = logging.getLogger(__name__)
 
 
@@ -27,6 +25,8 @@ def register(subparsers) -> None:
 
 
 def cmd_world(args: argparse.Namespace) -> int:
+    import numpy as np
+
     from ..calibrate.camera import load_camera
     from ..calibrate.measure import world_positions
     from ..errors import check_output_path
