@@ -88,12 +88,9 @@ def frame_loop(total: int | None) -> Iterator[FrameLoop]:
     A stopped loop (``KeyboardInterrupt``, which the command turns into exit code 130) whose live
     source was left inside an OpenCV call exits without waiting for that call
     (:func:`_exit_now_if_still_reading`)."""
-    from tqdm import tqdm
-
-    with GracefulStop() as stop, tqdm(total=total, unit="frame", disable=None, file=sys.stderr,
-                                      dynamic_ncols=True) as bar:
+    with GracefulStop() as stop, _progress_bar(total) as update:
         try:
-            yield FrameLoop(bar.update, stop.stop)
+            yield FrameLoop(update, stop.stop)
         except KeyboardInterrupt:
             from ..io.sources import blocked_live_sources
 
@@ -101,6 +98,21 @@ def frame_loop(total: int | None) -> Iterator[FrameLoop]:
             if blocked:
                 atexit.register(_exit_now_if_still_reading, blocked, 130)
             raise
+
+
+@contextmanager
+def _progress_bar(total: int | None) -> Iterator[Callable[[int], Any]]:
+    """The ``update(n)`` of a tqdm frame bar on stderr. When stderr is not a terminal the bar is
+    hidden (tqdm's ``disable=None``), and tqdm, which takes longer to import than a short run
+    takes to start, is not imported at all."""
+    if hasattr(sys.stderr, "isatty") and not sys.stderr.isatty():
+        yield lambda n=1: None
+        return
+    from tqdm import tqdm
+
+    with tqdm(total=total, unit="frame", disable=None, file=sys.stderr,
+              dynamic_ncols=True) as bar:
+        yield bar.update
 
 
 def _exit_now_if_still_reading(sources: list, code: int) -> None:
@@ -193,8 +205,9 @@ def run_overrides(args) -> list[str]:
 
 
 class CodecOption(argparse.Action):
-    """``--codec NAME``: its help lists the codecs this installation can encode, probed only
-    when the help is shown (``p.add_argument("--codec", action=CodecOption)``)."""
+    """``--codec NAME``: its help lists the codecs this installation can encode, found only
+    when the help is shown, from the cached probe of this installation
+    (:mod:`motiontrack.io.codec_cache`) (``p.add_argument("--codec", action=CodecOption)``)."""
 
     def __init__(self, option_strings, dest, default=None, **kwargs) -> None:
         kwargs.pop("help", None)
@@ -202,10 +215,10 @@ class CodecOption(argparse.Action):
 
     @property
     def help(self) -> str:
-        from ..io.video import encodable_codecs
+        from ..io.codec_cache import encodable_codec_names
 
         return (f"video codec, one this installation can encode: "
-                f"{', '.join(encodable_codecs())} (default {self.default or 'vp80'}; "
+                f"{', '.join(encodable_codec_names())} (default {self.default or 'vp80'}; "
                 "`motiontrack list` says what each is)")
 
     @help.setter
