@@ -15,7 +15,6 @@ import math
 import sys
 import typing
 from dataclasses import dataclass, field, fields, is_dataclass
-from importlib import resources
 from pathlib import Path
 from typing import Any, Iterable
 
@@ -666,6 +665,8 @@ def from_dict(cls: type, data: dict[str, Any], where: str = "") -> Any:
 
 def presets() -> dict[str, str]:
     """Shipped presets: name → first comment line (``motiontrack list``)."""
+    from importlib import resources   # here: a run without a preset never reads them
+
     out = {}
     for entry in sorted(resources.files("motiontrack").joinpath("data", "presets").iterdir(),
                         key=lambda e: e.name):
@@ -691,6 +692,8 @@ def load_config(path: str | Path | None = None, overrides: Iterable[str] = (),
         names = presets()
         if preset not in names:
             raise ConfigError(f"unknown preset {preset!r}; valid presets: {', '.join(names)}")
+        from importlib import resources
+
         entry = resources.files("motiontrack").joinpath("data", "presets", f"{preset}.toml")
         data = parse_toml(entry.read_text(encoding="utf-8"), f"preset {preset}")
     if path is not None:

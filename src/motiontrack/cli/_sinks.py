@@ -24,6 +24,8 @@ def add_sink_options(p: argparse.ArgumentParser, default_name: str) -> None:
 def sink_targets(args: argparse.Namespace) -> list:
     """The targets of ``--webhook`` and ``--mqtt``, checked (a bad URL, a bad camera name or a
     missing paho-mqtt is a :class:`~motiontrack.errors.ConfigError` before the run starts)."""
+    if not (args.webhook or args.mqtt or args.camera_name is not None):
+        return []   # nothing to check: a run without sinks does not load them
     from ..io.sinks import check_camera_name, parse_mqtt, parse_webhook, require_mqtt
 
     targets = [parse_webhook(u) for u in args.webhook] + [parse_mqtt(u) for u in args.mqtt]

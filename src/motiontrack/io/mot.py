@@ -13,7 +13,6 @@ confidence. Frames are 1-based.
 
 from __future__ import annotations
 
-import configparser
 import io
 import math
 import re
@@ -198,6 +197,8 @@ def write_mot(ann: Annotations, path: str | Path, kind: str = "results") -> None
 
 def read_seqinfo(path: str | Path) -> dict[str, object]:
     """Read ``seqinfo.ini``: name, imDir, frameRate, seqLength, imWidth, imHeight, imExt."""
+    import configparser   # here: every command reads MOT files, few read seqinfo.ini
+
     p = Path(path)
     if p.is_dir():
         p = p / "seqinfo.ini"

@@ -11,34 +11,31 @@ import functools
 import logging
 from dataclasses import replace
 from pathlib import Path
-from typing import Any, Callable, Iterable, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Iterable, Sequence
 
-import numpy as np
-
-from ..analytics import Analytics, load_scene
-from ..calibrate import fit_to_image, load_camera
 from ..config import PipelineConfig, SourceConfig, save_config
 from ..errors import ConfigError
-from ..evaluate.score import score_run
 from ..evaluate.scoring import DEFAULT_SCORING, ignores_zero_marked
-from ..io.sinks import check_camera_name
 from ..io.sources import Source
 from ..imaging import scaled_size
 from ..io.video import extension_for
 from ..pipeline import completes_tracks, fill_gap_frames, open_configured_source
 from ..render.streams import parse_streams
-from ..tracking.flow import SparseFlowParams
-from ..tracking.single import SingleTracker, follow_accuracy
 from ..types import Annotations, Box
-from .analytics_writers import CountsWriter, EventsWriter
-from .event_sinks import EventSinksWriter, deliveries
 from .folders import source_name
-from .heatmaps import HeatmapWriter, scene_geometry
 from .job import Job, Writer
 from .processors import (DenseFlowProcessor, FollowProcessor, OverlayProcessor,
                          SparseFlowProcessor, TrackProcessor)
 from .writers import (IntermediateWriter, MaskImagesWriter, MaskVideoWriter, ScoreWriter,
                       StillsWriter, TracksWriter, VideoWriter, ViewerWriter)
+
+if TYPE_CHECKING:
+    # a job imports what only some runs use when the run asks for it: a scene (analytics), a
+    # camera (calibrate), ground truth (the metrics), event sinks, another command's tracker
+    import numpy as np
+
+    from ..tracking.flow import SparseFlowParams
+    from ..tracking.single import SingleTracker
 
 log = logging.getLogger(__name__)
 
@@ -78,7 +75,12 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
     ignores_zero_marked(scoring)   # an unknown name fails before the source opens
     if sinks and scene is None:
         raise ConfigError("--webhook and --mqtt send scene-analytics events: give --scene")
-    camera_name = check_camera_name(camera_name or source_name(source)) if sinks else None
+    if sinks:
+        from ..io.sinks import check_camera_name
+
+        camera_name = check_camera_name(camera_name or source_name(source))
+    else:
+        camera_name = None
     if mask_images is not None and detections is not None:
         raise ConfigError("--mask-images needs motion masks; with --detections there are none")
     streams = parse_streams(save)
@@ -90,15 +92,22 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
     more = list(writers)
     camera = None
     if cfg.measure.camera:
+        from ..calibrate import load_camera
+
         camera = load_camera(cfg.measure.camera)
 
     def build(src: Source) -> Job:
         truth = gt if gt is not None else src.ground_truth()
         external = detections is not None
-        fitted = (fit_to_image(camera, src.info.width, src.info.height, cfg.measure.camera)
-                  if camera is not None else None)
+        fitted = None
+        if camera is not None:
+            from ..calibrate import fit_to_image
+
+            fitted = fit_to_image(camera, src.info.width, src.info.height, cfg.measure.camera)
         analytics = None
         if scene is not None:
+            from ..analytics import Analytics, load_scene
+
             analytics = Analytics(load_scene(scene, fitted), src.info.fps or 25.0, fitted)
         proc = TrackProcessor(cfg, src.info, detections,
                               needs_background="background" in streams, analytics=analytics)
@@ -111,6 +120,9 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
         tracks = TracksWriter(out, fitted, fill)
         writers = [tracks]
         if analytics is not None:
+            from .analytics_writers import CountsWriter, EventsWriter
+            from .heatmaps import HeatmapWriter, scene_geometry
+
             sc = analytics.scene
             writers += [EventsWriter(out, str(source), sc.source),
                         CountsWriter(out, sc.lines, sc.zones, bin_s),
@@ -127,9 +139,13 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
         if show is not None:
             writers.append(ViewerWriter(show))
         if truth is not None:
+            from ..evaluate.score import score_run
+
             writers.append(ScoreWriter(out, truth, tracks,
                                        functools.partial(score_run, scoring=scoring)))
         if sinks:
+            from .event_sinks import EventSinksWriter, deliveries
+
             writers.append(EventSinksWriter(deliveries(sinks, camera_name), camera_name))
         return Job(src, proc, [*writers, *more], out, force=force, config=(save_config, cfg))
 
@@ -146,6 +162,8 @@ def follow_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, tracker: S
     codec = cfg.output.codec
 
     def score(truth: Annotations, pred: Annotations, frames: int, start: int) -> dict[str, float]:
+        from ..tracking.single import follow_accuracy
+
         return follow_accuracy(truth, replace(pred, meta={"last_frame": start + frames}), gt_id)
 
     def build(src: Source) -> Job:
@@ -180,6 +198,8 @@ def sparse_flow_job(source: Any, cfg: PipelineConfig, out_dir: str | Path,
         if cfg.output.mask_video:
             writers.append(MaskVideoWriter(out, codec))
         if truth is not None:
+            from ..evaluate.score import score_run
+
             writers.append(ScoreWriter(out, truth, tracks,
                                        functools.partial(score_run, scoring=scoring),
                                        write_gt=False))

@@ -13,25 +13,25 @@ picture of it; the writers do the rest.
 from __future__ import annotations
 
 from dataclasses import asdict, replace
-from typing import Any, Iterator, Sequence
+from typing import TYPE_CHECKING, Any, Iterator, Sequence
 
 import cv2
 import numpy as np
 
-from ..analytics import Analytics
 from ..config import FarnebackParams, PipelineConfig
 from ..io.sources import Source, SourceInfo
-from ..motion.dense_flow import DenseFlow
 from ..pipeline import Pipeline
 from ..render.annotate import annotate_frame, draw_label
 from ..render.colors import TrackColors
-from ..render.flow import draw_feature_trails, draw_flow_legend, flow_to_bgr
-from ..render.overlay import draw_overlay, layers_at, overlay_layers
 from ..render.people import draw_people
-from ..render.scene import draw_scene
-from ..tracking.flow import SparseFlowParams, SparseFlowTracker
-from ..tracking.single import SingleTracker, follow
 from ..types import Annotations, Box, FrameResult, Track, TrackState
+
+if TYPE_CHECKING:
+    # each processor imports the modules only it uses when it is made: a command loads what it
+    # runs (``track`` without ``--scene`` neither analytics nor flow nor single trackers)
+    from ..analytics import Analytics
+    from ..tracking.flow import SparseFlowParams
+    from ..tracking.single import SingleTracker
 
 __all__ = ["TrackProcessor", "FollowProcessor", "SparseFlowProcessor", "DenseFlowProcessor",
            "OverlayProcessor"]
@@ -100,6 +100,8 @@ class TrackProcessor:
         if self.pipe.people is not None and result.people is not None:
             draw_people(img, result.people, inplace=True, colors=colors)
         if self.analytics is not None:
+            from ..render.scene import draw_scene
+
             draw_scene(img, self.analytics.scene.lines, self.analytics.scene.zones, result.scene)
         return img
 
@@ -129,6 +131,8 @@ class FollowProcessor:
         self._colors = TrackColors()
 
     def results(self, source: Source) -> Iterator[FrameResult]:
+        from ..tracking.single import follow
+
         for index, image, ok, box, score in follow(source, self.tracker, self.box):
             tracks: tuple[Track, ...] = ()
             if ok and box is not None:
@@ -163,6 +167,8 @@ class SparseFlowProcessor:
 
     def __init__(self, cfg: PipelineConfig, info: SourceInfo,
                  params: SparseFlowParams | None = None) -> None:
+        from ..tracking.flow import SparseFlowParams, SparseFlowTracker
+
         self.cfg = cfg
         self.params = params or SparseFlowParams()
         self.tracker = SparseFlowTracker((info.width, info.height), self.params, cfg.motion,
@@ -183,6 +189,8 @@ class SparseFlowProcessor:
         img = annotate_frame(result.frame, result.tracks, (), result.mask, out.trail, out.inset,
                              inset_scale=out.inset_scale, text=f"frame {result.index}",
                              colors=colors, legend=self.legend)
+        from ..render.flow import draw_feature_trails
+
         draw_feature_trails(img, [tr for tr in self.tracker.trails() if tr[0] in colors], colors)
         return img
 
@@ -201,6 +209,8 @@ class DenseFlowProcessor:
 
     def __init__(self, params: FarnebackParams | None = None,
                  max_magnitude: float | None = None) -> None:
+        from ..motion.dense_flow import DenseFlow
+
         self.params = params or FarnebackParams()
         self.max_magnitude = max_magnitude
         self.flow = DenseFlow(self.params)
@@ -229,6 +239,8 @@ class DenseFlowProcessor:
         self._moving += int(np.count_nonzero(mask))
 
     def annotate(self, result: FrameResult) -> np.ndarray:
+        from ..render.flow import draw_flow_legend, flow_to_bgr
+
         img = flow_to_bgr(self._last, self.max_magnitude)
         top = self.max_magnitude
         if top is None:   # each frame at its own largest magnitude: the wheel's rim says which
@@ -254,6 +266,8 @@ class OverlayProcessor:
 
     def __init__(self, runs: Sequence[tuple[str, Annotations]], gt: Annotations | None = None,
                  first: int = 1, last: int | None = None) -> None:
+        from ..render.overlay import overlay_layers
+
         self.layers = overlay_layers(runs, gt)
         self.first, self.last = first, last
 
@@ -268,6 +282,8 @@ class OverlayProcessor:
                               mask=None, regions=(), tracks=())
 
     def annotate(self, result: FrameResult) -> np.ndarray:
+        from ..render.overlay import draw_overlay, layers_at
+
         f = result.index + 1
         return draw_overlay(result.frame, layers_at(self.layers, f), frame_label=f"frame {f}")
 

@@ -15,7 +15,6 @@ from typing import Any, Callable, Iterable
 import cv2
 import numpy as np
 
-from ..calibrate import track_measurements, world_positions
 from ..errors import InputError
 from ..io.atomic import AtomicFile, DiskFullError, OutputLock, atomic_write_bytes, free_bytes
 from ..io.mot import format_mot_rows, read_mot, write_mot
@@ -93,6 +92,8 @@ class TracksWriter(Writer):
         if self.max_gap is not None:
             self._complete(summary, self.max_gap)
         if self.camera is not None:
+            from ..calibrate.measure import track_measurements   # with a camera only
+
             pred = self.final()
             summary.extra["measurements"] = {
                 str(k): v for k, v in track_measurements(pred.frames, pred.ids, pred.boxes,
@@ -115,6 +116,8 @@ class TracksWriter(Writer):
 
     def _world(self, boxes: np.ndarray) -> np.ndarray:
         """Ground-plane positions ``(x, y, 0)`` in metres of the boxes' foot points."""
+        from ..calibrate.measure import world_positions   # with a camera only
+
         return np.column_stack([world_positions(boxes, self.camera), np.zeros(len(boxes))])
 
 

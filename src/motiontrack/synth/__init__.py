@@ -10,18 +10,21 @@ See ``docs/synthetic.md`` for the scenes, their parameters and the ground-truth 
 
 from __future__ import annotations
 
-from .render import Bag, Column, Person
-from .scenes import (
-    MASK_PERSON,
-    MASK_SHADOW,
-    SCENES,
-    Lighting,
-    SyntheticScene,
-    make_scene,
-    parse_synth_spec,
-    scene_summaries,
-)
+from typing import TYPE_CHECKING, Any
+
+# registers the synth: scheme; the scenes and their drawing load when first used (a name below,
+# or a synth: source opened), so that the pipeline, which registers the scheme, starts without
 from .source import SyntheticSource
+
+#: the names offered here, by the submodule that defines them
+_LAZY = {**dict.fromkeys(("Bag", "Column", "Person"), "render"),
+         **dict.fromkeys(("MASK_PERSON", "MASK_SHADOW", "SCENES", "Lighting", "SyntheticScene",
+                          "make_scene", "parse_synth_spec", "scene_summaries"), "scenes")}
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .render import Bag, Column, Person
+    from .scenes import (MASK_PERSON, MASK_SHADOW, SCENES, Lighting, SyntheticScene, make_scene,
+                         parse_synth_spec, scene_summaries)
 
 __all__ = [
     "SCENES",
@@ -37,3 +40,17 @@ __all__ = [
     "MASK_PERSON",
     "MASK_SHADOW",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    if name in _LAZY:
+        from . import render, scenes   # scenes draws with render: the one loads the other
+
+        value = getattr(scenes if _LAZY[name] == "scenes" else render, name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *_LAZY})

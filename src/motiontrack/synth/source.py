@@ -9,7 +9,6 @@ from typing import Iterator
 
 from ..io.sources import SCHEMES, Source, SourceInfo
 from ..types import Annotations, Frame
-from .scenes import parse_synth_spec
 
 __all__ = ["SyntheticSource"]
 
@@ -19,6 +18,9 @@ class SyntheticSource(Source):
     """A synthetic scene (``synth:NAME?seed=..``) rendered on the fly, with exact ground truth."""
 
     def __init__(self, spec: str, start: int = 0, max_frames: int = 0) -> None:
+        # the scenes and their drawing load with the first synth: source, not with the scheme
+        from .scenes import parse_synth_spec
+
         super().__init__(start, max_frames)
         self.scene = parse_synth_spec(spec)
         s = self.scene
