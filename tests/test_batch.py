@@ -293,3 +293,137 @@ def test_a_task_that_never_returns_is_cancelled_and_its_worker_restarted():
         # both workers are back: two tasks run at the same time again
         assert map_tasks(cl, _sleep_or_return, ["a", "b"]) == ["a", "b"]
         assert len(cl.scheduler_info()["workers"]) == 2
+
+
+# ------------------------------------------------------------- scene, camera and ground truth
+def _synth_video(folder: Path, n: int = 40) -> tuple[Path, Path]:
+    """A synthetic scene written as an .avi file and its ground truth as gt.txt: a video file
+    with no ground truth of its own."""
+    import cv2
+
+    from motiontrack.io.mot import write_mot
+    from motiontrack.io.sources import open_source
+
+    video, gt = folder / "walk.avi", folder / "walk-gt.txt"
+    with open_source(f"synth:walker?n_frames={n}") as src:
+        writer = None
+        for f in src:
+            if writer is None:
+                h, w = f.image.shape[:2]
+                writer = cv2.VideoWriter(str(video), cv2.VideoWriter_fourcc(*"MJPG"), 10, (w, h))
+            writer.write(f.image)
+        writer.release()
+        write_mot(src.ground_truth(), gt, kind="gt")
+    return video, gt
+
+
+def test_batch_files_apply_to_videos_without_their_own_and_gt_from_matches_name_or_source(
+        tmp_path):
+    from motiontrack.batch.sources import Video, with_files
+
+    for name in ("scene.toml", "cam.xml", "own.toml", "gt-a.txt", "gt-b.txt", "b.avi"):
+        (tmp_path / name).write_text("x", encoding="utf-8")
+    videos = [Video("a", "/x/a.avi"), Video("b", str(tmp_path / "b.avi")),
+              Video("c", "/x/c.avi", scene=str(tmp_path / "own.toml"))]
+    (tmp_path / "m.toml").write_text(
+        '[[sequence]]\nname = "a"\nsource = "elsewhere.avi"\ngt = "gt-a.txt"\n'
+        '[[sequence]]\nname = "other"\nsource = "b.avi"\ngt = "gt-b.txt"\ncamera = "cam.xml"\n',
+        encoding="utf-8")
+    out = with_files(videos, scene=str(tmp_path / "scene.toml"), gt_from=str(tmp_path / "m.toml"))
+    assert [(v.name, v.gt, v.scene, v.camera) for v in out] == [
+        ("a", str(tmp_path / "gt-a.txt"), str(tmp_path / "scene.toml"), None),   # by name
+        ("b", str(tmp_path / "gt-b.txt"), str(tmp_path / "scene.toml"),            # by source
+         str(tmp_path / "cam.xml")),
+        ("c", None, str(tmp_path / "own.toml"), None)]                             # its own scene
+    (tmp_path / "none.toml").write_text('[[sequence]]\nsource = "z.avi"\ngt = "g.txt"\n',
+                                        encoding="utf-8")
+    with pytest.raises(ConfigError, match="none of its sequences is one of the 3 videos"):
+        with_files(videos, gt_from=str(tmp_path / "none.toml"))
+    with pytest.raises(ConfigError, match="--camera .*no such file"):
+        with_files(videos, camera=str(tmp_path / "absent.xml"))
+
+
+@pytest.mark.slow
+def test_batch_scene_and_gt_from_give_each_video_the_events_and_metrics_of_track_alone(
+        tmp_path, client):
+    from motiontrack.io.events import read_events
+    from motiontrack.io.mot import read_mot as read_gt
+    video, gt = _synth_video(tmp_path)
+    scene = tmp_path / "scene.toml"   # the whole picture: the walker enters it
+    scene.write_text('[[zone]]\nname = "all"\n'
+                     'polygon = [[0, 0], [4000, 0], [4000, 4000], [0, 4000]]\n', encoding="utf-8")
+    (tmp_path / "m.toml").write_text(f'[[sequence]]\nname = "walk"\nsource = "{video.name}"\n'
+                                     f'gt = "{gt.name}"\n', encoding="utf-8")
+    results = tmp_path / "results"
+    code = main(["batch", str(video), "-o", str(results), "-j", "2", "--set",
+                 "output.video=false", "--scene", str(scene), "--gt-from", str(tmp_path / "m.toml")])
+    assert code == 0
+    alone = track_job(str(video), _cfg(), tmp_path / "alone", gt=read_gt(gt, kind="gt"),
+                      scene=scene)
+    summary = alone.run()
+    events = read_events(results / "walk" / "events.jsonl").events
+    assert len(events) > 0
+    assert events == read_events(tmp_path / "alone" / "events.jsonl").events
+    row = _index(results)["walk"]
+    assert float(row["HOTA"]) == pytest.approx(summary.accuracy["HOTA"], abs=1e-12)
+    assert json.loads((results / "combined.json").read_text(encoding="utf-8"))["sequences"] == [
+        "walk"]
+
+
+@pytest.mark.slow
+def test_progress_reports_frames_and_the_clusters_frame_rate_while_videos_run(tmp_path, client):
+    calls = []
+    scenes = ["synth:walker?n_frames=400", "synth:crossing?n_frames=400"]
+    rows = run_batch(scenes, tmp_path / "results", _cfg(), client=client,
+                     progress=lambda c: calls.append(dict(c)))
+    assert [r["status"] for r in rows] == ["done", "done"]
+    assert calls[0] == {"done": 0, "failed": 0, "running": 2, "total": 2, "frames": 0,
+                        "fps": 0.0}
+    during = [c for c in calls if c["done"] == 0 and c["frames"] > 0]
+    assert during, "no frames reported while the videos ran"
+    assert all(c["fps"] > 0 for c in during)
+    assert [c["frames"] for c in calls] == sorted(c["frames"] for c in calls)
+    assert calls[-1]["frames"] == 800 and calls[-1]["done"] == 2
+
+
+@pytest.mark.slow
+def test_ctrl_c_stops_the_batch_within_seconds_and_the_index_says_which_videos_are_done(
+        tmp_path):
+    """SIGINT to the whole process group, as a terminal's Ctrl-C sends it (the local cluster's
+    workers get it too)."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    results = tmp_path / "results"
+    short = ["synth:walker?n_frames=30", "synth:crossing?n_frames=30"]
+    long = ["synth:walker?n_frames=20000&seed=1", "synth:crossing?n_frames=20000&seed=1"]
+    proc = subprocess.Popen([sys.executable, "-m", "motiontrack", "batch", *short, *long, "-o",
+                             str(results), "-j", "2", "--set", "output.video=false"],
+                            start_new_session=True, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    try:
+        t0 = time.monotonic()
+        while time.monotonic() - t0 < 180:
+            if (results / "index.csv").is_file() and sum(
+                    r["status"] == "done" for r in _index(results).values()) == 2:
+                break
+            time.sleep(0.2)
+        time.sleep(1.0)   # the long videos are running now
+        os.killpg(proc.pid, signal.SIGINT)
+        t1 = time.monotonic()
+        _, err = proc.communicate(timeout=60)
+        stopped_in = time.monotonic() - t1
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    assert proc.returncode == 130, err
+    assert stopped_in < 20
+    assert "--resume finishes them" in err
+    index = _index(results)
+    assert [index[n]["status"] for n in index] == ["done", "done", "interrupted", "interrupted"]
+    for name in ("synth-walker", "synth-crossing"):
+        assert json.loads((results / name / "summary.json").read_text())["status"] == "complete"
+    assert not list(results.glob(".*.partial"))
+    assert not (results / "synth-walker-2").exists()

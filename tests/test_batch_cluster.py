@@ -86,3 +86,42 @@ def test_batch_on_an_external_scheduler_matches_track_alone(tmp_path, scheduler_
         alone = tmp_path / f"alone-{name}"
         track_job(src, cfg, alone).run()
         assert (results / name / "tracks.txt").read_bytes() == (alone / "tracks.txt").read_bytes()
+
+
+@pytest.mark.slow
+def test_an_interrupted_batch_frees_the_clusters_workers_within_seconds(tmp_path,
+                                                                         scheduler_address):
+    """Ctrl-C reaches only the client's process on a cluster of its own; Dask cannot stop a
+    running task, so the videos running stop themselves on the batch's stop event."""
+    import os
+    import signal
+
+    from distributed import Client
+
+    results = tmp_path / "results"
+    long = ["synth:walker?n_frames=3000", "synth:crossing?n_frames=3000"]
+    proc = subprocess.Popen([sys.executable, "-m", "motiontrack", "batch", *long, "-o",
+                             str(results), "--cluster", scheduler_address, "--set",
+                             "output.video=false"], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    try:
+        with Client(scheduler_address, timeout=30) as cl:
+            deadline = time.monotonic() + 120
+            while sum(len(v) for v in cl.processing().values()) < 2:
+                assert time.monotonic() < deadline and proc.poll() is None
+                time.sleep(0.2)
+            time.sleep(2.0)   # both videos are tracking frames
+            os.kill(proc.pid, signal.SIGINT)
+            _, err = proc.communicate(timeout=60)
+            assert proc.returncode == 130, err
+            t0 = time.monotonic()
+            while any(cl.call_stack().values()):   # a task still executing on a worker
+                assert time.monotonic() - t0 < 15, cl.call_stack()
+                time.sleep(0.2)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    with open(results / "index.csv", newline="", encoding="utf-8") as fh:
+        assert [r["status"] for r in csv.DictReader(fh)] == ["interrupted", "interrupted"]
+    time.sleep(1.0)   # the workers' runs remove their own partial folders as they stop
+    assert not list(results.glob(".*.partial")) and not (results / "synth-walker").exists()

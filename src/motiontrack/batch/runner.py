@@ -14,7 +14,9 @@ import io
 import json
 import logging
 import shutil
+import threading
 import time
+import uuid
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, Mapping, Sequence
@@ -25,7 +27,7 @@ from ..errors import ConfigError, printable
 from ..io.atomic import OutputLock, atomic_write_bytes, atomic_write_text
 from ..run.executor import dask_client, map_tasks
 from .combined import write_combined
-from .sources import Video, expand_sources
+from .sources import Video, expand_sources, with_files
 
 log = logging.getLogger(__name__)
 
@@ -53,19 +55,78 @@ class BatchTask:
     config: Mapping[str, Any]
     config_hash: str
     timeout_s: float | None = None
+    #: the Dask event topic the worker reports the video's frames on (None: no reports)
+    progress_topic: str | None = None
+    #: the name of the batch's ``distributed.Event`` that asks running videos to stop
+    stop_event: str | None = None
+
+
+#: seconds between two reports of a video's frames to the batch's client
+REPORT_EVERY_S = 1.0
 
 
 class VideoTimeout(Exception):
     """A video ran longer than the batch's ``--timeout-s``."""
 
 
+class BatchStopped(Exception):
+    """The batch was interrupted while this video ran."""
+
+
 def _worker_name() -> str:
+    worker = _this_worker()
+    return "local" if worker is None else str(worker.name)
+
+
+def _this_worker() -> Any:
     try:
         from distributed import get_worker
 
-        return str(get_worker().name)
+        return get_worker()
     except (ImportError, ValueError):   # not on a Dask worker
-        return "local"
+        return None
+
+
+class _Frames:
+    """The run's progress callback, which counts the frames and reports them on the batch's
+    topic every :data:`REPORT_EVERY_S` seconds, and its stop poll: true once the video is over
+    its time or the batch's stop event is set (checked as often as frames are reported), so
+    that an interrupted batch frees even the workers of a remote cluster within a second or
+    two (Dask cannot stop a running task)."""
+
+    def __init__(self, task: BatchTask, deadline: float | None) -> None:
+        self.name, self.deadline = task.video.name, deadline
+        self.worker = _this_worker() if task.progress_topic or task.stop_event else None
+        self.topic, self.stop_event = task.progress_topic, None
+        if self.worker is not None and task.stop_event:
+            try:
+                from distributed import Event
+
+                self.stop_event = Event(task.stop_event)
+            except Exception:   # noqa: BLE001 - without it the video just runs to its end
+                self.stop_event = None
+        self.frames, self.late, self.stopped = 0, False, False
+        self.next_report = self.next_check = time.perf_counter() + REPORT_EVERY_S
+
+    def __call__(self, n: int) -> None:
+        self.frames += n
+        if self.topic and self.worker is not None and time.perf_counter() >= self.next_report:
+            self.next_report = time.perf_counter() + REPORT_EVERY_S
+            try:
+                self.worker.log_event(self.topic, {"name": self.name, "frames": self.frames})
+            except Exception:   # noqa: BLE001 - progress is never worth failing a video
+                self.topic = None
+
+    def should_stop(self) -> bool:
+        now = time.perf_counter()
+        self.late = self.late or (self.deadline is not None and now > self.deadline)
+        if self.stop_event is not None and now >= self.next_check:
+            self.next_check = now + REPORT_EVERY_S
+            try:
+                self.stopped = self.stopped or self.stop_event.is_set()
+            except Exception:   # noqa: BLE001 - the scheduler away: the client is gone too
+                self.stop_event = None
+        return self.late or self.stopped
 
 
 def _one_line(exc: BaseException) -> str:
@@ -95,21 +156,16 @@ def run_video(task: BatchTask, attempt: int = 1) -> dict[str, Any]:
         cfg = apply_overrides(from_dict(PipelineConfig, dict(task.config)), overrides)
         gt = read_annotations(v.gt, mot_kind="gt") if v.gt else None
         job = track_job(v.source, cfg, partial, force=True, gt=gt, scene=v.scene)
-        deadline = None if task.timeout_s is None else t0 + task.timeout_s
-        late: list[bool] = []
-
-        def over_time() -> bool:
-            if time.perf_counter() > deadline:
-                late.append(True)
-            return bool(late)
-
-        # polled after each frame: the run stops itself, so its worker is free at once
+        frames = _Frames(task, None if task.timeout_s is None else t0 + task.timeout_s)
+        # polled after each frame: a run over its time stops itself, so its worker is free
         try:
-            summary = job.run(should_stop=None if deadline is None else over_time)
+            summary = job.run(progress=frames, should_stop=frames.should_stop)
         except KeyboardInterrupt:
-            if not late:
-                raise
-            raise VideoTimeout(f"ran longer than --timeout-s {task.timeout_s:g}") from None
+            if frames.late:
+                raise VideoTimeout(f"ran longer than --timeout-s {task.timeout_s:g}") from None
+            if frames.stopped:
+                raise BatchStopped("the batch stopped before this video finished") from None
+            raise
         meta = json.loads((partial / "summary.json").read_text(encoding="utf-8"))
         # the paths the summary names are those of the finished folder
         meta["outputs"] = {k: str(final / Path(p).name) for k, p in meta.get("outputs", {}).items()}
@@ -130,6 +186,8 @@ def run_video(task: BatchTask, attempt: int = 1) -> dict[str, Any]:
         shutil.rmtree(partial, ignore_errors=True)
         if isinstance(exc, VideoTimeout):
             row["status"] = "timeout"
+        elif isinstance(exc, BatchStopped):
+            row["status"] = "interrupted"
         row["error"] = _one_line(exc)
         log.warning("%s %s: %s", v.name, row["status"], row["error"])
     row["wall_s"] = round(time.perf_counter() - t0, 3)
@@ -155,6 +213,53 @@ def _hung_row(task: BatchTask, attempts: int) -> dict[str, Any]:
     row.update(status="timeout", error=f"VideoTimeout: ran longer than --timeout-s "
                                          f"{task.timeout_s:g} and did not stop; worker restarted")
     return row
+
+
+def _ask_to_stop(client: Any, name: str) -> None:
+    """Set the batch's stop event: its videos still running stop after their current frame."""
+    try:
+        from distributed import Event
+
+        Event(name, client=client).set()
+    except Exception as exc:   # noqa: BLE001 - the cluster gone: nothing runs to stop
+        log.debug("could not ask the workers to stop: %s", exc)
+
+
+def _interrupted_row(task: BatchTask) -> dict[str, Any]:
+    """The row of a video the batch stopped before it finished (redone by ``--resume``)."""
+    import cv2
+
+    v = task.video
+    shutil.rmtree(Path(task.results) / f".{v.name}.partial", ignore_errors=True)
+    return {"name": v.name, "source": v.source, "status": "interrupted",
+            "error": "the batch stopped before this video finished",
+            "config_hash": task.config_hash, "motiontrack_version": __version__,
+            "opencv_version": cv2.__version__}
+
+
+class _Rate:
+    """Frames tracked per video and the cluster's frame rate over the last
+    :attr:`WINDOW_S` seconds."""
+
+    WINDOW_S = 5.0
+
+    def __init__(self) -> None:
+        self.frames: dict[str, int] = {}
+        self.samples: list[tuple[float, int]] = [(time.monotonic(), 0)]
+
+    def seen(self, name: str, frames: int) -> None:
+        self.frames[name] = max(frames, self.frames.get(name, 0))
+        now = time.monotonic()
+        self.samples.append((now, self.total()))
+        while len(self.samples) > 2 and now - self.samples[1][0] > self.WINDOW_S:
+            self.samples.pop(0)
+
+    def total(self) -> int:
+        return sum(self.frames.values())
+
+    def fps(self) -> float:
+        (t0, n0), (t1, n1) = self.samples[0], self.samples[-1]
+        return (n1 - n0) / (t1 - t0) if t1 > t0 else 0.0
 
 
 def _complete(results: Path, name: str, chash: str) -> bool:
@@ -227,15 +332,22 @@ def _check_names(videos: Sequence[Video]) -> None:
 def run_batch(sources: Sequence[str], results: str | Path, config: PipelineConfig | None = None,
               *, jobs: int = 1, cluster: str | None = None, client: Any = None,
               resume: bool = False, retries: int = 2, timeout_s: float | None = 3600,
-              progress: Callable[[Mapping[str, int]], None] | None = None) -> list[dict[str, Any]]:
+              scene: str | None = None, camera: str | None = None, gt_from: str | None = None,
+              progress: Callable[[Mapping[str, float]], None] | None = None
+              ) -> list[dict[str, Any]]:
     """Track every video of ``sources`` into ``results`` and return the index rows.
 
     Runs on ``client`` when given, else on the scheduler at ``cluster``, else on a local
-    cluster of ``jobs`` worker processes. With ``resume``, videos whose folder holds a complete
-    run with this config keep it (and their index row). A video still running after
-    ``timeout_s`` seconds (None: no limit) stops and is a ``timeout`` row. ``progress`` is called
-    with counts ``done``, ``failed`` (timeouts included), ``running``, ``total`` whenever a video
-    finishes.
+    cluster of ``jobs`` worker processes. ``scene`` and ``camera`` files apply to every video
+    without its own (from a manifest); ``gt_from`` is a manifest giving videos their ground
+    truth (:func:`~motiontrack.batch.sources.with_files`). With ``resume``, videos whose folder
+    holds a complete run with this config keep it (and their index row). A video still running
+    after ``timeout_s`` seconds (None: no limit) stops and is a ``timeout`` row. ``progress`` is
+    called with counts ``done``, ``failed`` (timeouts included), ``running``, ``total``, the
+    ``frames`` tracked so far and the cluster's ``fps`` (over the last few seconds) whenever a
+    video finishes and as workers report frames (every :data:`REPORT_EVERY_S` seconds).
+    Interrupted (``KeyboardInterrupt``), the batch cancels its tasks and writes the videos not
+    finished as ``interrupted`` rows before the interruption propagates.
     """
     if timeout_s is not None and not timeout_s > 0:
         raise ConfigError(f"--timeout-s must be > 0, got {timeout_s}")
@@ -244,7 +356,7 @@ def run_batch(sources: Sequence[str], results: str | Path, config: PipelineConfi
     if jobs < 1:
         raise ConfigError(f"-j must be >= 1, got {jobs}")
     cfg = config if config is not None else PipelineConfig()
-    videos = expand_sources(sources)
+    videos = with_files(expand_sources(sources), scene=scene, camera=camera, gt_from=gt_from)
     _check_names(videos)
     out = Path(results)
     out.mkdir(parents=True, exist_ok=True)
@@ -267,18 +379,36 @@ def run_batch(sources: Sequence[str], results: str | Path, config: PipelineConfi
         def save() -> None:
             write_index(sorted(rows.values(), key=lambda r: order[r["name"]]), out / INDEX_FILE)
 
+        rate = _Rate()
+        lock = threading.Lock()   # finished videos and workers' reports come on two threads
+
+        def report() -> None:
+            if progress is not None:
+                progress({**counts, "frames": rate.total(), "fps": rate.fps()})
+
         def finished(i: int, row: dict[str, Any], attempts: int) -> None:
             row["attempts"] = attempts
-            rows[row["name"]] = row
-            counts["done" if row["status"] == "done" else "failed"] += 1
-            left = len(videos) - counts["done"] - counts["failed"]
-            counts["running"] = min(left, workers)
-            save()
-            if progress is not None:
-                progress(dict(counts))
+            with lock:
+                rows[row["name"]] = row
+                counts["done" if row["status"] == "done" else "failed"] += 1
+                left = len(videos) - counts["done"] - counts["failed"]
+                counts["running"] = min(left, workers)
+                rate.seen(row["name"], int(row.get("frames") or 0))
+                save()
+                report()
+
+        def reported(event: tuple[float, Any]) -> None:
+            msg = event[1]
+            with lock:
+                if isinstance(msg, dict) and msg.get("name") not in rows:
+                    rate.seen(str(msg.get("name")), int(msg.get("frames", 0)))
+                    report()
 
         save()
-        tasks = [BatchTask(v, str(out.resolve()), to_dict(cfg), chash, timeout_s) for v in todo]
+        batch_id = f"motiontrack-batch-{uuid.uuid4().hex[:12]}"
+        topic = batch_id if progress is not None else None
+        tasks = [BatchTask(v, str(out.resolve()), to_dict(cfg), chash, timeout_s, topic,
+                           f"{batch_id}-stop") for v in todo]
         if not tasks:
             return _finish(out, [rows[v.name] for v in videos])
         manager = dask_client(jobs, cluster) if client is None else _given(client)
@@ -286,14 +416,26 @@ def run_batch(sources: Sequence[str], results: str | Path, config: PipelineConfi
             workers = max(1, sum(w.get("nthreads", 1)
                                  for w in cl.scheduler_info()["workers"].values()))
             counts["running"] = min(len(tasks), workers)
-            if progress is not None:
-                progress(dict(counts))
-            map_tasks(cl, run_video, tasks, retries=retries, on_result=finished,
-                      on_lost=lambda i, exc, n: _lost_row(tasks[i], exc, n),
-                      key="motiontrack-batch",
-                      hard_timeout_s=None if timeout_s is None
-                      else timeout_s + max(10.0, timeout_s / 10),
-                      on_timeout=lambda i, n: _hung_row(tasks[i], n))
+            report()
+            if topic is not None:
+                cl.subscribe_topic(topic, reported)
+            try:
+                map_tasks(cl, run_video, tasks, retries=retries, on_result=finished,
+                          on_lost=lambda i, exc, n: _lost_row(tasks[i], exc, n),
+                          key="motiontrack-batch",
+                          hard_timeout_s=None if timeout_s is None
+                          else timeout_s + max(10.0, timeout_s / 10),
+                          on_timeout=lambda i, n: _hung_row(tasks[i], n))
+            except KeyboardInterrupt:
+                _ask_to_stop(cl, f"{batch_id}-stop")
+                with lock:
+                    for t in tasks:
+                        rows.setdefault(t.video.name, _interrupted_row(t))
+                    save()
+                raise
+            finally:
+                if topic is not None:
+                    cl.unsubscribe_topic(topic)
         return _finish(out, [rows[v.name] for v in videos])
 
 

@@ -6,13 +6,13 @@ import glob
 import os
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Iterable
+from typing import Iterable, Sequence
 
 from ..errors import ConfigError, printable
 from ..run.folders import source_name
 from ..studies.sweep import read_manifest_entries
 
-__all__ = ["Video", "VIDEO_SUFFIXES", "expand_sources"]
+__all__ = ["Video", "VIDEO_SUFFIXES", "expand_sources", "with_files"]
 
 #: the files a folder SOURCE contributes (case-insensitive)
 VIDEO_SUFFIXES = (".avi", ".mp4", ".mov", ".mkv", ".m4v", ".mpg", ".mpeg", ".webm", ".wmv",
@@ -86,3 +86,44 @@ def expand_sources(sources: Iterable[str]) -> list[Video]:
             taken.add(name)
         out.append(Video(name, v.source, v.gt, v.scene, v.camera))
     return out
+
+
+def with_files(videos: Sequence[Video], *, scene: str | None = None, camera: str | None = None,
+               gt_from: str | None = None) -> list[Video]:
+    """``videos`` with the batch's own files: a video without a scene or camera file of its own
+    (from a manifest) takes ``scene`` and ``camera``; ``gt_from``, a manifest of ``[[sequence]]``
+    tables, gives a video the ground truth (and scene and camera, where it names them and the
+    video has none) of the entry with the video's name or, failing that, its source. A
+    ``gt_from`` that matches no video is refused: its names or sources are not this batch's."""
+    for what, path in (("--scene", scene), ("--camera", camera)):
+        if path is not None and not os.path.isfile(path):
+            raise ConfigError(f"{what} {printable(path)}: no such file")
+    by_name: dict[str, dict] = {}
+    by_source: dict[str, dict] = {}
+    if gt_from is not None:
+        entries = read_manifest_entries(gt_from, files=("scene", "camera"))
+        by_name = {e["name"]: e for e in entries}
+        by_source = {_same_file(e["source"]): e for e in entries}
+    out, matched = [], 0
+    for v in videos:
+        entry = by_name.get(v.name) or by_source.get(_same_file(v.source))
+        gt, sc, cam = v.gt, v.scene, v.camera
+        if entry is not None:
+            matched += 1
+            gt = gt or entry.get("gt")
+            sc = sc or entry.get("scene")
+            cam = cam or entry.get("camera")
+        sc = sc or (str(Path(scene).resolve()) if scene else None)
+        cam = cam or (str(Path(camera).resolve()) if camera else None)
+        out.append(Video(v.name, v.source, gt, sc, cam))
+    if gt_from is not None and not matched:
+        raise ConfigError(f"--gt-from {printable(gt_from)}: none of its sequences is one of the "
+                          f"{len(videos)} videos (matched by name, then by source path)")
+    return out
+
+
+def _same_file(source: str) -> str:
+    """A key equal for two spellings of one file (synth: and stream sources as written)."""
+    if ":" in source and not os.path.exists(source):
+        return source
+    return os.path.normcase(os.path.realpath(source))

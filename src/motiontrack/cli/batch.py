@@ -25,6 +25,16 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--config", help="TOML config file (applied after --preset)")
     p.add_argument("--set", dest="overrides", action="append", default=[], metavar="STAGE.PARAM=VALUE",
                    help="override one config field (repeatable)")
+    p.add_argument("--scene", metavar="FILE",
+                   help="scene file (lines, zones; docs/analytics.md) for every video without its "
+                        "own: each video's folder gets its events.jsonl and counts.csv")
+    p.add_argument("--camera", metavar="FILE",
+                   help="camera calibration for every video without its own (speeds and "
+                        "positions in metres)")
+    p.add_argument("--gt-from", metavar="MANIFEST",
+                   help="manifest of [[sequence]] tables giving ground truth (and scene, camera) "
+                        "to the videos of the same name or source: their index rows get "
+                        "HOTA/MOTA/IDF1 and combined.json combines them")
     where = p.add_mutually_exclusive_group()
     where.add_argument("-j", "--jobs", type=int, default=1,
                        help="worker processes of a local Dask cluster (default 1)")
@@ -54,13 +64,20 @@ def cmd_batch(args) -> int:
         def progress(c) -> None:
             bar.total = c["total"]
             bar.n = c["done"] + c["failed"]
-            bar.set_postfix(done=c["done"], failed=c["failed"], running=c["running"],
-                            refresh=False)
+            bar.set_postfix_str(f"done={c['done']} failed={c['failed']} running={c['running']} "
+                                f"frames={c['frames']} {c['fps']:.0f} fps", refresh=False)
             bar.refresh()
 
-        rows = run_batch(args.sources, args.out, cfg, jobs=args.jobs, cluster=args.cluster,
-                         resume=args.resume, retries=args.retries, timeout_s=args.timeout_s,
-                         progress=progress)
+        try:
+            rows = run_batch(args.sources, args.out, cfg, jobs=args.jobs, cluster=args.cluster,
+                             resume=args.resume, retries=args.retries,
+                             timeout_s=args.timeout_s, scene=args.scene, camera=args.camera,
+                             gt_from=args.gt_from, progress=progress)
+        except KeyboardInterrupt:
+            bar.close()
+            print(f"interrupted; the videos done are kept, the others are `interrupted` in "
+                  f"{args.out}/index.csv (--resume finishes them)", file=sys.stderr)
+            raise
     failed = [r for r in rows if r.get("status") != "done"]
     print(f"{len(rows) - len(failed)} done, {len(failed)} failed; index: {args.out}/index.csv")
     combined = Path(args.out) / COMBINED_FILE
