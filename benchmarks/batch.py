@@ -3,12 +3,13 @@
 16 short ``synth:`` scenes (``walker`` and ``crossing``, 8 seeds each, ``--frames`` frames,
 no annotated video) are tracked three ways, each into a fresh folder:
 
-1. serially in this process, ``track_job(...).run()`` one after another (no Dask);
+1. serially in this process, ``track_job(...).run()`` one after another (no Dask), once with
+   OpenCV's default threads and once with one OpenCV thread, as batch workers run;
 2. ``run_batch(..., jobs=1)``: a local cluster of one worker process;
 3. ``run_batch(..., jobs=2)``: a local cluster of two worker processes.
 
 Reported: the wall time of each, the ratio ``-j 2`` / serial, and the batch machinery's
-overhead per video, ``(batch -j 1 - serial) / videos`` (task submission and results over the
+overhead per video, ``(batch -j 1 - serial with one OpenCV thread) / videos`` (task submission and results over the
 scheduler, the partial folder and its rename, the index rewritten after each video, the
 combined metrics). The batch times are of ``run_batch`` on a client already started, its
 workers having imported the pipeline; starting that cluster is reported apart (once per
@@ -25,6 +26,8 @@ import logging
 import tempfile
 import time
 from pathlib import Path
+
+import cv2
 
 from motiontrack.batch import run_batch
 from motiontrack.config import PipelineConfig, apply_overrides
@@ -54,6 +57,13 @@ def main() -> None:
         for name, src in zip(names, scenes):
             track_job(src, cfg, base / "serial" / name).run()
         serial = time.perf_counter() - t0
+        threads = cv2.getNumThreads()
+        cv2.setNumThreads(1)
+        t0 = time.perf_counter()
+        for name, src in zip(names, scenes):
+            track_job(src, cfg, base / "serial1" / name).run()
+        serial_one_thread = time.perf_counter() - t0
+        cv2.setNumThreads(threads)
 
         walls, starts = {}, {}
         for jobs in (1, 2):
@@ -72,11 +82,12 @@ def main() -> None:
         n = len(scenes)
         print(json.dumps({
             "videos": n, "frames_per_video": args.frames,
-            "serial_s": round(serial, 2), "batch_j1_s": round(walls[1], 2),
+            "serial_s": round(serial, 2), "serial_one_opencv_thread_s": round(serial_one_thread, 2),
+            "batch_j1_s": round(walls[1], 2),
             "batch_j2_s": round(walls[2], 2),
             "ratio_j2_over_serial": round(walls[2] / serial, 3),
             "cluster_start_j1_s": round(starts[1], 2), "cluster_start_j2_s": round(starts[2], 2),
-            "overhead_per_video_s": round((walls[1] - serial) / n, 3),
+            "overhead_per_video_s": round((walls[1] - serial_one_thread) / n, 3),
         }, indent=2))
 
 
