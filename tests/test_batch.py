@@ -427,3 +427,32 @@ def test_ctrl_c_stops_the_batch_within_seconds_and_the_index_says_which_videos_a
         assert json.loads((results / name / "summary.json").read_text())["status"] == "complete"
     assert not list(results.glob(".*.partial"))
     assert not (results / "synth-walker-2").exists()
+
+
+@pytest.mark.slow
+def test_cut_copies_of_the_pets_clip_give_the_tracks_of_track_alone(tmp_path, client, data):
+    import cv2
+
+    cap = cv2.VideoCapture(str(data("pets09-s2l1", "video.avi")))
+    cuts = {"pets-a": range(0, 60), "pets-b": range(120, 180)}
+    writers = {n: cv2.VideoWriter(str(tmp_path / f"{n}.avi"), cv2.VideoWriter_fourcc(*"MJPG"), 7,
+                                  (768, 576)) for n in cuts}
+    k = 0
+    while k < 180:
+        ok, image = cap.read()
+        assert ok
+        for n, frames in cuts.items():
+            if k in frames:
+                writers[n].write(image)
+        k += 1
+    for w in writers.values():
+        w.release()
+    results = tmp_path / "results"
+    rows = run_batch([str(tmp_path / f"{n}.avi") for n in cuts], results, _cfg(), client=client)
+    assert [(r["name"], r["status"], r["frames"]) for r in rows] == [("pets-a", "done", 60),
+                                                                    ("pets-b", "done", 60)]
+    for n in cuts:
+        track_job(str(tmp_path / f"{n}.avi"), _cfg(), tmp_path / f"alone-{n}").run()
+        tracks = (results / n / "tracks.txt").read_bytes()
+        assert tracks == (tmp_path / f"alone-{n}" / "tracks.txt").read_bytes()
+        assert tracks.count(b"\n") > 60   # people were tracked
