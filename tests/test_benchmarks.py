@@ -134,3 +134,20 @@ def test_memory_benchmark_reports_rss_at_every_tenth_of_the_run(tmp_path):
     assert all(s["rss_mb"] <= doc["peak_rss_mb"] + 1 for s in doc["samples"]), out
     assert re.search(r"^peak RSS \d+\.\d MB \(target < 300 MB: (met|MISSED)\)$", out, re.M), out
     assert "RSS slope over the second half: " in out, out
+
+
+@pytest.mark.slow
+def test_startup_benchmark_reports_every_case_against_the_opencv_floor():
+    out = subprocess.run([sys.executable, str(REPO / "benchmarks" / "startup.py"), "--rounds", "1"],
+                         capture_output=True, text=True, timeout=300, check=True).stdout
+    # a row: the case in 30 columns, then its numbers
+    rows = {line[:30].strip(): [float(v) for v in re.findall(r"\d+\.\d+", line[30:])]
+            for line in out.splitlines()[2:] if not line.startswith("target: ")}
+    assert list(rows) == ['python -c "import cv2"', "motiontrack --help",
+                          "motiontrack track --help", "track --help, codecs probed",
+                          "import of the track path"], out
+    # wall and CPU: median [min-max] (one round: all three equal), then the two ratios
+    assert all(len(v) == 8 and v[0] == v[1] == v[2] and v[3] == v[4] == v[5] and v[0] > 0
+               for v in rows.values()), out
+    assert rows['python -c "import cv2"'][6:] == [1.0, 1.0], out
+    assert len(re.findall(r"^target: .* < 0\.3 s wall \(median\): (met|NOT met)", out, re.M)) == 2
