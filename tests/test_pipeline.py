@@ -284,23 +284,59 @@ def test_head_splitting_without_shapes_keeps_detection_in_its_worker_thread():
                         for r in pipe.results(src)])
     assert outputs[0] == outputs[1]
     assert sum(n for _i, _t, n in outputs[0]) > 0
-    with_shapes = load_config(None, ["people.enabled=true"])
-    assert Pipeline(with_shapes, (640, 480)).sequential is True
 
 
 @pytest.mark.slow
-def test_track_job_keeps_the_shapes_in_order_with_detection(tmp_path):
-    # The shape tracker reads the detector's background image after each frame: the CLI's job
-    # must not run detection of the next frame meanwhile (in threaded mode `--preset people`
-    # reads a model being updated in another thread, and its scores vary from run to run). It
-    # writes what `run` yields.
+def test_shapes_fit_the_background_of_their_own_frame_while_the_next_frame_is_detected():
+    # The shape tracker reads the detector's background image after each frame. The detector's
+    # thread takes it right after its update and hands it on with the frame, so detection of the
+    # next frame runs meanwhile and the shapes still see their own frame's background: the
+    # tracks and outlines equal those of a run with detection and tracking in one thread.
+    from motiontrack.io.sources import open_source
+    from motiontrack.pipeline import Pipeline
+
+    cfg = load_config(None, ["people.enabled=true"])
+    spec = "synth:crossing?n_frames=60"
+    outputs = []
+    for sequential in (False, True):
+        src = open_source(spec)
+        pipe = Pipeline(cfg, (src.info.width, src.info.height), None, src.info.fps)
+        assert pipe.sequential is False
+        pipe.sequential = sequential
+        outputs.append([(r.index, [(t.id, t.box) for t in r.tracks],
+                         [(s.track_id, s.outline.tobytes()) for s in r.people.shapes])
+                        for r in pipe.results(src)])
+    assert outputs[0] == outputs[1]
+    assert sum(len(shapes) for _i, _t, shapes in outputs[0]) > 0
+
+
+def test_motion_carries_the_detector_background_only_for_the_shapes():
+    # the background image costs about half a KNN update: taken only when the shapes read it
+    from motiontrack.pipeline import Pipeline
+    from motiontrack.types import Frame
+
+    img = np.random.default_rng(0).integers(0, 255, (48, 64, 3), np.uint8)
+    frame = Frame(0, img, 0.0)
+    for overrides, wanted in ((["people.enabled=true"], True),
+                              (["people.enabled=true", "people.shapes=false"], False), ([], False)):
+        pipe = Pipeline(load_config(None, overrides), (64, 48))
+        motion = pipe.motion(frame)
+        assert (motion.background is not None) is wanted
+        if wanted:
+            np.testing.assert_array_equal(motion.background, pipe.detector.background())
+
+
+@pytest.mark.slow
+def test_track_job_with_shapes_writes_what_run_yields(tmp_path):
+    # The CLI's job runs `--preset people` with detection in its worker thread (the background
+    # image travels with each frame) and writes what `run` yields.
     from motiontrack.pipeline import run
     from motiontrack.run import track_job
 
     cfg = load_config(None, ["people.enabled=true", "output.video=false"])
     spec = "synth:crossing?n_frames=60"
     job = track_job(spec, cfg, tmp_path / "out")
-    assert job.processor.pipe.sequential is True
+    assert job.processor.pipe.sequential is False
     job.run()
     written = np.loadtxt(tmp_path / "out" / "tracks.txt", delimiter=",", ndmin=2)[:, :6]
     tracks = tracks_of(run(spec, cfg))

@@ -91,14 +91,16 @@ def fill_gap_frames(cfg: PipelineConfig, fps: float | None, external: bool) -> i
 class Motion:
     """The image work of one frame (:meth:`Pipeline.motion`): the cleaned motion ``mask`` and
     the detector's ``raw_mask`` at processing scale, the preprocessed frame ``small`` they came
-    from, the ``static`` foreground when the pipeline keeps a dual background; with external
-    detections only ``detections`` (``mask`` is None)."""
+    from, the ``static`` foreground when the pipeline keeps a dual background, the detector's
+    ``background`` image after this frame when a later stage reads it (the people stage's
+    shapes); with external detections only ``detections`` (``mask`` is None)."""
 
     mask: np.ndarray | None
     raw_mask: np.ndarray | None = None
     small: np.ndarray | None = None
     detections: list[Region] = field(default_factory=list)
     static: StaticFrame | None = None
+    background: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -184,11 +186,17 @@ class Pipeline:
         #: frames a lost track may coast: its stopped pixels are kept that long
         self._keep_unseen = self.tracker.max_lost
         self.frames_seen = 0
+        #: the people stage's shapes read the detector's background image of each frame: it is
+        #: taken right after the detector's update, in the detector's thread, and travels with
+        #: the frame's Motion, so detection of the next frame can run meanwhile
+        self._wants_background = (self.people is not None and self.people.needs_background
+                                  and self.detector is not None)
         #: run detection and tracking in one thread (needed when a later stage reads the
-        #: detector's state, e.g. its background image, for the same frame). Head-based
-        #: splitting needs only the mask: it runs in this thread while the worker detects the
-        #: next frame (measured faster than running it in the worker, which it would slow down).
-        self.sequential = self.people is not None and self.people.needs_tracks
+        #: detector's state for the same frame: a writer of the background image). Head-based
+        #: splitting and the people stage need only what Motion carries: they run in this thread
+        #: while the worker detects the next frame (measured faster than running head splitting
+        #: in the worker, which it would slow down).
+        self.sequential = False
 
     def _frame_gap(self, frame: Frame) -> int:
         """Frame periods since the previous frame, from the timestamps (wall-clock for live
@@ -239,7 +247,9 @@ class Pipeline:
         if self.roi is not None:
             raw = np.bitwise_and(raw, self.roi)
         static = self.static.apply(small) if self.static is not None else None
-        return Motion(clean_mask(raw, self.cfg.cleanup), raw_mask=raw, small=small, static=static)
+        background = self.detector.background() if self._wants_background else None
+        return Motion(clean_mask(raw, self.cfg.cleanup), raw_mask=raw, small=small, static=static,
+                      background=background)
 
     def regions_of(self, index: int, motion: Motion) -> Detection:
         """Second half of :meth:`detect`: the mask's regions, split between heads while the
@@ -315,7 +325,11 @@ class Pipeline:
         regions, mask, small = det.regions, det.mask, det.motion.small
         people = PeopleFrame(heads=det.heads) if det.heads is not None else None
         if self.people is not None:
-            background = self.detector.background() if self.detector is not None else None
+            background = det.motion.background
+            if background is None and self._wants_background:
+                # a Motion made without it (by hand, in order with this call): the detector
+                # still holds this frame's model
+                background = self.detector.background()
             regions, people = self.people.process(frame.image, background, mask, regions,
                                                   self._prev_tracks, work=small)
         owned = self.bridge.measurements(self.tracker.views(), frame.image) if self.bridge else None

@@ -52,10 +52,10 @@ class PeopleStage:
         self._hog_cache: list[Region] = []
 
     @property
-    def needs_tracks(self) -> bool:
-        """Whether any step after :meth:`split_regions` runs (HOG or shapes): those need the
-        frame, the background and the previous tracks, so the pipeline runs them in order."""
-        return self.shape_tracker is not None or self.hog is not None
+    def needs_background(self) -> bool:
+        """Whether :meth:`process` reads the motion detector's background image of the frame
+        (the shape tracker fits outlines to the edges of frame − background)."""
+        return self.shape_tracker is not None
 
     def split_regions(self, mask: np.ndarray | None, regions: Sequence[Region], width: int
                       ) -> tuple[list[Region], list[Any]]:
