@@ -9,6 +9,7 @@ functions here are imported by the test modules (``from conftest import ann, tra
 from __future__ import annotations
 
 import os
+import socket
 from collections.abc import Iterable
 from pathlib import Path
 
@@ -33,6 +34,13 @@ def require(*parts: str) -> Path:
             pytest.fail(msg + " and MOTIONTRACK_REQUIRE_DATA=1")
         pytest.skip(msg)
     return p
+
+
+def free_port() -> int:
+    """A TCP port on 127.0.0.1 that nothing listened on a moment ago, for a server a test starts."""
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
 
 
 @pytest.fixture

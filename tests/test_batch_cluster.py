@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import csv
-import socket
 import subprocess
 import sys
 import time
@@ -13,18 +12,13 @@ import pytest
 
 pytest.importorskip("distributed")
 
+from conftest import free_port  # noqa: E402
 from motiontrack.cli import main  # noqa: E402
 from motiontrack.config import PipelineConfig, apply_overrides  # noqa: E402
 from motiontrack.run.jobs import track_job  # noqa: E402
 
 SCENES = ["synth:walker?n_frames=30", "synth:crossing?n_frames=30"]
 DASK = Path(sys.executable).with_name("dask")
-
-
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 def _stop(proc: subprocess.Popen) -> None:
@@ -45,11 +39,11 @@ def scheduler_address(tmp_path):
         pytest.skip("the dask command is not installed beside this Python")
     from distributed import Client
 
-    port = _free_port()
+    port = free_port()
     addr = f"tcp://127.0.0.1:{port}"
     logs = [open(tmp_path / n, "wb") for n in ("scheduler.log", "worker.log")]
     procs = [subprocess.Popen([str(DASK), "scheduler", "--host", "127.0.0.1", "--port", str(port),
-                               "--dashboard-address", f"127.0.0.1:{_free_port()}"],
+                               "--dashboard-address", f"127.0.0.1:{free_port()}"],
                               stdout=logs[0], stderr=subprocess.STDOUT)]
     try:
         procs.append(subprocess.Popen([str(DASK), "worker", addr, "--nworkers", "2",

@@ -20,6 +20,7 @@ from pathlib import Path
 
 import pytest
 
+from conftest import free_port
 from motiontrack.cli import main
 from motiontrack.errors import ConfigError
 from motiontrack.io.mot import write_mot
@@ -88,12 +89,6 @@ def _mosquitto() -> str | None:
     return shutil.which("mosquitto") or shutil.which("mosquitto", path="/usr/sbin:/sbin")
 
 
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
 def _start_broker(conf: Path, port: int, log: Path) -> subprocess.Popen:
     with log.open("ab") as out:   # the broker keeps its own copy of the descriptor
         proc = subprocess.Popen([_mosquitto(), "-c", str(conf)],
@@ -112,7 +107,7 @@ def _start_broker(conf: Path, port: int, log: Path) -> subprocess.Popen:
 
 class Broker:
     def __init__(self, folder: Path) -> None:
-        self.port = _free_port()
+        self.port = free_port()
         self.conf = folder / "mosquitto.conf"
         self.conf.write_text(f"listener {self.port} 127.0.0.1\nallow_anonymous true\n")
         self.log = folder / "mosquitto.log"
@@ -353,7 +348,7 @@ def test_full_queue_drops_instead_of_blocking_and_counts_add_up():
 
 
 def test_close_during_back_off_returns_at_the_deadline():
-    down = f"http://127.0.0.1:{_free_port()}/events"   # nothing listens: connection refused
+    down = f"http://127.0.0.1:{free_port()}/events"   # nothing listens: connection refused
     d = WebhookDelivery(parse_webhook(down), backoff_s=10)
     d.start()
     d.offer(encode({"n": 1}))
@@ -419,7 +414,7 @@ def test_mqtt_delivers_what_was_queued_while_the_broker_restarted(broker, paho):
 
 
 def test_mqtt_broker_that_is_down_does_not_stall_and_drops_are_counted(paho):
-    d = MqttDelivery(MqttTarget("127.0.0.1", _free_port()), "cam")
+    d = MqttDelivery(MqttTarget("127.0.0.1", free_port()), "cam")
     d.start()
     t0 = time.monotonic()
     for k in range(5):

@@ -6,7 +6,6 @@ from __future__ import annotations
 import json
 import os
 import signal
-import socket
 import subprocess
 import sys
 import time
@@ -20,6 +19,7 @@ pytest.importorskip("starlette")
 pytest.importorskip("uvicorn")
 httpx = pytest.importorskip("httpx")
 
+from conftest import free_port  # noqa: E402
 from motiontrack.io.mot import read_mot  # noqa: E402
 
 
@@ -32,17 +32,11 @@ def _headless() -> bool:
 pytestmark = pytest.mark.skipif(not _headless(), reason="OpenCV's GUI build shows a window")
 
 
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
 class Track:
     """``motiontrack track SOURCE --show --port P`` in a subprocess without a display."""
 
     def __init__(self, tmp_path: Path, source: str) -> None:
-        self.port, self.out = _free_port(), tmp_path / "run"
+        self.port, self.out = free_port(), tmp_path / "run"
         self.err = open(tmp_path / "stderr.txt", "w+")
         env = {**os.environ, "PYTHONUNBUFFERED": "1"}
         for k in ("DISPLAY", "WAYLAND_DISPLAY"):   # no browser is opened
