@@ -5,13 +5,10 @@ a stream that keeps failing gives up."""
 
 from __future__ import annotations
 
-import functools
-import http.server
 import json
 import logging
 import os
 import signal
-import socketserver
 import subprocess
 import sys
 import threading
@@ -22,6 +19,7 @@ import cv2
 import numpy as np
 import pytest
 
+from mjpeg_server import MjpegServer, moving_box, serve_folder
 from motiontrack.cli import main
 from motiontrack.config import load_config
 from motiontrack.errors import ConfigError, SourceError
@@ -34,64 +32,7 @@ STOP_WITHIN = 2.0
 
 def _picture(i: int) -> np.ndarray:
     """Frame ``i`` of the served scene: a white square moving right on a grey background."""
-    img = np.full((48, 64, 3), 90, np.uint8)
-    x = 4 + 2 * (i % 25)
-    cv2.rectangle(img, (x, 14), (x + 10, 34), (255, 255, 255), -1)
-    return img
-
-
-class _Server(socketserver.ThreadingMixIn, http.server.HTTPServer):
-    daemon_threads = True
-    block_on_close = False
-
-
-class Mjpeg:
-    """An MJPEG stream: each connection gets ``frames`` frames at ``fps``, then the server closes
-    it (``then="close"``) or keeps it open and silent until :meth:`stop` (``then="stall"``).
-    ``served`` is set once the first connection has had its frames."""
-
-    def __init__(self, frames: int, then: str = "close", fps: float = 25.0) -> None:
-        self.frames, self.then, self.fps = frames, then, fps
-        self.connections = 0
-        self.served = threading.Event()
-        self.stopped = threading.Event()
-        self._parts = [cv2.imencode(".jpg", _picture(i))[1].tobytes() for i in range(frames)]
-        server = self
-
-        class Handler(http.server.BaseHTTPRequestHandler):
-            def log_message(self, *args):   # quiet
-                pass
-
-            def do_GET(self):
-                server.connections += 1
-                try:
-                    server._stream(self.wfile, self)
-                except (BrokenPipeError, ConnectionResetError):
-                    pass                    # the client went away
-
-        self.httpd = _Server(("127.0.0.1", 0), Handler)
-        self.url = f"http://127.0.0.1:{self.httpd.server_address[1]}/s.mjpg"
-        self._thread = threading.Thread(target=self.httpd.serve_forever, daemon=True)
-        self._thread.start()
-
-    def _stream(self, out, handler) -> None:
-        handler.send_response(200)
-        handler.send_header("Content-Type", "multipart/x-mixed-replace; boundary=frame")
-        handler.end_headers()
-        for jpeg in self._parts:
-            out.write(b"--frame\r\nContent-Type: image/jpeg\r\nContent-Length: %d\r\n\r\n"
-                      % len(jpeg) + jpeg + b"\r\n")
-            out.flush()
-            time.sleep(1 / self.fps)
-        self.served.set()
-        if self.then == "stall":
-            self.stopped.wait(30)           # connection open, nothing sent
-
-    def stop(self) -> None:
-        """Stop listening (new connections are refused) and end the stalled ones."""
-        self.stopped.set()
-        self.httpd.shutdown()
-        self.httpd.server_close()
+    return moving_box(i, size=(64, 48), box=(4, 14, 14, 34), step=2, period=25)
 
 
 @pytest.fixture(autouse=True)
@@ -108,8 +49,9 @@ def _restore_logging():
 def mjpeg():
     servers = []
 
-    def start(frames: int, then: str = "close") -> Mjpeg:
-        servers.append(Mjpeg(frames, then))
+    def start(frames: int, then: str = "close") -> MjpegServer:
+        """A stream whose every connection gets ``frames`` pictures at 25 fps, then ``then``."""
+        servers.append(MjpegServer([_picture(i) for i in range(frames)], frames, then))
         return servers[-1]
 
     yield start
@@ -128,13 +70,7 @@ def served_clip(tmp_path):
         w.write(_picture(i))
     w.release()
 
-    class Quiet(http.server.SimpleHTTPRequestHandler):
-        def log_message(self, *args):
-            pass
-
-    httpd = _Server(("127.0.0.1", 0), functools.partial(Quiet, directory=str(root)))
-    thread = threading.Thread(target=httpd.serve_forever, daemon=True)
-    thread.start()
+    httpd = serve_folder(root)
     yield f"http://127.0.0.1:{httpd.server_address[1]}/clip.avi"
     httpd.shutdown()
     httpd.server_close()
