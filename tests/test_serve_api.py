@@ -12,9 +12,6 @@ from __future__ import annotations
 import json
 import os
 import signal
-import socket
-import subprocess
-import sys
 import time
 from pathlib import Path
 
@@ -31,6 +28,7 @@ from motiontrack.io.events import read_events  # noqa: E402
 from motiontrack.io.mot import read_mot  # noqa: E402
 from motiontrack.io.tomlfile import read_toml  # noqa: E402
 from motiontrack.serve.cameras import parse_cameras  # noqa: E402
+from serve_process import ServeProcess, synth_cameras  # noqa: E402
 
 CAMERAS = ("walker", "crossing")
 
@@ -187,77 +185,16 @@ def test_scene_put_is_validated_and_keeps_other_settings(tmp_path):
 
 
 # ------------------------------------------------------------------------- a live server
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-class Server:
-    def __init__(self, root: Path, *extra: str) -> None:
-        self.root, self.port = root, _free_port()
-        self.url = f"http://127.0.0.1:{self.port}"
-        for name in CAMERAS:
-            assert main(["synth-events", f"synth:{name}", "-o", str(root / name)]) == 0
-        text = "".join(f'[[camera]]\nname = "{n}"\nsource = "synth:{n}"\n'
-                       f'scene = "{n}/scene.toml"\nloop = true\n\n' for n in CAMERAS)
-        (root / "cameras.toml").write_text(text)
-        self.out = root / "out"
-        env = {**os.environ, "PYTHONUNBUFFERED": "1"}
-        env.pop("MOTIONTRACK_TOKEN", None)
-        self.log = open(root / "serve.log", "w")
-        self.proc = subprocess.Popen(
-            [sys.executable, "-m", "motiontrack", "serve", str(root / "cameras.toml"), "--port",
-             str(self.port), "--out", str(self.out), *extra],
-            cwd=root, stdout=self.log, stderr=subprocess.STDOUT, env=env)
-        self.client = httpx.Client(base_url=self.url, timeout=10)
-        self.wait(lambda: (lambda cams: len(cams) == len(CAMERAS) and all(
-            c["status"] == "running" and c["frames"] > 5 for c in cams))(self.cameras()),
-            60, "both cameras running")
-
-    def cameras(self) -> list[dict]:
-        try:
-            return self.client.get("/api/cameras").json()
-        except httpx.TransportError:
-            assert self.proc.poll() is None, self.logs()
-            return []
-
-    def camera(self, name: str) -> dict:
-        return next(c for c in self.cameras() if c["name"] == name)
-
-    def wait(self, cond, timeout: float, what: str):
-        end = time.monotonic() + timeout
-        while time.monotonic() < end:
-            got = cond()
-            if got:
-                return got
-            time.sleep(0.2)
-        raise AssertionError(f"not within {timeout} s: {what}\n{self.logs()}")
-
-    def logs(self) -> str:
-        self.log.flush()
-        return (self.root / "serve.log").read_text()[-3000:]
-
-    def stop(self) -> int:
-        if self.proc.poll() is None:
-            self.proc.send_signal(signal.SIGTERM)
-        try:
-            return self.proc.wait(15)
-        finally:
-            self.client.close()
-            self.log.close()
+def _serve(root: Path, *args: str) -> ServeProcess:
+    """``motiontrack serve`` with the cameras walker and crossing, looping with their scenes."""
+    return ServeProcess(root, synth_cameras(root, {n: f"synth:{n}" for n in CAMERAS}), *args)
 
 
 @pytest.fixture(scope="module")
 def server(tmp_path_factory):
-    srv = Server(tmp_path_factory.mktemp("serve"))
-    yield srv
-    try:
-        srv.stop()
-    finally:
-        if srv.proc.poll() is None:
-            srv.proc.kill()
-            srv.proc.wait(10)
+    with _serve(tmp_path_factory.mktemp("serve")) as srv:
+        srv.wait_running(frames=5, timeout=60)
+        yield srv
 
 
 def _mjpeg_frames(client, url: str, n: int, timeout: float = 10.0) -> list[bytes]:
@@ -303,9 +240,10 @@ def test_live_pictures_snapshot_and_mjpeg(server):
 @pytest.mark.slow
 def test_live_events_since_sse_and_counts(server):
     # walker's person enters the plaza at frame 95 and crosses the gate at frame 139 (25 fps)
-    events = server.wait(lambda: server.client.get("/api/cameras/walker/events?since=0").json()
+    events = server.wait("two walker events",
+                         lambda: server.client.get("/api/cameras/walker/events?since=0").json()
                          if len(server.client.get("/api/cameras/walker/events?since=0").json()) >= 2
-                         else None, 30, "two walker events")
+                         else None, 30)
     seqs = [e["seq"] for e in events]
     assert seqs == list(range(1, len(seqs) + 1))
     assert {e["type"] for e in events} >= {"zone_enter", "line_cross"}
@@ -347,8 +285,9 @@ def test_live_scene_edit_is_applied_without_restart(server):
     r = c.put("/api/cameras/walker/scene", json=view)
     assert r.status_code == 200
     assert [ln["name"] for ln in read_toml(scene)["line"]] == ["gate", "middle"]
-    counts = server.wait(lambda: (lambda k: k if "middle" in k["lines"] else None)(
-        c.get("/api/cameras/walker/counts").json()), 10, "the new line in the counts")
+    counts = server.wait("the new line in the counts",
+                         lambda: (lambda k: k if "middle" in k["lines"] else None)(
+                             c.get("/api/cameras/walker/counts").json()), 10)
     assert counts["lines"]["middle"] == {"in": 0, "out": 0} or sum(
         counts["lines"]["middle"].values()) >= 0
     assert "gate" in counts["lines"]
@@ -359,9 +298,10 @@ def test_live_scene_edit_is_applied_without_restart(server):
 def test_live_killed_camera_process_restarts_and_pictures_resume(server):
     before = server.camera("crossing")
     os.kill(before["pid"], signal.SIGKILL)
-    after = server.wait(lambda: (lambda x: x if x["pid"] != before["pid"]
+    after = server.wait("crossing running again in a new process",
+                        lambda: (lambda x: x if x["pid"] != before["pid"]
                                  and x["status"] == "running" and x["frames"] > 3 else None)(
-        server.camera("crossing")), 40, "crossing running again in a new process")
+        server.camera("crossing")), 40)
     assert after["restarts"] >= 1
     frames = _mjpeg_frames(server.client, "/api/cameras/crossing/stream.mjpg", 2)
     assert len(frames) >= 2
@@ -370,15 +310,12 @@ def test_live_killed_camera_process_restarts_and_pictures_resume(server):
 
 @pytest.mark.slow
 def test_sigterm_stops_cameras_and_commits_their_outputs(tmp_path):
-    srv = Server(tmp_path, "--rotate-s", "4")
-    try:
-        srv.wait(lambda: len(list((srv.out / "walker").iterdir())) >= 2, 20, "a rotated segment")
+    with _serve(tmp_path, "--rotate-s", "4") as srv:
+        srv.wait_running(frames=5, timeout=60)
+        srv.wait("a rotated segment", lambda: len(list((srv.out / "walker").iterdir())) >= 2, 20)
         t0 = time.monotonic()
         code = srv.stop()
         took = time.monotonic() - t0
-    finally:
-        if srv.proc.poll() is None:
-            srv.proc.kill()
     assert code == 0, srv.logs()
     assert took < 10
     for name in CAMERAS:
@@ -400,12 +337,10 @@ def test_sigterm_stops_cameras_and_commits_their_outputs(tmp_path):
 
 @pytest.mark.slow
 def test_cameras_stop_and_commit_when_the_server_is_killed(tmp_path):
-    srv = Server(tmp_path)
-    pids = [c["pid"] for c in srv.cameras()]
-    srv.proc.kill()
-    srv.proc.wait(10)
-    srv.client.close()
-    srv.log.close()
+    with _serve(tmp_path) as srv:
+        pids = [c["pid"] for c in srv.wait_running(frames=5, timeout=60).values()]
+        srv.proc.kill()
+        srv.proc.wait(10)
 
     def gone(pid: int) -> bool:
         try:

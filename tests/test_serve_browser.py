@@ -21,19 +21,13 @@ import importlib.util
 import json
 import os
 import shutil
-import signal
-import socket
-import subprocess
-import sys
 import time
-import urllib.error
-import urllib.request
-from pathlib import Path
 
 import pytest
 
 from motiontrack.io.tomlfile import parse_toml
 from motiontrack.types import EVENT_TYPES
+from serve_process import ServeProcess, synth_cameras
 
 pytestmark = pytest.mark.slow
 
@@ -65,96 +59,13 @@ def _browser_paths() -> tuple[str, str]:
     return chromium, driver
 
 
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-def _get(base: str, path: str, timeout: float = 5.0):
-    req = urllib.request.Request(base + path, headers={"Authorization": f"Bearer {TOKEN}"})
-    with urllib.request.urlopen(req, timeout=timeout) as r:
-        body = r.read()
-        return json.loads(body) if "json" in r.headers.get("Content-Type", "") else body
-
-
-def _wait(what: str, check, timeout: float, interval: float = 0.2, server=None):
-    """Poll ``check()`` until it returns something truthy; fail naming ``what`` (and the server's
-    last log lines) after ``timeout`` seconds."""
-    end = time.monotonic() + timeout
-    last = None
-    while time.monotonic() < end:
-        try:
-            last = check()
-        except (OSError, ValueError) as e:   # server not up yet, a request cut short
-            last = e
-        if last and not isinstance(last, Exception):
-            return last
-        time.sleep(interval)
-    log = server.log_tail() if server is not None else ""
-    pytest.fail(f"{what} within {timeout:g} s (last: {last!r}){log}")
-
-
-class Server:
-    """`motiontrack serve` in a subprocess."""
-
-    def __init__(self, folder: Path):
-        self.folder = folder
-        self.port = _free_port()
-        self.base = f"http://127.0.0.1:{self.port}/"
-        self.scenes: dict[str, Path] = {}
-        tables = []
-        for name, spec in CAMERAS.items():
-            subprocess.run([sys.executable, "-m", "motiontrack", "synth-events", spec, "-o",
-                            str(folder / name), "-q"], check=True, timeout=120)
-            self.scenes[name] = folder / name / "scene.toml"
-            tables.append(f'[[camera]]\nname = "{name}"\nsource = "{spec}"\n'
-                          f'scene = "{name}/scene.toml"\nloop = true\n')
-        (folder / "cameras.toml").write_text("\n".join(tables))
-        self.log = open(folder / "serve.log", "wb")
-        self.proc = subprocess.Popen(
-            [sys.executable, "-m", "motiontrack", "serve", str(folder / "cameras.toml"),
-             "--port", str(self.port), "--out", str(folder / "out"), "--token", TOKEN],
-            cwd=folder, stdout=self.log, stderr=subprocess.STDOUT)
-
-    def log_tail(self) -> str:
-        self.log.flush()
-        text = (self.folder / "serve.log").read_text(errors="replace")
-        return "\nserve's last output:\n" + "\n".join(text.splitlines()[-25:])
-
-    def cameras(self) -> dict[str, dict]:
-        return {c["name"]: c for c in _get(self.base, "api/cameras")}
-
-    def wait_running(self) -> None:
-        def running():
-            if self.proc.poll() is not None:
-                pytest.fail(f"motiontrack serve exited with {self.proc.returncode}"
-                            + self.log_tail())
-            cams = self.cameras()
-            return (set(cams) == set(CAMERAS)
-                    and all(c["status"] == "running" and c["frames"] > 0 for c in cams.values()))
-        _wait("both cameras running", running, timeout=90, server=self)
-
-    def stop(self) -> None:
-        if self.proc.poll() is None:
-            self.proc.send_signal(signal.SIGTERM)
-            try:
-                self.proc.wait(30)
-            except subprocess.TimeoutExpired:
-                self.proc.kill()
-                self.proc.wait(10)
-        self.log.close()
-
-
 @pytest.fixture(scope="module")
 def server(tmp_path_factory):
     _browser_paths()   # skip before starting anything when there is no browser
-    srv = Server(tmp_path_factory.mktemp("serve"))
-    try:
-        srv.wait_running()
+    root = tmp_path_factory.mktemp("serve")
+    with ServeProcess(root, synth_cameras(root, CAMERAS), token=TOKEN) as srv:
+        srv.wait_running(timeout=90)
         yield srv
-    finally:
-        srv.stop()
 
 
 @pytest.fixture(scope="module")
@@ -180,12 +91,12 @@ def browser(server):
 @pytest.fixture
 def page(server, browser):
     """The page, opened with the token, once both camera tiles show."""
-    browser.get(f"{server.base}?token={TOKEN}")
+    browser.get(f"{server.url}/?token={TOKEN}")
     for name in CAMERAS:
-        _wait(f"the tile of camera {name}",
-              lambda n=name: browser.find_elements("css selector",
-                                                   f'[data-testid="camera-tile-{n}"]'),
-              timeout=15, server=server)
+        server.wait(f"the tile of camera {name}",
+                    lambda n=name: browser.find_elements("css selector",
+                                                         f'[data-testid="camera-tile-{n}"]'),
+                    timeout=15)
     yield browser
     errors = [e for e in browser.get_log("browser") if e["level"] == "SEVERE"]
     # a stream cut short while the page is left is not the page's fault; anything else is
@@ -193,7 +104,7 @@ def page(server, browser):
     assert not errors, f"errors in the browser console: {errors}"
     # nothing the page did may have brought a camera down
     for name, cam in server.cameras().items():
-        assert cam["status"] == "running" and cam["restarts"] == 0, (cam, server.log_tail())
+        assert cam["status"] == "running" and cam["restarts"] == 0, (cam, server.logs())
 
 
 def _js(driver, script: str, *args):
@@ -210,8 +121,8 @@ def _img_state(driver, name: str) -> dict:
 def test_both_camera_pictures_update_with_their_numbers(server, page, tmp_path):
     shots = {}
     for name in CAMERAS:
-        _wait(f"camera {name}'s picture decoded", lambda n=name: _img_state(page, n)["w"] > 0,
-              timeout=15, server=server)
+        server.wait(f"camera {name}'s picture decoded", lambda n=name: _img_state(page, n)["w"] > 0,
+                    timeout=15)
         img = page.find_element("css selector", f'[data-testid="camera-img-{name}"]')
         # each picture a second apart: the synthetic scenes carry sensor noise, so two frames
         # never look alike, and a frozen stream gives the same pixels twice
@@ -227,10 +138,10 @@ def test_both_camera_pictures_update_with_their_numbers(server, page, tmp_path):
         state = _img_state(page, name)
         assert (state["w"], state["h"]) == (640, 480), state
         # the numbers: frames go up with the poll of /api/cameras, the status is the server's
-        _wait(f"camera {name}'s frame count rising",
-              lambda n=name: int(page.find_element(
-                  "css selector", f'[data-testid="camera-frames-{n}"]').text) > frames_before,
-              timeout=5, server=server)
+        server.wait(f"camera {name}'s frame count rising",
+                    lambda n=name: int(page.find_element(
+                        "css selector", f'[data-testid="camera-frames-{n}"]').text) > frames_before,
+                    timeout=5)
         assert page.find_element("css selector",
                                  f'[data-testid="camera-status-{name}"]').text == "running"
         fps = float(page.find_element("css selector", f'[data-testid="camera-fps-{name}"]').text)
@@ -266,8 +177,8 @@ def test_events_reach_the_feed_within_two_seconds_of_their_frame(server, page, t
         return evs if {e["ev"]["camera"] for e in evs} == set(CAMERAS) else None
 
     # each loop of a synthetic camera (10 s at 25 fps) has its line crossings and zone entries
-    events = _wait("events of both cameras in the feed", fresh_events_of_both, timeout=40,
-                   interval=0.5, server=server)
+    events = server.wait("events of both cameras in the feed", fresh_events_of_both, timeout=40,
+                         interval=0.5)
     page.save_screenshot(str(tmp_path / "feed.png"))
     latencies = [item["received_ms"] / 1000.0 - _frame_read_time(item["ev"]) for item in events]
     (tmp_path / "latency.json").write_text(json.dumps(
@@ -283,7 +194,7 @@ def test_events_reach_the_feed_within_two_seconds_of_their_frame(server, page, t
         assert seqs == sorted(seqs, reverse=True), seqs
     # the API has the same events under the same sequence numbers
     ev = events[0]["ev"]
-    listed = _get(server.base, f"api/cameras/{ev['camera']}/events?since={ev['seq'] - 1}")
+    listed = server.get(f"/api/cameras/{ev['camera']}/events?since={ev['seq'] - 1}")
     assert listed and listed[0]["seq"] == ev["seq"] and listed[0]["type"] == ev["type"]
 
 
@@ -318,31 +229,33 @@ def test_a_line_drawn_in_the_editor_is_saved_and_counted(server, page, tmp_path)
     from selenium.webdriver.support.ui import Select
 
     name = "north"
-    scene = _get(server.base, f"api/cameras/{name}/scene")
+    scene = server.get(f"/api/cameras/{name}/scene")
     w, h = scene["width"], scene["height"]
     Select(page.find_element("css selector", '[data-testid="editor-camera"]')).select_by_value(name)
-    _wait("the editor showing the scene's lines",
-          lambda: len(page.find_elements("css selector", '[data-testid^="editor-line-name-"]'))
-          == len(scene["lines"]) and _js(page, "return document.querySelector("
-                                             "'[data-testid=\"editor-canvas\"]').width") == w,
-          timeout=10, server=server)
+    server.wait("the editor showing the scene's lines",
+                lambda: len(page.find_elements("css selector",
+                                               '[data-testid^="editor-line-name-"]'))
+                == len(scene["lines"]) and _js(page, "return document.querySelector("
+                                                   "'[data-testid=\"editor-canvas\"]').width") == w,
+                timeout=10)
 
     # a name the scene already has: the server refuses the scene and the page shows its words
     page.find_element("css selector", '[data-testid="editor-name"]').send_keys("gate")
     _click_source_points(page, [(0.25 * w, 0.3 * h), (0.25 * w, 0.98 * h)])
     page.find_element("css selector", '[data-testid="editor-save"]').click()
     error = page.find_element("css selector", '[data-testid="editor-error"]')
-    _wait("the server's error shown", lambda: error.is_displayed() and "gate" in error.text,
-          timeout=10, server=server)
+    server.wait("the server's error shown", lambda: error.is_displayed() and "gate" in error.text,
+                timeout=10)
     assert "400" in error.text
     # the refused PUT is the one error this page may log (reading the log empties it)
     logged = [e["message"] for e in page.get_log("browser") if e["level"] == "SEVERE"]
     assert all("/scene" in m and "400" in m for m in logged), logged
-    assert "door" not in server.scenes[name].read_text()
+    assert "door" not in (server.root / name / "scene.toml").read_text()
     page.find_element("css selector", '[data-testid="editor-reload"]').click()
-    _wait("the unsaved line discarded",
-          lambda: len(page.find_elements("css selector", '[data-testid^="editor-line-name-"]'))
-          == len(scene["lines"]), timeout=10, server=server)
+    server.wait("the unsaved line discarded",
+                lambda: len(page.find_elements("css selector",
+                                               '[data-testid^="editor-line-name-"]'))
+                == len(scene["lines"]), timeout=10)
 
     # a vertical line left of the middle, over the feet of both walkers: both cross it each loop
     a, b = (0.4 * w, 0.3 * h), (0.4 * w, 0.98 * h)
@@ -352,14 +265,14 @@ def test_a_line_drawn_in_the_editor_is_saved_and_counted(server, page, tmp_path)
              page.find_elements("css selector", '[data-testid^="editor-line-name-"]')]
     assert names == [line["name"] for line in scene["lines"]] + ["door"]
     page.find_element("css selector", '[data-testid="editor-save"]').click()
-    _wait("the scene saved",
-          lambda: page.find_element("css selector",
-                                    '[data-testid="editor-message"]').text.startswith("saved"),
-          timeout=10, server=server)
+    server.wait("the scene saved",
+                lambda: page.find_element(
+                    "css selector", '[data-testid="editor-message"]').text.startswith("saved"),
+                timeout=10)
     assert not page.find_element("css selector", '[data-testid="editor-error"]').is_displayed()
 
     # the camera's scene file now has the line, in source pixels (one displayed pixel of error)
-    saved = parse_toml(server.scenes[name].read_text(), "scene.toml")
+    saved = parse_toml((server.root / name / "scene.toml").read_text(), "scene.toml")
     door = [line for line in saved["line"] if line["name"] == "door"]
     assert len(door) == 1
     px = w / _js(page, "return document.querySelector('[data-testid=\"editor-canvas\"]')"
@@ -369,10 +282,10 @@ def test_a_line_drawn_in_the_editor_is_saved_and_counted(server, page, tmp_path)
     assert [z["name"] for z in saved["zone"]] == [z["name"] for z in scene["zones"]]
 
     # applied without a restart: the line shows in the counts and people crossing it count
-    _wait("the new line counted on the page",
-          lambda: (c := _count_row(page, name, "door")) and c["in"] + c["out"] > 0,
-          timeout=45, interval=0.5, server=server)
-    counts = _get(server.base, f"api/cameras/{name}/counts")
+    server.wait("the new line counted on the page",
+                lambda: (c := _count_row(page, name, "door")) and c["in"] + c["out"] > 0,
+                timeout=45, interval=0.5)
+    counts = server.get(f"/api/cameras/{name}/counts")
     assert counts["lines"]["door"]["in"] + counts["lines"]["door"]["out"] > 0
     assert server.cameras()[name]["status"] == "running"
     page.save_screenshot(str(tmp_path / "editor.png"))
@@ -383,12 +296,13 @@ def test_a_zone_drawn_closes_with_enter_and_a_deleted_item_leaves_the_scene_file
     from selenium.webdriver.support.ui import Select
 
     name = "south"
-    scene = _get(server.base, f"api/cameras/{name}/scene")
+    scene = server.get(f"/api/cameras/{name}/scene")
     w, h = scene["width"], scene["height"]
     Select(page.find_element("css selector", '[data-testid="editor-camera"]')).select_by_value(name)
-    _wait("the editor showing the scene's zones",
-          lambda: len(page.find_elements("css selector", '[data-testid^="editor-zone-name-"]'))
-          == len(scene["zones"]), timeout=10, server=server)
+    server.wait("the editor showing the scene's zones",
+                lambda: len(page.find_elements("css selector",
+                                               '[data-testid^="editor-zone-name-"]'))
+                == len(scene["zones"]), timeout=10)
     page.find_element("css selector", '[data-testid="tool-zone"]').click()
     page.find_element("css selector", '[data-testid="editor-name"]').send_keys("kerb")
     corners = [(0.05 * w, 0.6 * h), (0.25 * w, 0.6 * h), (0.25 * w, 0.9 * h), (0.05 * w, 0.9 * h)]
@@ -401,12 +315,12 @@ def test_a_zone_drawn_closes_with_enter_and_a_deleted_item_leaves_the_scene_file
     gate = page.find_element("css selector", '[aria-label="Delete line gate"]')
     gate.click()
     page.find_element("css selector", '[data-testid="editor-save"]').click()
-    _wait("the scene saved",
-          lambda: page.find_element("css selector",
-                                    '[data-testid="editor-message"]').text.startswith("saved"),
-          timeout=10, server=server)
+    server.wait("the scene saved",
+                lambda: page.find_element(
+                    "css selector", '[data-testid="editor-message"]').text.startswith("saved"),
+                timeout=10)
 
-    saved = parse_toml(server.scenes[name].read_text(), "scene.toml")
+    saved = parse_toml((server.root / name / "scene.toml").read_text(), "scene.toml")
     assert saved.get("line", []) == []
     kerb = [z for z in saved["zone"] if z["name"] == "kerb"]
     assert len(kerb) == 1
@@ -416,6 +330,6 @@ def test_a_zone_drawn_closes_with_enter_and_a_deleted_item_leaves_the_scene_file
     for got, want in zip(kerb[0]["polygon"], corners):
         assert got == pytest.approx(want, abs=1.5 * px)
     # the camera runs the new scene: the zone is counted, the line no longer
-    _wait("the counts following the saved scene",
-          lambda: (c := _get(server.base, f"api/cameras/{name}/counts"))
-          and "kerb" in c["zones"] and "gate" not in c["lines"], timeout=15, server=server)
+    server.wait("the counts following the saved scene",
+                lambda: (c := server.get(f"/api/cameras/{name}/counts"))
+                and "kerb" in c["zones"] and "gate" not in c["lines"], timeout=15)
