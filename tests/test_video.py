@@ -90,6 +90,9 @@ def test_outputs_get_the_usual_permissions_not_mkstemps_0600(tmp_path):
     import motiontrack.io.atomic as atomic
 
     old = os.umask(0o022)
+    # the module's own objects are put back afterwards: a reload makes new classes (DiskFullError)
+    # that the modules which imported the old ones would not catch
+    saved = dict(vars(atomic))
     try:
         importlib.reload(atomic)  # FILE_MODE is taken from the umask at import (same module dict)
         assert atomic.FILE_MODE == 0o644
@@ -98,7 +101,8 @@ def test_outputs_get_the_usual_permissions_not_mkstemps_0600(tmp_path):
             sink.write(_frames(1, 32, 32)[0])
     finally:
         os.umask(old)
-        importlib.reload(atomic)
+        vars(atomic).clear()
+        vars(atomic).update(saved)
     assert stat.S_IMODE((tmp_path / "a.txt").stat().st_mode) == 0o644
     assert stat.S_IMODE((tmp_path / "v.webm").stat().st_mode) == 0o644
 

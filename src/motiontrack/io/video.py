@@ -6,13 +6,16 @@ never fills its device: it stops with :class:`~motiontrack.io.atomic.DiskFullErr
 than :data:`DISK_RESERVE` is left (``cv2.VideoWriter`` would go on silently writing a broken
 file), so the small outputs of the run still fit.
 
+The encoder runs in a thread of its own behind a queue of a few frames
+(:mod:`motiontrack.io.frame_queue`), so the run draws and tracks the next frames while it encodes.
+
 WebM is encoded with PyAV (the ``video`` extra, ``pip install motiontrack[video]``) when it is
-installed: it lets libvpx run in its real-time mode (``deadline=realtime``, ``cpu-used=8``,
-constant quality ``crf``), about 4–8 ms per 768x576 frame against 32 ms (VP8) and 175 ms (VP9)
-through ``cv2.VideoWriter``, which gives no access to the encoder's speed settings. H.264
-(``h264``) is written by PyAV too, with libx264 (or OpenH264) as yuv420p MP4 whose index comes
-first (``movflags=+faststart``), so that browsers play it while it loads. Without PyAV, and for
-the other codecs, OpenCV writes the file.
+installed: it lets libvpx run in its real-time mode at a fixed speed (:data:`PYAV_OPTIONS`) on one
+thread, several times faster than through ``cv2.VideoWriter``, which gives no access to the
+encoder's speed settings (docs/benchmarks.md, "Speed alternatives"). H.264 (``h264``) is written
+by PyAV too, with libx264 (or OpenH264) as yuv420p MP4 whose index comes first
+(``movflags=+faststart``), so that browsers play it while it loads. Without PyAV, and for the
+other codecs, OpenCV writes the file.
 
 Which codecs this installation can encode is probed once per process
 (:func:`encodable_codecs`: PyAV opens each encoder, OpenCV writes one tiny frame); a codec it
@@ -32,9 +35,10 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, MotionTrackError, printable
 from .atomic import (DiskFullError, commit_temp, free_bytes, is_disk_full, output_error,
                      temp_path_for)
+from .frame_queue import FrameQueue
 
 log = logging.getLogger(__name__)
 
@@ -57,13 +61,19 @@ PYAV_CODECS = {
     # the index (moov) first: a browser starts playing before the whole file has arrived
     "h264": ("mp4", {"movflags": "+faststart"}, ("libx264", "libopenh264", "h264")),
 }
-#: libvpx settings: real-time speed, constant quality (crf, lower = better; the bit rate is a cap)
-PYAV_OPTIONS = {"deadline": "realtime", "cpu-used": "8", "crf": "10"}
+#: libvpx settings: real-time mode, constant quality (crf, lower = better; the bit rate is a cap),
+#: blocks that barely change from the last frame (sum of absolute differences under
+#: ``static-thresh`` over 16x16 pixels) kept as they are, which a still camera's scene mostly is.
+#: VP8 reads a negative ``cpu-used`` as a fixed speed (-16 the fastest); a positive one lets it pick
+#: its speed from the time it measures, to fill (16 - cpu-used) / 16 of the frame interval: at 10
+#: fps, 50 ms a frame for cpu-used 8, and a file that depends on the machine's load. VP9's fastest
+#: real-time speed is 8.
+PYAV_OPTIONS = {"deadline": "realtime", "cpu-used": "-16", "crf": "16", "static-thresh": "500"}
 PYAV_MAX_BITRATE = 20_000_000
 #: PyAV encoder → (its options, bit rate; 0 = the encoder's own rate control)
 PYAV_ENCODER_OPTIONS = {
     "libvpx": (PYAV_OPTIONS, PYAV_MAX_BITRATE),
-    "libvpx-vp9": ({**PYAV_OPTIONS, "row-mt": "1"}, PYAV_MAX_BITRATE),
+    "libvpx-vp9": ({**PYAV_OPTIONS, "cpu-used": "8", "row-mt": "1"}, PYAV_MAX_BITRATE),
     # about as fast per frame as real-time libvpx; crf 23 is libx264's own default quality
     "libx264": ({"preset": "veryfast", "crf": "23"}, 0),
     "libopenh264": ({}, 8_000_000),
@@ -71,6 +81,13 @@ PYAV_ENCODER_OPTIONS = {
 
 #: bytes a video leaves free on its device for the other outputs of the run (tracks, summary)
 DISK_RESERVE = 1 << 20
+
+
+def encoder_threads() -> int:
+    """Threads of an encoder: the cores the pipeline leaves (it keeps about two busy), at least 1
+    and at most 8. libvpx's threads wait for each other by spinning, so on a machine without
+    spare cores a second thread costs the pipeline CPU time instead of saving wall time."""
+    return max(1, min(8, (os.cpu_count() or 1) - 2))
 
 
 def extension_for(codec: str) -> str:
@@ -192,7 +209,7 @@ class _PyAVWriter:
             if bit_rate:
                 self._stream.bit_rate = bit_rate
             self._stream.options = dict(options)
-            self._stream.thread_count = max(1, min(8, os.cpu_count() or 1))
+            self._stream.thread_count = encoder_threads()
         except BaseException:
             self._out.close()
             raise
@@ -202,7 +219,10 @@ class _PyAVWriter:
 
         if any(self._pad):
             image = cv2.copyMakeBorder(image, 0, self._pad[0], 0, self._pad[1], cv2.BORDER_REPLICATE)
-        frame = av.VideoFrame.from_ndarray(np.ascontiguousarray(image), format="bgr24")
+        # OpenCV's BGR to I420 (BT.601, limited range, as FFmpeg's) takes a tenth of the time
+        # of FFmpeg's own conversion from bgr24
+        yuv = cv2.cvtColor(image, cv2.COLOR_BGR2YUV_I420)
+        frame = av.VideoFrame.from_ndarray(yuv, format="yuv420p")
         for packet in self._stream.encode(frame):
             self._out.mux(packet)
 
@@ -214,14 +234,26 @@ class _PyAVWriter:
             self._out.close()
 
 
+class EncoderError(MotionTrackError):
+    """The encoder of a video failed while the run was writing it."""
+
+
 class VideoSink:
     """Write frames to ``path`` with ``codec``; opened lazily at the first frame (size from it).
 
     ``backend``: ``"auto"`` (PyAV for WebM and H.264 when it has the encoder, else OpenCV),
     ``"pyav"`` or ``"opencv"``; :attr:`backend` tells which one is used.
+
+    The encoder runs in a thread of its own (:class:`~motiontrack.io.frame_queue.FrameQueue`):
+    :meth:`write` copies the frame into one of at most ``slots`` buffers and returns, waiting
+    only while every buffer is queued. An error of the encoder is raised, as one
+    :class:`EncoderError` (or :class:`~motiontrack.io.atomic.DiskFullError`, or the
+    :class:`OSError` of the device), by the next :meth:`write` or by :meth:`close`.
+    :meth:`close` waits for every frame written and finishes the file.
     """
 
-    def __init__(self, path: str | Path, fps: float, codec: str = "vp80", backend: str = "auto") -> None:
+    def __init__(self, path: str | Path, fps: float, codec: str = "vp80", backend: str = "auto",
+                 slots: int | None = None) -> None:
         if codec not in CODECS:
             raise InputError(f"unknown codec {codec!r}; valid: {', '.join(CODECS)}")
         if backend not in ("auto", "pyav", "opencv"):
@@ -235,21 +267,35 @@ class VideoSink:
         self.path = Path(path)
         self.fps = float(fps) if fps and fps > 0 else 25.0
         self.codec = codec
+        self.slots = slots
         self._writer: cv2.VideoWriter | _PyAVWriter | None = None
+        self._queue: FrameQueue | None = None
         self._tmp: Path | None = None
         self.frames = 0
 
     def write(self, image: np.ndarray) -> None:
-        if image.ndim == 2:
-            image = cv2.cvtColor(image, cv2.COLOR_GRAY2BGR)
+        """Queue one frame ((h, w, 3) BGR or (h, w) gray uint8); the first one sets the size."""
         if self._writer is None:
-            self._writer = self._open(image.shape[1], image.shape[0])
+            h, w = image.shape[:2]
+            self._writer = self._open(w, h)
+            self._queue = FrameQueue(self._encode, (h, w, 3), self.slots,
+                                     name=f"motiontrack-video-{self.path.name}")
         self._check_space()
+        try:
+            self._queue.put(image)
+        except ValueError as exc:   # a frame of another size
+            raise EncoderError(f"cannot write {printable(self.path)}: {exc}") from None
+        self.frames += 1
+
+    def _encode(self, image: np.ndarray) -> None:
+        """One frame into the encoder (in the queue's thread): its errors as this sink's."""
         try:
             self._writer.write(image)
         except OSError as exc:  # PyAV reports a full device; cv2.VideoWriter reports nothing
             raise output_error(self.path, exc) from None
-        self.frames += 1
+        except Exception as exc:
+            raise EncoderError(f"cannot encode {self.codec} video to {printable(self.path)}: "
+                               f"{printable(exc)}") from None
 
     def _check_space(self) -> None:
         """Stop before the device is full: less than :data:`DISK_RESERVE` is left."""
@@ -279,27 +325,38 @@ class VideoSink:
         return writer
 
     def close(self) -> None:
-        """Finish the file and move it to its final name (nothing is written for 0 frames);
-        when that fails, the temporary file is removed."""
-        if self._writer is not None:
+        """Encode every frame written, finish the file and move it to its final name (nothing is
+        written for 0 frames); when that fails, the temporary file is removed."""
+        if self._writer is None:
+            return
+        try:
+            if self._queue is not None:
+                self._queue.close()   # every queued frame encoded, or the encoder's error
+                self._queue = None
             writer, self._writer = self._writer, None
-            try:
-                writer.release()
-                if self._tmp is not None:
-                    commit_temp(self._tmp, self.path)
-                    self._tmp = None
-            except OSError as exc:
-                self.discard()
-                raise output_error(self.path, exc) from None
-            except BaseException:
-                self.discard()
-                raise
+            writer.release()
+            if self._tmp is not None:
+                commit_temp(self._tmp, self.path)
+                self._tmp = None
+        except DiskFullError:
+            self.discard()
+            raise
+        except OSError as exc:
+            self.discard()
+            raise output_error(self.path, exc) from None
+        except BaseException:
+            self.discard()
+            raise
 
     def discard(self) -> None:
-        """Stop writing and remove the temporary file (nothing appears under :attr:`path`).
-        Never fails: it is called while another error is on its way."""
+        """Stop writing (frames still queued are dropped) and remove the temporary file (nothing
+        appears under :attr:`path`). Never fails: it is called while another error is on its
+        way."""
+        queue, self._queue = self._queue, None
         writer, self._writer = self._writer, None
         try:
+            if queue is not None:
+                queue.abort()
             if writer is not None:
                 writer.release()
         except Exception as exc:  # e.g. the encoder cannot flush onto a full device
