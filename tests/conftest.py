@@ -84,3 +84,17 @@ def tracks_of(results: Iterable[FrameResult]) -> Annotations:
         if close is not None:
             close()
     return ann(rows)
+
+
+def communicate_or_dump(proc, timeout: float) -> tuple[str, str]:
+    """``proc.communicate(timeout)``; a process still running then (started with
+    ``PYTHONFAULTHANDLER=1``) is sent SIGABRT so that its threads' stacks are in the failure."""
+    import signal
+    import subprocess
+
+    try:
+        return proc.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        proc.send_signal(signal.SIGABRT)
+        out, err = proc.communicate(timeout=30)
+        raise AssertionError(f"still running after {timeout} s; its stacks:\n{err[-6000:]}")

@@ -20,6 +20,8 @@ from motiontrack.io.mot import read_mot  # noqa: E402
 from motiontrack.run.executor import dask_client  # noqa: E402
 from motiontrack.run.jobs import track_job  # noqa: E402
 
+from conftest import communicate_or_dump  # noqa: E402
+
 SCENES = ["synth:walker?n_frames=30", "synth:crossing?n_frames=30", "synth:walker?n_frames=25&seed=3"]
 
 
@@ -402,6 +404,7 @@ def test_ctrl_c_stops_the_batch_within_seconds_and_the_index_says_which_videos_a
     proc = subprocess.Popen([sys.executable, "-m", "motiontrack", "batch", *short, *long, "-o",
                              str(results), "-j", "2", "--set", "output.video=false"],
                             start_new_session=True, stdout=subprocess.PIPE,
+                            env={**os.environ, "PYTHONFAULTHANDLER": "1"},
                             stderr=subprocess.PIPE, text=True)
     try:
         t0 = time.monotonic()
@@ -413,7 +416,7 @@ def test_ctrl_c_stops_the_batch_within_seconds_and_the_index_says_which_videos_a
         time.sleep(1.0)   # the long videos are running now
         os.killpg(proc.pid, signal.SIGINT)
         t1 = time.monotonic()
-        _, err = proc.communicate(timeout=60)
+        _, err = communicate_or_dump(proc, 60)
         stopped_in = time.monotonic() - t1
     finally:
         if proc.poll() is None:

@@ -12,7 +12,7 @@ import pytest
 
 pytest.importorskip("distributed")
 
-from conftest import free_port  # noqa: E402
+from conftest import communicate_or_dump, free_port  # noqa: E402
 from motiontrack.cli import main  # noqa: E402
 from motiontrack.config import PipelineConfig, apply_overrides  # noqa: E402
 from motiontrack.run.jobs import track_job  # noqa: E402
@@ -97,6 +97,7 @@ def test_an_interrupted_batch_frees_the_clusters_workers_within_seconds(tmp_path
     proc = subprocess.Popen([sys.executable, "-m", "motiontrack", "batch", *long, "-o",
                              str(results), "--cluster", scheduler_address, "--set",
                              "output.video=false"], stdout=subprocess.PIPE,
+                            env={**os.environ, "PYTHONFAULTHANDLER": "1"},
                             stderr=subprocess.PIPE, text=True)
     try:
         with Client(scheduler_address, timeout=30) as cl:
@@ -106,7 +107,7 @@ def test_an_interrupted_batch_frees_the_clusters_workers_within_seconds(tmp_path
                 time.sleep(0.2)
             time.sleep(2.0)   # both videos are tracking frames
             os.kill(proc.pid, signal.SIGINT)
-            _, err = proc.communicate(timeout=60)
+            _, err = communicate_or_dump(proc, 60)
             assert proc.returncode == 130, err
             t0 = time.monotonic()
             while any(cl.call_stack().values()):   # a task still executing on a worker
