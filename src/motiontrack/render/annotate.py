@@ -9,6 +9,7 @@ a frame share one.
 
 from __future__ import annotations
 
+from functools import lru_cache
 from typing import Mapping, Sequence
 
 import cv2
@@ -72,17 +73,19 @@ def draw_tracks(img: np.ndarray, tracks: Sequence[Track], trail: int = 32,
     colors = _colors_of(tracks, colors)
     scale, thick = text_scale(img.shape)
     radius = max(3, int(round(min(img.shape[:2]) / 160.0)))
+    seen_width, predicted_width = line_width(img.shape), line_width(img.shape, seen=False)
     for t in tracks:
         color = colors[t.id]
         b = t.box
         p1 = (int(round(b.x)), int(round(b.y)))
         p2 = (int(round(b.x2)), int(round(b.y2)))
-        cv2.rectangle(img, p1, p2, color, line_width(img.shape, t.time_since_update == 0))
+        width = seen_width if t.time_since_update == 0 else predicted_width
+        cv2.rectangle(img, p1, p2, color, width)
         cx, cy = b.center
         cv2.circle(img, (int(round(cx)), int(round(cy))), radius, color, -1)
         if trail > 1 and len(t.history) > 1:
             pts = np.round(np.array(t.history[-trail:])).astype(np.int32).reshape(-1, 1, 2)
-            cv2.polylines(img, [pts], False, color, line_width(img.shape), cv2.LINE_AA)
+            cv2.polylines(img, [pts], False, color, seen_width, cv2.LINE_AA)
         draw_label(img, str(t.id), (p1[0], p1[1] - 2), color, scale, thick)
 
 
@@ -116,16 +119,18 @@ def draw_mask_inset(img: np.ndarray, mask: np.ndarray, fraction: float = 0.2,
 LEGEND_STYLES = ("track", "predicted", "region", "hypothesis", "head", "points")
 
 
-def _swatch(img: np.ndarray, style: str, x: int, y: int, size: int) -> None:
-    """One legend symbol in the square ``(x, y)``–``(x + size, y + size)``."""
+def _swatch(img: np.ndarray, style: str, x: int, y: int, size: int,
+            frame_shape: Sequence[int]) -> None:
+    """One legend symbol in the square ``(x, y)``–``(x + size, y + size)``, its lines as wide
+    as on a frame of ``frame_shape``."""
     p1, p2 = (x, y), (x + size, y + size)
     c = (x + size // 2, y + size // 2)
     if style == "track":
-        cv2.rectangle(img, p1, p2, palette_color(0), line_width(img.shape))
+        cv2.rectangle(img, p1, p2, palette_color(0), line_width(frame_shape))
     elif style == "predicted":
-        cv2.rectangle(img, p1, p2, palette_color(0), line_width(img.shape, seen=False))
+        cv2.rectangle(img, p1, p2, palette_color(0), line_width(frame_shape, seen=False))
     elif style == "region":
-        cv2.rectangle(img, p1, p2, REGION_COLOR, line_width(img.shape, seen=False))
+        cv2.rectangle(img, p1, p2, REGION_COLOR, line_width(frame_shape, seen=False))
     elif style == "hypothesis":
         cv2.rectangle(img, p1, p2, (255, 255, 255), 1)
     elif style == "head":
@@ -142,10 +147,33 @@ def draw_legend(img: np.ndarray, entries: Sequence[tuple[str, str]], origin: tup
                 right: bool = False) -> int:
     """A legend of ``(style, label)`` entries (styles in :data:`LEGEND_STYLES`) on a translucent
     dark panel whose bottom-left (bottom-right with ``right``) corner is ``origin`` (in place);
-    returns the panel's height in pixels. A panel that would leave the frame is moved inside."""
+    returns the panel's height in pixels. A panel that would leave the frame is moved inside.
+
+    The panel is drawn once per frame size (:func:`_legend_layer`); each frame only darkens
+    the scene under it and lays the drawn panel over it.
+    """
     if not entries:
         return 0
-    scale, thick = text_scale(img.shape)
+    shape = (int(img.shape[0]), int(img.shape[1]), 3)
+    (y0, y1, x0, x1), ph, keep, paint = _legend_layer(shape, tuple(map(tuple, entries)),
+                                                      (int(origin[0]), int(origin[1])), right)
+    roi = img[y0:y1, x0:x1]
+    if img.ndim == 2:   # the coverage is the same in every channel
+        keep, paint = keep[..., 0], cv2.cvtColor(paint, cv2.COLOR_BGR2GRAY)
+    roi[...] = cv2.add(cv2.multiply(roi, keep, dtype=cv2.CV_32F), paint, dtype=cv2.CV_8U)
+    return ph
+
+
+@lru_cache(maxsize=32)
+def _legend_layer(shape: tuple[int, int, int], entries: tuple[tuple[str, str], ...],
+                  origin: tuple[int, int], right: bool
+                  ) -> tuple[tuple[int, int, int, int], int, np.ndarray, np.ndarray]:
+    """The legend panel of a frame of ``shape``: its rectangle ``(y0, y1, x0, x1)``, its
+    height, and per pixel the share of the scene kept (``keep``, float32: 0.4 under the panel,
+    less under anti-aliased edges, 0 under symbols) and the colour laid over it (``paint``,
+    float32). Drawn over black and over white: where the two agree the legend covers the pixel,
+    where they differ, by how much the difference tells."""
+    scale, thick = text_scale(shape)
     scale *= 0.8   # a key, read once: smaller than the ids it explains
     (_, th), base = cv2.getTextSize("Ag", _FONT, scale, thick)
     row = th + base + max(2, th // 3)
@@ -153,18 +181,24 @@ def draw_legend(img: np.ndarray, entries: Sequence[tuple[str, str]], origin: tup
     pad = max(3, th // 3)
     width = max(cv2.getTextSize(label, _FONT, scale, thick)[0][0] for _, label in entries)
     pw, ph = pad * 3 + size + width, pad * 2 + row * len(entries) - (row - size)
-    h, w = img.shape[:2]
+    h, w = shape[:2]
     x0 = min(max(0, origin[0] - pw if right else origin[0]), max(0, w - pw))
     y0 = min(max(0, origin[1] - ph), max(0, h - ph))
     x1, y1 = min(w, x0 + pw), min(h, y0 + ph)
-    # translucent, so the scene under the legend stays visible
-    img[y0:y1, x0:x1] = (img[y0:y1, x0:x1].astype(np.uint16) * 2 // 5).astype(np.uint8)
-    for i, (style, label) in enumerate(entries):
-        y = y0 + pad + i * row
-        _swatch(img, style, x0 + pad, y, size)
-        cv2.putText(img, label, (x0 + 2 * pad + size, y + size - base // 2), _FONT, scale,
-                    (255, 255, 255), thick, cv2.LINE_AA)
-    return ph
+    drawn = []
+    for background in (0, 255):
+        canvas = np.full((y1 - y0, x1 - x0, 3), background, np.uint8)
+        for i, (style, label) in enumerate(entries):
+            y = pad + i * row
+            # swatches sized by the whole frame's shape, as on the frame itself
+            _swatch(canvas, style, pad, y, size, shape)
+            cv2.putText(canvas, label, (2 * pad + size, y + size - base // 2), _FONT, scale,
+                        (255, 255, 255), thick, cv2.LINE_AA)
+        drawn.append(canvas.astype(np.float32))
+    over_black, over_white = drawn
+    # translucent, so the scene under the legend stays visible: 2/5 of it is kept
+    keep = (over_white - over_black) / 255.0 * 0.4
+    return (y0, y1, x0, x1), ph, keep, over_black
 
 
 def annotate_frame(frame: np.ndarray, tracks: Sequence[Track], regions: Sequence[Region] = (),

@@ -7,6 +7,7 @@ The geometry comes as plain objects (lines with ``name, a, b``; zones with ``nam
 
 from __future__ import annotations
 
+from functools import lru_cache
 from typing import Any, Sequence
 
 import cv2
@@ -28,6 +29,35 @@ def _pt(p: Sequence[float]) -> tuple[int, int]:
     return int(round(p[0])), int(round(p[1]))
 
 
+@lru_cache(maxsize=16)
+def _zone_layer(shape: tuple[int, ...], polygons: tuple[tuple[tuple[int, int], ...], ...]
+                ) -> tuple[tuple[int, int, int, int], np.ndarray, np.ndarray] | None:
+    """The zones' fill, drawn once per frame size: the rectangle ``(y0, y1, x0, x1)`` around
+    the zones, which of its pixels they cover (uint8 mask, 255 inside) and the zone colour at its
+    size."""
+    mask = np.zeros(shape[:2], np.uint8)
+    cv2.fillPoly(mask, [np.array(p, np.int32).reshape(-1, 2) for p in polygons], 255)
+    x, y, w, h = cv2.boundingRect(mask)
+    if w == 0 or h == 0:
+        return None
+    inside = np.ascontiguousarray(mask[y:y + h, x:x + w])
+    color = np.empty((h, w, 3), np.uint8)
+    color[:] = ZONE_COLOR
+    return (y, y + h, x, x + w), inside, color
+
+
+def _tint_zones(img: np.ndarray, polygons: tuple[tuple[tuple[int, int], ...], ...]) -> None:
+    """Blend the zone colour into the zones, in place, touching only the rectangle around them
+    (the fill does not change from frame to frame)."""
+    layer = _zone_layer(img.shape, polygons)
+    if layer is None:
+        return
+    (y0, y1, x0, x1), inside, color = layer
+    roi = img[y0:y1, x0:x1]
+    # the same arithmetic as blending a tinted copy of the whole frame, on the zones only
+    cv2.copyTo(cv2.addWeighted(color, _ZONE_ALPHA, roi, 1.0 - _ZONE_ALPHA, 0.0), inside, roi)
+
+
 def draw_scene(img: np.ndarray, lines: Sequence[Any], zones: Sequence[Any],
                frame: SceneFrame | None) -> np.ndarray:
     """Draw zones (tinted, outlined, ``name: occupancy``), lines (with an arrow towards the
@@ -41,10 +71,9 @@ def draw_scene(img: np.ndarray, lines: Sequence[Any], zones: Sequence[Any],
     occupancy = frame.occupancy if frame is not None else {}
     counts = frame.line_counts if frame is not None else {}
     if zones:
-        tint = img.copy()
-        for z in zones:
-            cv2.fillPoly(tint, [np.round(np.asarray(z.polygon)).astype(np.int32)], ZONE_COLOR)
-        cv2.addWeighted(tint, _ZONE_ALPHA, img, 1.0 - _ZONE_ALPHA, 0.0, dst=img)
+        polygons = tuple(tuple(map(tuple, np.round(np.asarray(z.polygon)).astype(int).tolist()))
+                         for z in zones)
+        _tint_zones(img, polygons)
     for z in zones:
         poly = np.round(np.asarray(z.polygon)).astype(np.int32)
         cv2.polylines(img, [poly], True, ZONE_COLOR, lw, cv2.LINE_AA)
