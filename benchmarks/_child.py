@@ -32,6 +32,14 @@ def motiontrack_command() -> list[str]:
     return [str(exe)] if exe.is_file() else [sys.executable, "-m", "motiontrack"]
 
 
+def cache_bytecode(work: Path) -> None:
+    """Let the children keep compiled bytecode (in ``work``), as an installed package has it: a
+    shell with ``PYTHONDONTWRITEBYTECODE=1`` would otherwise make every start recompile
+    motiontrack's sources. Run each command once before timing it, to fill the cache."""
+    os.environ.pop("PYTHONDONTWRITEBYTECODE", None)
+    os.environ["PYTHONPYCACHEPREFIX"] = str(Path(work) / "bytecode")
+
+
 def run_child(argv: list[str]) -> ChildRun:
     """Run ``argv`` to its end and measure it (:class:`ChildRun`); exit with the command's own
     message when it fails. Its output goes to files, read once it has exited, so the parent does

@@ -72,7 +72,7 @@ from motiontrack.types import Annotations, Frame
 
 # benchmarks/ is on sys.path when a script here runs
 import tutorial
-from _child import ChildRun, motiontrack_command, run_child
+from _child import ChildRun, cache_bytecode, motiontrack_command, run_child
 from _pets import add_data_argument, pets_video
 
 
@@ -374,6 +374,11 @@ def whole_process(args: argparse.Namespace, video: Path, gt: Annotations) -> Non
     rows = process_rows(video, args.frames, fourccs)
     by_name = {r.name: r for r in rows}
     with tempfile.TemporaryDirectory(prefix="throughput-") as work:
+        cache_bytecode(Path(work))
+        for row in rows:   # a warm-up run of each row fills the bytecode cache
+            (Path(work) / "warm-up" / row.folder).mkdir(parents=True)
+            run_child(row.command(Path(work) / "warm-up" / row.folder))
+        shutil.rmtree(Path(work) / "warm-up")
         measure(rows, args.rounds, Path(work))
         for row in rows:
             path = row.predictions(Path(work) / "round0" / row.folder)
