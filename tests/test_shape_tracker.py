@@ -261,3 +261,59 @@ def test_shape_tracker_raises_recall_on_column_and_crossing(scene):
                           for shapes in (False, True))
     assert r1 > r0
     assert p1 >= p0 - 0.02
+
+
+def test_difference_image_is_the_largest_channel_difference():
+    from motiontrack.people.shape_tracker import difference_image
+
+    rng = np.random.default_rng(0)
+    a, b = (rng.integers(0, 256, (30, 40, 3), dtype=np.uint8) for _ in range(2))
+    want = np.abs(a.astype(int) - b.astype(int)).max(axis=2)
+    np.testing.assert_array_equal(difference_image(a, b), want)
+    grey = np.abs(a[..., 0].astype(int) - b[..., 0].astype(int))
+    np.testing.assert_array_equal(difference_image(a[..., 0], b[..., 0]), grey)
+
+
+def _crossing_shapes(group):
+    """The shapes of the two people of the synthetic ``crossing`` scene while they pass each
+    other (the nearer one hides part of the other), fitted with people grouped by ``group``
+    (None: the tracker's own grouping), and how often a group had to be fitted again."""
+    from motiontrack.synth import make_scene
+
+    scene = make_scene("crossing", seed=0)
+    gt = scene.ground_truth()
+    st = ShapeTracker(load_default_model())
+    if group is not None:
+        st._group = group
+    measure, refits = st._measure_group, []
+
+    def counted(ids, *args):
+        kept = measure(ids, *args)
+        refits.append(kept < len(ids))
+        return kept
+
+    st._measure_group = counted
+    out = []
+    for i in range(150, 230):
+        a = gt.at(i + 1)
+        tracks = [_track(int(t), b) for t, b in zip(a.ids, a.boxes)]
+        out.append(st.update(scene.frame(i), scene.background, [], tracks,
+                             mask=scene.foreground_mask(i)))
+    return out, sum(refits)
+
+
+def test_people_fitted_together_get_the_fits_of_one_at_a_time():
+    one_by_one, _ = _crossing_shapes(lambda order, boxes: [order[0]])
+    grouped, _ = _crossing_shapes(None)
+    # everyone in one group: a person the fitted outline of a nearer one hides is fitted again
+    together, refits = _crossing_shapes(lambda order, boxes: list(order))
+    assert refits > 0
+    assert sum(map(len, one_by_one)) == 160
+    for run in (grouped, together):
+        for a_frame, b_frame in zip(one_by_one, run):
+            assert len(a_frame) == len(b_frame)
+            for a, b in zip(a_frame, b_frame):
+                assert (a.track_id, a.box, a.support, a.visible, a.coasting, a.search) \
+                    == (b.track_id, b.box, b.support, b.visible, b.coasting, b.search)
+                for name in ("outline", "control", "normals"):
+                    np.testing.assert_array_equal(getattr(a, name), getattr(b, name))

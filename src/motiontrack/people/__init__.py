@@ -2,7 +2,8 @@
 
 * :mod:`.heads` — human feature (head) detector and head-based splitting of merged regions;
 * :mod:`.bspline`, :mod:`.shape_model` — closed B-spline outlines and the point-distribution model;
-* :mod:`.shape_tracker` — active shape tracker fitted to the difference image;
+* :mod:`.shape_tracker` — active shape tracker fitted to the difference image (its numerics for
+  several people at once in :mod:`.shape_batch`);
 * :mod:`.hog` — OpenCV's HOG people detector (whole frame or motion regions);
 * :mod:`.training` — training a shape model from ground truth or synthetic scenes;
 * :mod:`.stage` — :class:`PeopleStage`, which wires them for the pipeline, one call per frame::

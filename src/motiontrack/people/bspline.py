@@ -120,7 +120,9 @@ def signed_area(points: np.ndarray) -> float:
     if len(p) < 3:
         return 0.0
     x, y = p[:, 0], p[:, 1]
-    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
+    # np.roll(v, -1), without its generic axis handling (a tenth of the cost on short outlines)
+    return 0.5 * float(np.dot(x, np.concatenate((y[1:], y[:1])))
+                       - np.dot(np.concatenate((x[1:], x[:1])), y))
 
 
 def normals(control: np.ndarray, t: np.ndarray) -> np.ndarray:

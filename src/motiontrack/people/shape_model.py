@@ -35,6 +35,7 @@ from ..errors import InputError
 __all__ = [
     "ShapeModel",
     "fit_similarity",
+    "weighted_similarity",
     "apply_similarity",
     "invert_similarity",
     "default_model_path",
@@ -64,27 +65,39 @@ def fit_similarity(src: np.ndarray, dst: np.ndarray, weights: np.ndarray | None 
     s = np.asarray(src, dtype=np.float64).reshape(-1, 2)
     d = np.asarray(dst, dtype=np.float64).reshape(-1, 2)
     w = np.ones(len(s)) if weights is None else np.asarray(weights, dtype=np.float64).reshape(-1)
-    if np.count_nonzero(w > 0) < 2 or w.sum() <= 0:
+    return weighted_similarity(s, d, w)
+
+
+def weighted_similarity(s: np.ndarray, d: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """:func:`fit_similarity` of float64 arrays ``(K, 2)``, ``(K, 2)``, ``(K,)`` as they are
+    (no conversion: the shape tracker calls it twice per person and frame)."""
+    if np.count_nonzero(w > 0) < 2:
         return np.array([1.0, 0.0, 0.0, 0.0])
     W = w.sum()
-    ms = (w[:, None] * s).sum(axis=0) / W
-    md = (w[:, None] * d).sum(axis=0) / W
-    s0, d0 = s - ms, d - md
+    if W <= 0:
+        return np.array([1.0, 0.0, 0.0, 0.0])
+    wc = w[:, None]
+    msx, msy = ((wc * s).sum(axis=0) / W).tolist()
+    mdx, mdy = ((wc * d).sum(axis=0) / W).tolist()
+    s0, d0 = s - (msx, msy), d - (mdx, mdy)
     den = float((w * (s0 ** 2).sum(axis=1)).sum())
     if den <= 0:
-        return np.array([1.0, 0.0, md[0] - ms[0], md[1] - ms[1]])
-    a = float((w * (s0[:, 0] * d0[:, 0] + s0[:, 1] * d0[:, 1])).sum()) / den
-    b = float((w * (s0[:, 0] * d0[:, 1] - s0[:, 1] * d0[:, 0])).sum()) / den
-    tx = md[0] - (a * ms[0] - b * ms[1])
-    ty = md[1] - (b * ms[0] + a * ms[1])
-    return np.array([a, b, tx, ty])
+        return np.array([1.0, 0.0, mdx - msx, mdy - msy])
+    sx, sy, dx, dy = s0[:, 0], s0[:, 1], d0[:, 0], d0[:, 1]
+    a = float((w * (sx * dx + sy * dy)).sum()) / den
+    b = float((w * (sx * dy - sy * dx)).sum()) / den
+    return np.array([a, b, mdx - (a * msx - b * msy), mdy - (b * msx + a * msy)])
 
 
 def apply_similarity(pose: np.ndarray, pts: np.ndarray) -> np.ndarray:
     """Apply ``(a, b, tx, ty)`` to points ``(K, 2)``."""
-    a, b, tx, ty = np.asarray(pose, dtype=np.float64)
+    a, b, tx, ty = np.asarray(pose, dtype=np.float64).tolist()
     p = np.asarray(pts, dtype=np.float64).reshape(-1, 2)
-    return np.stack([a * p[:, 0] - b * p[:, 1] + tx, b * p[:, 0] + a * p[:, 1] + ty], axis=1)
+    x, y = p[:, 0], p[:, 1]
+    out = np.empty((len(p), 2))
+    out[:, 0] = a * x - b * y + tx
+    out[:, 1] = b * x + a * y + ty
+    return out
 
 
 def invert_similarity(pose: np.ndarray) -> np.ndarray:
