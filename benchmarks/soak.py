@@ -5,7 +5,10 @@ born and deleted all the time) through the `track` job (`motiontrack.run.track_j
 `motiontrack track --no-video`. Peak RSS is reported at 1k, 10k and 20k frames; the target is a
 growth under 10% from 1k to 20k frames.
 
-Run: .venv/bin/python benchmarks/soak.py [--frames 20000]
+With --video the annotated video (the default codec) is written too, and the resident memory is
+printed every 1,000 frames: the encoder's queue and state must not grow either.
+
+Run: .venv/bin/python benchmarks/soak.py [--frames 20000] [--video]
 """
 
 from __future__ import annotations
@@ -44,9 +47,16 @@ def peak_rss_mb() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0  # KiB on Linux
 
 
+def rss_mb() -> float:
+    """The resident memory now (Linux), MB."""
+    with open("/proc/self/statm") as f:
+        return int(f.read().split()[1]) * resource.getpagesize() / 1024.0 / 1024.0
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--frames", type=int, default=20000)
+    ap.add_argument("--video", action="store_true", help="write the annotated video too")
     args = ap.parse_args()
     checkpoints = sorted({c for c in (1000, 10000, 20000, args.frames) if c <= args.frames})
     marks: dict[int, float] = {}
@@ -55,12 +65,15 @@ def main() -> None:
     def progress(k: int) -> None:
         nonlocal done
         done += k
+        if args.video and done % 1000 == 0:
+            print(f"  {done:>6} frames: RSS {rss_mb():.1f} MB, peak {peak_rss_mb():.1f} MB",
+                  flush=True)
         if done in checkpoints:
             marks[done] = peak_rss_mb()
             print(f"  {done:>6} frames: peak RSS {marks[done]:.1f} MB "
                   f"({time.perf_counter() - t0:.0f} s)", flush=True)
 
-    cfg = load_config(None, ["output.video=false"])
+    cfg = load_config(None, [f"output.video={'true' if args.video else 'false'}"])
     with tempfile.TemporaryDirectory() as out:
         job = track_job(LoopedScene(args.frames), cfg, out, force=True)
         t0 = time.perf_counter()

@@ -233,3 +233,17 @@ def test_the_mask_video_of_gray_frames_has_every_frame(tmp_path):
     with av.open(str(out / "annotated.webm")) as c:
         s = c.streams.video[0]
         assert (s.codec_context.width, s.codec_context.height) == (info.width, info.height)
+
+
+def test_webm_through_opencv_says_how_to_encode_it_faster(tmp_path, monkeypatch, caplog):
+    monkeypatch.setattr(video, "pyav_encoder", lambda codec: None)    # an installation without PyAV
+    caplog.set_level("INFO", logger="motiontrack.io.video")
+    with VideoSink(tmp_path / "v.webm", 10.0, "vp80") as sink:
+        assert sink.backend == "opencv"
+        sink.write(_numbered(1)[0])
+    assert "v.webm: vp80 is encoded by OpenCV" in caplog.text
+    assert "pip install 'motiontrack[video]'" in caplog.text
+    caplog.clear()
+    with VideoSink(tmp_path / "v.avi", 10.0, "mjpg") as sink:
+        sink.write(_numbered(1)[0])
+    assert caplog.text == ""

@@ -21,7 +21,7 @@ from typing import Callable
 import cv2
 import numpy as np
 
-__all__ = ["FrameQueue", "QUEUE_BYTES", "MAX_SLOTS", "slots_for"]
+__all__ = ["FrameQueue", "QUEUE_BYTES", "MAX_SLOTS", "slots_for", "copy_frame"]
 
 #: memory the queued frames of one video may take (at least 2 frames are queued whatever the size)
 QUEUE_BYTES = 32 << 20
@@ -36,26 +36,41 @@ def slots_for(shape: tuple[int, ...]) -> int:
     return max(2, min(MAX_SLOTS, QUEUE_BYTES // max(1, nbytes)))
 
 
+def copy_frame(image: np.ndarray, buf: np.ndarray) -> None:
+    """``image`` ((h, w, 3) BGR or (h, w) gray uint8) into the (h, w, 3) buffer ``buf``."""
+    if image.shape[:2] != buf.shape[:2]:
+        raise ValueError(f"frame of {image.shape[1]}x{image.shape[0]} pixels into a buffer of "
+                         f"{buf.shape[1]}x{buf.shape[0]}")
+    if image.ndim == 2:
+        cv2.cvtColor(image, cv2.COLOR_GRAY2BGR, dst=buf)
+    else:
+        np.copyto(buf, image, casting="unsafe")
+
+
 class FrameQueue:
     """``consume(frame)`` for every :meth:`put` frame, in order, in a worker thread.
 
     Parameters
     ----------
-    consume : called in the worker with each frame, an (h, w, 3) uint8 BGR buffer that is reused
+    consume : called in the worker with each frame, a uint8 buffer of ``shape`` that is reused
         once it returns (it must not keep a reference to it).
-    shape : (h, w, 3) of every frame.
+    shape : shape of the buffers, (h, w, 3) for BGR frames.
     slots : buffers, i.e. the most frames queued or being consumed at once (default
         :func:`slots_for`).
     name : the worker thread's name.
+    fill : ``fill(image, buffer)`` puts a frame given to :meth:`put` into a buffer, in the
+        caller's thread (e.g. converted for the encoder); default :func:`copy_frame`.
     """
 
-    def __init__(self, consume: Callable[[np.ndarray], None], shape: tuple[int, int, int],
-                 slots: int | None = None, name: str = "motiontrack-encoder") -> None:
+    def __init__(self, consume: Callable[[np.ndarray], None], shape: tuple[int, ...],
+                 slots: int | None = None, name: str = "motiontrack-encoder",
+                 fill: Callable[[np.ndarray, np.ndarray], None] | None = None) -> None:
         self.shape = tuple(int(s) for s in shape)
         self.slots = slots_for(self.shape) if slots is None else int(slots)
         if self.slots < 1:
             raise ValueError(f"slots must be >= 1, got {self.slots}")
         self._consume = consume
+        self._fill = fill or copy_frame
         self._free: queue.SimpleQueue[np.ndarray] = queue.SimpleQueue()
         for _ in range(self.slots):
             self._free.put(np.empty(self.shape, np.uint8))
@@ -73,21 +88,14 @@ class FrameQueue:
         return self._error
 
     def put(self, image: np.ndarray) -> None:
-        """Queue a copy of ``image`` ((h, w, 3) BGR or (h, w) gray uint8, of :attr:`shape`);
-        waits while every buffer is in use. Raises the worker's error once it has one."""
+        """Queue ``image``, copied into a buffer by ``fill``; waits while every buffer is in use.
+        Raises the worker's error once it has one."""
         self._raise()
         if self._closed:
             raise ValueError("frame queue is closed")
-        h, w = self.shape[:2]
-        if image.shape[:2] != (h, w):
-            raise ValueError(f"frame of {image.shape[1]}x{image.shape[0]} pixels in a video of "
-                             f"{w}x{h}")
         buf = self._free.get()   # blocks while the worker holds every buffer
         try:
-            if image.ndim == 2:
-                cv2.cvtColor(image, cv2.COLOR_GRAY2BGR, dst=buf)
-            else:
-                np.copyto(buf, image, casting="unsafe")
+            self._fill(image, buf)
         except BaseException:
             self._free.put(buf)
             raise

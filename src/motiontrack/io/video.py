@@ -214,14 +214,26 @@ class _PyAVWriter:
             self._out.close()
             raise
 
-    def write(self, image: np.ndarray) -> None:
-        import av
+    @property
+    def buffer_shape(self) -> tuple[int, int]:
+        """Shape of a frame as :meth:`fill` leaves it: I420, the planes one under the other."""
+        return self._stream.height * 3 // 2, self._stream.width
 
+    def fill(self, image: np.ndarray, buf: np.ndarray) -> None:
+        """``image`` (BGR or gray, the video's size) into ``buf`` as I420 (in the run's thread:
+        it replaces the copy a queued frame needs, and leaves the encoder's thread the encoding)."""
+        if image.ndim == 2:
+            image = cv2.cvtColor(image, cv2.COLOR_GRAY2BGR)
         if any(self._pad):
             image = cv2.copyMakeBorder(image, 0, self._pad[0], 0, self._pad[1], cv2.BORDER_REPLICATE)
         # OpenCV's BGR to I420 (BT.601, limited range, as FFmpeg's) takes a tenth of the time
         # of FFmpeg's own conversion from bgr24
-        yuv = cv2.cvtColor(image, cv2.COLOR_BGR2YUV_I420)
+        cv2.cvtColor(image, cv2.COLOR_BGR2YUV_I420, dst=buf)
+
+    def write(self, yuv: np.ndarray) -> None:
+        """Encode one frame that :meth:`fill` made."""
+        import av
+
         frame = av.VideoFrame.from_ndarray(yuv, format="yuv420p")
         for packet in self._stream.encode(frame):
             self._out.mux(packet)
@@ -245,7 +257,8 @@ class VideoSink:
     ``"pyav"`` or ``"opencv"``; :attr:`backend` tells which one is used.
 
     The encoder runs in a thread of its own (:class:`~motiontrack.io.frame_queue.FrameQueue`):
-    :meth:`write` copies the frame into one of at most ``slots`` buffers and returns, waiting
+    :meth:`write` copies the frame (as I420 for PyAV) into one of at most ``slots`` buffers and
+    returns, waiting
     only while every buffer is queued. An error of the encoder is raised, as one
     :class:`EncoderError` (or :class:`~motiontrack.io.atomic.DiskFullError`, or the
     :class:`OSError` of the device), by the next :meth:`write` or by :meth:`close`.
@@ -270,21 +283,27 @@ class VideoSink:
         self.slots = slots
         self._writer: cv2.VideoWriter | _PyAVWriter | None = None
         self._queue: FrameQueue | None = None
+        self._size = (0, 0)
         self._tmp: Path | None = None
         self.frames = 0
 
     def write(self, image: np.ndarray) -> None:
         """Queue one frame ((h, w, 3) BGR or (h, w) gray uint8); the first one sets the size."""
+        h, w = image.shape[:2]
         if self._writer is None:
-            h, w = image.shape[:2]
             self._writer = self._open(w, h)
-            self._queue = FrameQueue(self._encode, (h, w, 3), self.slots,
+            self._size = (w, h)
+            if isinstance(self._writer, _PyAVWriter):
+                shape, fill = self._writer.buffer_shape, self._writer.fill
+            else:
+                shape, fill = (h, w, 3), None
+            self._queue = FrameQueue(self._encode, shape, self.slots, fill=fill,
                                      name=f"motiontrack-video-{self.path.name}")
+        if (w, h) != self._size:
+            raise EncoderError(f"cannot write {printable(self.path)}: frame of {w}x{h} pixels "
+                               f"in a video of {self._size[0]}x{self._size[1]}")
         self._check_space()
-        try:
-            self._queue.put(image)
-        except ValueError as exc:   # a frame of another size
-            raise EncoderError(f"cannot write {printable(self.path)}: {exc}") from None
+        self._queue.put(image)
         self.frames += 1
 
     def _encode(self, image: np.ndarray) -> None:
@@ -316,6 +335,10 @@ class VideoSink:
                     raise output_error(self.path, exc) from None
                 raise InputError(f"cannot encode {self.codec} video to {self.path} with PyAV: "
                                  f"{exc}") from None
+        if self.codec in PYAV_CODECS:
+            log.info("%s: %s is encoded by OpenCV, which gives the encoder no speed setting (about "
+                     "ten times slower than with PyAV: pip install 'motiontrack[video]')",
+                     self.path.name, self.codec)
         fourcc = cv2.VideoWriter_fourcc(*CODECS[self.codec][0])
         writer = cv2.VideoWriter(str(self._tmp), fourcc, self.fps, (w, h))
         if not writer.isOpened():
