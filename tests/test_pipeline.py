@@ -291,7 +291,10 @@ def test_shapes_fit_the_background_of_their_own_frame_while_the_next_frame_is_de
     # The shape tracker reads the detector's background image after each frame. The detector's
     # thread takes it right after its update and hands it on with the frame, so detection of the
     # next frame runs meanwhile and the shapes still see their own frame's background: the
-    # tracks and outlines equal those of a run with detection and tracking in one thread.
+    # tracks and outlines equal those of a run with detection and tracking in one thread. The
+    # shapes make the tracking thread the longest, so the detector's thread finds the regions.
+    import threading
+
     from motiontrack.io.sources import open_source
     from motiontrack.pipeline import Pipeline
 
@@ -303,9 +306,18 @@ def test_shapes_fit_the_background_of_their_own_frame_while_the_next_frame_is_de
         pipe = Pipeline(cfg, (src.info.width, src.info.height), None, src.info.fps)
         assert pipe.sequential is False
         pipe.sequential = sequential
+        threads = set()
+        regions_of = pipe.regions_of
+
+        def recorded(index, motion, regions_of=regions_of, threads=threads):
+            threads.add(threading.current_thread())
+            return regions_of(index, motion)
+
+        pipe.regions_of = recorded
         outputs.append([(r.index, [(t.id, t.box) for t in r.tracks],
                          [(s.track_id, s.outline.tobytes()) for s in r.people.shapes])
                         for r in pipe.results(src)])
+        assert (threading.main_thread() in threads) is sequential
     assert outputs[0] == outputs[1]
     assert sum(len(shapes) for _i, _t, shapes in outputs[0]) > 0
 
