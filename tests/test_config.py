@@ -101,6 +101,10 @@ def test_pixel_window_scales_widens_and_cuts_a_box():
     # (10.5, 20, 7, 9) at scale 0.5 is x 5.25..8.75, y 10..14.5: whole pixels 5..9, 10..15
     assert pixel_window((10.5, 20, 7, 9), 0.5, (100, 200)) == (5, 10, 9, 15)
     assert pixel_window((10.5, 20, 7, 9), 0.5, (100, 200, 3), margin=2) == (3, 8, 11, 17)
+    # boxes come as tuples, NumPy rows of float64 and of int (the tracker's and the ghost
+    # filter's): the same window
+    assert pixel_window(np.array([10.5, 20, 7, 9]), 0.5, (100, 200)) == (5, 10, 9, 15)
+    assert pixel_window(np.array([10, 20, 7, 9]), 0.5, (100, 200)) == (5, 10, 9, 15)
     # cut to the image; a box outside it is an empty window
     assert pixel_window((-4, 190, 10, 30), 1.0, (200, 100)) == (0, 190, 6, 200)
     x1, y1, x2, y2 = pixel_window((150, 10, 5, 5), 1.0, (200, 100))

@@ -42,7 +42,10 @@ def pixel_window(box: Sequence[float] | np.ndarray, scale: float, shape: tuple[i
     pixels covers in an image of ``shape`` (h, w, ...) at processing scale ``scale``: the scaled
     box widened to whole pixels, plus ``margin`` pixels on each side, cut to the image (empty
     when ``x2 <= x1`` or ``y2 <= y1``)."""
-    x, y, bw, bh = (float(v) * scale for v in box)
+    # a list of floats first: NumPy scalars, or a generator, cost several times the arithmetic
+    # (a window is taken per region and per box of every frame)
+    x, y, bw, bh = box.tolist() if isinstance(box, np.ndarray) else [float(v) for v in box]
+    x, y, bw, bh = x * scale, y * scale, bw * scale, bh * scale
     h, w = shape[:2]
     return (max(0, int(x) - margin), max(0, int(y) - margin),
             min(w, math.ceil(x + bw) + margin), min(h, math.ceil(y + bh) + margin))

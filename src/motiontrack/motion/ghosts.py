@@ -153,7 +153,8 @@ class GhostFilter:
         keep = []
         for r in regions:
             # two pixels of margin: the outline's outer side and the 3x3 support
-            x1, y1, x2, y2 = pixel_window(r.box.as_array(), scale, mask.shape, margin=2)
+            b = r.box
+            x1, y1, x2, y2 = pixel_window((b.x, b.y, b.w, b.h), scale, mask.shape, margin=2)
             cur = (to_gray(image[y1:y2, x1:x2]) if gray is None  # only the crop is needed
                    else gray[y1:y2, x1:x2])
             crop = mask[y1:y2, x1:x2]
