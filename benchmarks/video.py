@@ -12,10 +12,19 @@ without its video from process start.
             from process start, the median CPU time (user + sys), and the peak RSS of each run;
             the video's cost per frame is the difference to the --no-video run of the same round.
 
+--drawing   What the run's own thread spends on a frame's picture: the annotated frame, the copy
+            it is drawn on, the conversion to I420, the legend and a scene's zone tint drawn once
+            per frame size against drawn on every frame (this thread's CPU per call, the fastest
+            of --rounds runs over --frames frames).
+--gil       Whether PyAV releases the GIL while it encodes: the main thread counts in a pure-Python
+            loop while a second thread encodes VP8 with the default's settings; a call that held
+            the GIL would see the count stand still.
+
 Wall times move with the machine's load; on a loaded machine compare the CPU columns.
 
 Run: .venv/bin/python benchmarks/video.py --encoders [--frames 100] [--rounds 3]
      .venv/bin/python benchmarks/video.py --track [--codec vp80 --codec h264] [--rounds 5]
+     .venv/bin/python benchmarks/video.py --drawing --gil
 """
 
 from __future__ import annotations
@@ -60,6 +69,12 @@ PYAV_ROWS = {
     "VP8 realtime cpu-used -16, crf 16, static-thresh 500, 1 thread":
         ("webm", "libvpx", {**VP8, "cpu-used": "-16", "crf": "16", "static-thresh": "500"},
          20_000_000, 1, "i420"),
+    "VP8 realtime cpu-used -16, crf 16, static-thresh 1000, 1 thread":
+        ("webm", "libvpx", {**VP8, "cpu-used": "-16", "crf": "16", "static-thresh": "1000"},
+         20_000_000, 1, "i420"),
+    "VP8 realtime cpu-used -16, crf 16, static-thresh 2000, 1 thread":
+        ("webm", "libvpx", {**VP8, "cpu-used": "-16", "crf": "16", "static-thresh": "2000"},
+         20_000_000, 1, "i420"),
     "VP9 realtime cpu-used 8, row-mt, 1 thread":
         ("webm", "libvpx-vp9", {**VP8, "cpu-used": "8", "row-mt": "1"}, 20_000_000, 1, "i420"),
     "H.264 libx264 veryfast crf 23, 1 thread": ("mp4", "libx264", {"preset": "veryfast", "crf": "23"},
@@ -68,6 +83,8 @@ PYAV_ROWS = {
                                                                     "crf": "23"}, 0, 1, "i420"),
     "H.264 libx264 ultrafast crf 23, 1 thread": ("mp4", "libx264", {"preset": "ultrafast",
                                                                     "crf": "23"}, 0, 1, "i420"),
+    "H.264 libx264 ultrafast crf 23, 2 threads": ("mp4", "libx264", {"preset": "ultrafast",
+                                                                     "crf": "23"}, 0, 2, "i420"),
     "H.264 libx264 ultrafast crf 26, 1 thread": ("mp4", "libx264", {"preset": "ultrafast",
                                                                     "crf": "26"}, 0, 1, "i420"),
 }
@@ -78,8 +95,8 @@ OPENCV_ROWS = {
     "OpenCV MJPG (AVI)": ("MJPG", ".avi"),
 }
 #: the product's own sink (its encoder thread and settings), per codec
-SINK_ROWS = {"motiontrack VideoSink vp80 (the default)": "vp80",
-             "motiontrack VideoSink h264": "h264"}
+SINK_ROWS = {"motiontrack VideoSink vp80 (the default: static-thresh 1000)": "vp80",
+             "motiontrack VideoSink h264 (ultrafast)": "h264"}
 
 
 def annotated_frames(video: Path, n: int) -> list[np.ndarray]:
@@ -192,6 +209,125 @@ def encoders(args: argparse.Namespace, video: Path) -> None:
               f"{size[name]:7.1f} {psnr[name]:7.2f}")
 
 
+def _ms_per_call(fn: Callable[[], object], n: int, rounds: int) -> float:
+    """The fastest of ``rounds`` runs of ``n`` calls, in ms of this thread's CPU per call."""
+    best = float("inf")
+    for _ in range(rounds):
+        t0 = time.thread_time()
+        for _ in range(n):
+            fn()
+        best = min(best, (time.thread_time() - t0) / n * 1e3)
+    return best
+
+
+def drawing(args: argparse.Namespace, video: Path) -> None:
+    """What `track` spends on a frame's picture besides the encoder, in the run's thread."""
+    from types import SimpleNamespace
+
+    from motiontrack.render import annotate as draw
+    from motiontrack.render import scene
+
+    src = open_source(str(video))
+    proc = TrackProcessor(PipelineConfig(), src.info)
+    results = []
+    for result in proc.results(src):
+        results.append(result)
+        if len(results) == args.frames:
+            break
+    src.close()
+    frame = results[0].frame
+    it = iter(range(10 ** 9))
+    rows = {"annotate a frame (the processor's picture, legend included)":
+            lambda: proc.annotate(results[next(it) % len(results)])}
+    rows["copy of the frame (the picture is drawn on a copy)"] = frame.copy
+    rows["BGR to I420 with OpenCV (into the encoder's buffer)"] = \
+        lambda: cv2.cvtColor(frame, cv2.COLOR_BGR2YUV_I420)
+    import av
+
+    rows["bgr24 to yuv420p with FFmpeg (PyAV's reformat)"] = \
+        lambda: av.VideoFrame.from_ndarray(frame, format="bgr24").reformat(format="yuv420p")
+    img = frame.copy()
+    entries = (("track", "track (id, trail)"), ("predicted", "track, not seen (predicted)"),
+               ("region", "motion region"), ("head", "head"), ("hypothesis", "shape hypothesis"))
+    rows["legend of 5 kinds, drawn once per frame size and laid over the frame"] = \
+        lambda: draw.draw_legend(img, entries, (4, 560))
+
+    def legend_each_frame() -> None:
+        """The legend drawn on the frame itself: the scene under the panel darkened, then the
+        symbols and labels (the panel's place from the cached layer)."""
+        (y0, y1, x0, x1), ph, _, _ = draw._legend_layer(img.shape, entries, (4, 560), False)
+        scale, thick = draw.text_scale(img.shape)
+        scale *= 0.8
+        font = cv2.FONT_HERSHEY_SIMPLEX
+        (_, th), base = cv2.getTextSize("Ag", font, scale, thick)
+        row, size, pad = th + base + max(2, th // 3), th + base // 2, max(3, th // 3)
+        img[y0:y1, x0:x1] = (img[y0:y1, x0:x1].astype(np.uint16) * 2 // 5).astype(np.uint8)
+        for i, (style, label) in enumerate(entries):
+            y = y0 + pad + i * row
+            draw._swatch(img, style, x0 + pad, y, size, img.shape)
+            cv2.putText(img, label, (x0 + 2 * pad + size, y + size - base // 2), font, scale,
+                        (255, 255, 255), thick, cv2.LINE_AA)
+
+    rows["legend of 5 kinds, drawn on every frame"] = legend_each_frame
+    zones = [SimpleNamespace(name="a", polygon=[[100, 300], [400, 300], [400, 500], [100, 500]]),
+             SimpleNamespace(name="b", polygon=[[500, 100], [700, 120], [650, 300]])]
+    polygons = tuple(tuple(map(tuple, z.polygon)) for z in zones)
+    rows["two zones tinted inside their rectangle (the layer made once)"] = \
+        lambda: scene._tint_zones(img, polygons)
+
+    def tint_whole_frame() -> None:
+        tinted = img.copy()
+        cv2.fillPoly(tinted, [np.array(p, np.int32) for p in polygons], scene.ZONE_COLOR)
+        cv2.addWeighted(tinted, 0.15, img, 0.85, 0.0, dst=img)
+
+    rows["two zones tinted by blending a tinted copy of the whole frame"] = tint_whole_frame
+    print(f"{len(results)} PETS frames, this thread's CPU per call, the fastest of {args.rounds} "
+          f"runs; load average {os.getloadavg()[0]:.1f}")
+    for name, fn in rows.items():
+        print(f"{name:72s} {_ms_per_call(fn, len(results), args.rounds):7.3f} ms")
+
+
+def gil(args: argparse.Namespace, video: Path) -> None:
+    """Whether PyAV releases the GIL while it encodes: the main thread counts in a pure-Python
+    loop while a second thread encodes VP8 as the default does; an encoder call that held the GIL
+    would see the count stand still from its start to its end."""
+    import threading
+
+    import av
+
+    from motiontrack.io.video import PYAV_MAX_BITRATE, PYAV_OPTIONS
+
+    frames = [cv2.cvtColor(f, cv2.COLOR_BGR2YUV_I420) for f in annotated_frames(video, 30)]
+    count = [0]
+    steps: list[int] = []
+    done = threading.Event()
+
+    def encode() -> None:
+        with tempfile.TemporaryDirectory() as tmp, \
+                av.open(str(Path(tmp) / "g.webm"), "w", format="webm") as out:
+            s = out.add_stream("libvpx", rate=10)
+            s.width, s.height, s.pix_fmt = 768, 576, "yuv420p"
+            s.options, s.bit_rate, s.thread_count = dict(PYAV_OPTIONS), PYAV_MAX_BITRATE, 1
+            for k in range(30 * args.rounds):
+                frame = av.VideoFrame.from_ndarray(frames[k % 30], format="yuv420p")
+                before = count[0]
+                packets = s.encode(frame)
+                steps.append(count[0] - before)
+                for p in packets:
+                    out.mux(p)
+        done.set()
+
+    th = threading.Thread(target=encode)
+    th.start()
+    while not done.is_set():
+        count[0] += 1
+    th.join()
+    moved = sum(1 for d in steps if d > 0)
+    print(f"{len(steps)} encoder calls: the main thread's Python loop went on during {moved} of "
+          f"them (median {statistics.median(steps)} steps a call); load average "
+          f"{os.getloadavg()[0]:.1f}")
+
+
 def _run(argv: list[str]) -> tuple[float, float, float]:
     """Wall seconds, CPU seconds (user + sys) and peak RSS (MB) of one process."""
     t0 = time.perf_counter()
@@ -237,14 +373,22 @@ def main() -> None:
     add_data_argument(ap)
     ap.add_argument("--encoders", action="store_true", help="encoders side by side")
     ap.add_argument("--track", action="store_true", help="track with and without the video")
+    ap.add_argument("--drawing", action="store_true",
+                    help="drawing and conversion costs in the run's thread")
+    ap.add_argument("--gil", action="store_true",
+                    help="does the main thread run Python while PyAV encodes")
     ap.add_argument("--frames", type=int, default=100, help="frames encoded (--encoders)")
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--only", action="append", help="rows whose name contains this (--encoders)")
     ap.add_argument("--codec", action="append", help="codec of a video run (--track; default vp80)")
     args = ap.parse_args()
     video = pets_video(args.data)
-    if not (args.encoders or args.track):
-        ap.error("give --encoders and/or --track")
+    if not (args.encoders or args.track or args.drawing or args.gil):
+        ap.error("give --encoders, --track, --drawing and/or --gil")
+    if args.drawing:
+        drawing(args, video)
+    if args.gil:
+        gil(args, video)
     if args.encoders:
         encoders(args, video)
     if args.track:
