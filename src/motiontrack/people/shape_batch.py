@@ -31,23 +31,36 @@ __all__ = ["Outlines", "OutlineSet", "FitInput", "fit_people", "similarity", "se
 _TURN = np.array([1.0, -1.0])
 
 
+#: (a, b, tx, ty) → (a, a, -b, b, tx, ty), see :func:`_apply`
+_SPREAD, _SIGNS = [0, 0, 1, 1, 2, 3], np.array([1.0, 1.0, -1.0, 1.0, 1.0, 1.0])
+
+
 def similarity(pose: np.ndarray, pts: np.ndarray) -> np.ndarray:
     """:func:`~.shape_model.apply_similarity` of each person's pose ``(A, 4)`` to their points
     ``(A, M, 2)``."""
-    a, b, tx, ty = (pose[:, i, None] for i in range(4))
-    x, y = pts[..., 0], pts[..., 1]
-    out = np.empty(pts.shape)
-    out[..., 0] = a * x - b * y + tx
-    out[..., 1] = b * x + a * y + ty
-    return out
+    return _apply((pose[:, _SPREAD] * _SIGNS)[:, None, :], pts)
 
 
-def _inverse(pose: np.ndarray) -> np.ndarray:
-    """:func:`~.shape_model.invert_similarity` of poses ``(A, 4)`` (scales > 0)."""
-    a, b, tx, ty = pose.T
-    s2 = a * a + b * b
-    ia, ib = a / s2, -b / s2
-    return np.stack([ia, ib, -(ia * tx - ib * ty), -(ib * tx + ia * ty)], axis=1)
+def _apply(c: np.ndarray, pts: np.ndarray) -> np.ndarray:
+    """Points ``(A, M, 2)`` under similarities given as ``(a, a, -b, b, tx, ty)`` ``(A, 1, 6)``.
+
+    ``x' = a x - b y + tx, y' = b x + a y + ty`` computed as ``(a, a) (x, y) + (-b, b) (y, x) +
+    (tx, ty)``: the same products and sums (``a x + (-b y)`` is ``a x - b y`` exactly, and
+    ``a y + b x`` is ``b x + a y``), so the one-person formula's values."""
+    return pts * c[..., 0:2] + pts[..., ::-1] * c[..., 2:4] + c[..., 4:6]
+
+
+def _inverse_similarity(pose: np.ndarray, pts: np.ndarray) -> np.ndarray:
+    """Points ``(A, M, 2)`` under the inverses (:func:`~.shape_model.invert_similarity`) of
+    poses ``(A, 4)`` whose scales are > 0."""
+    ab, t = pose[:, :2], pose[:, 2:]
+    s2 = np.add.reduce(ab * ab, axis=1)[:, None]           # a a + b b
+    iab = ab * _SIGNS[1:3] / s2                               # (a / s2, -b / s2)
+    c = np.empty((len(pose), 1, 6))
+    c[:, 0, :4] = iab[:, _SPREAD[:4]] * _SIGNS[:4]            # (ia, ia, -ib, ib)
+    # (-(ia tx - ib ty), -(ib tx + ia ty)) as above
+    c[:, 0, 4:] = -(t * c[:, 0, 0:2] + t[:, ::-1] * c[:, 0, 2:4])
+    return _apply(c, pts)
 
 
 @dataclass
@@ -162,7 +175,7 @@ class Outlines:
         _limit_tilt(pose, max_tilt, ok)
         _limit_scale(pose, model_pts, s0, max_scale_change, ok)
         safe = np.where(ok[:, None], pose, [[1.0, 0.0, 0.0, 0.0]])
-        local = similarity(_inverse(safe), target)
+        local = _inverse_similarity(safe, target)
         # Points without an edge keep the model's own position (no information there).
         local[~found] = model_pts[~found]
         ctrl_local = self.pinv @ local
@@ -236,28 +249,34 @@ def _weighted_similarities(s: np.ndarray, d: np.ndarray, w: np.ndarray, found: n
     The sums along the points that are pairwise in NumPy (1-D) are taken person by person over
     that person's found points, so they add in the same order; the centroids are column sums
     (added in order) and may run over all points with the others weighted zero."""
-    n = len(s)
-    total = np.array([w[i].compress(found[i]).sum() for i in range(n)])
+    n, k = w.shape
+    # each person's found points laid end to end (compress keeps rows contiguous): a slice of
+    # them adds up as the 1-D sum over that person's found points
+    flat = found.reshape(-1)
+    ends = np.cumsum(np.count_nonzero(found, axis=1)).tolist()
+    spans = list(zip([0] + ends[:-1], ends))
+    fw = w.reshape(-1).compress(flat)
+    total = np.array([fw[i:j].sum() for i, j in spans])
     wz = np.where(found, w, 0.0)[..., None]
     with np.errstate(invalid="ignore", divide="ignore"):
         ms = (wz * s).sum(axis=1) / total[:, None]
         md = (wz * d).sum(axis=1) / total[:, None]
     s0, d0 = s - ms[:, None, :], d - md[:, None, :]
     sx, sy, dx, dy = s0[..., 0], s0[..., 1], d0[..., 0], d0[..., 1]
-    terms = np.empty((n, 3, w.shape[1]))                   # each person's rows contiguous
-    np.multiply(w, (s0 ** 2).sum(axis=2), out=terms[:, 0])
-    np.multiply(w, sx * dx + sy * dy, out=terms[:, 1])
-    np.multiply(w, sx * dy - sy * dx, out=terms[:, 2])
+    terms = np.empty((3, n, k))
+    np.multiply(w, (s0 ** 2).sum(axis=2), out=terms[0])
+    np.multiply(w, sx * dx + sy * dy, out=terms[1])
+    np.multiply(w, sx * dy - sy * dx, out=terms[2])
+    terms = terms.reshape(3, -1).compress(flat, axis=1)
     out = np.empty((n, 4))
-    counts = np.count_nonzero(found & (w > 0), axis=1)
-    for i in range(n):
-        if counts[i] < 2 or total[i] <= 0:
+    counts = np.count_nonzero(found & (w > 0), axis=1).tolist()
+    msl, mdl, totals = ms.tolist(), md.tolist(), total.tolist()
+    for i, (lo, hi) in enumerate(spans):
+        if counts[i] < 2 or totals[i] <= 0:
             out[i] = (1.0, 0.0, 0.0, 0.0)
             continue
-        # compress keeps the rows contiguous: each adds up as the 1-D sum of its found points
-        den, an, bn = terms[i].compress(found[i], axis=1).sum(axis=1).tolist()
-        msx, msy = ms[i].tolist()
-        mdx, mdy = md[i].tolist()
+        den, an, bn = terms[:, lo:hi].sum(axis=1).tolist()
+        (msx, msy), (mdx, mdy) = msl[i], mdl[i]
         if den <= 0:
             out[i] = (1.0, 0.0, mdx - msx, mdy - msy)
             continue
@@ -307,6 +326,12 @@ def steps(n: int) -> tuple[np.ndarray, np.ndarray]:
     return s, 1e-6 * np.abs(s)[None, :]
 
 
+@functools.lru_cache(maxsize=64)
+def _arange(n: int) -> np.ndarray:
+    """``0 … n-1`` (read only)."""
+    return np.arange(n)
+
+
 def _remap(image: np.ndarray, at: np.ndarray, dst: np.ndarray) -> None:
     """``dst`` = ``image`` read at the pixels ``at`` (float32 ``(…, 2)`` whole numbers x, y), 0
     off the image (nearest neighbour, constant border: no separate bounds test)."""
@@ -322,11 +347,14 @@ def search_edges(inputs: list[FitInput], gain: float, rel: np.ndarray, nrm: np.n
     ``rel``, ``nrm`` ``(A, K, 2)``: sample points in each person's window and unit normals;
     ``n`` ``(A,)``: search ``-n … n`` px. The inputs' ``gradients`` are ``(gx, gy)`` (only
     edges where the image falls going outwards count) or one edge-magnitude channel, times
-    ``gain``. Returns ``offsets, strength`` ``(A, K)``.
+    ``gain`` (a power of two). Returns ``offsets, strength`` ``(A, K)``.
     """
     a, k = rel.shape[:2]
     nmax = int(n.max())
     st, penalty = steps(nmax)
+    if (n != nmax).any():
+        # a person searching fewer steps never picks one beyond them
+        penalty = np.where(np.abs(st) <= n[:, None], penalty, np.inf)[:, None, :]
     # x, y of every search point rounded to its pixel, made (2, A, K, S) (the long axis last
     # is several times quicker in NumPy) and written out as the (A, K, S, 2) maps cv2.remap
     # reads (whole numbers are exact in float32)
@@ -339,19 +367,15 @@ def search_edges(inputs: list[FitInput], gain: float, rel: np.ndarray, nrm: np.n
     for i, inp in enumerate(inputs):
         _remap(inp.gradients, at[i], g[i])
     if oriented:
-        gx, gy = g[..., 0], g[..., 1]
-        if gain != 1.0:
-            gx, gy = gx * gain, gy * gain
-        vals = np.maximum(-(gx * nrm[..., 0:1] + gy * nrm[..., 1:2]), 0.0)
+        # -((g gain) . n) as g . (-gain n): scaling by a power of two is exact, so the products
+        # round as the one-person formula's do
+        w = nrm * -gain
+        vals = np.maximum(g[..., 0] * w[..., 0:1] + g[..., 1] * w[..., 1:2], 0.0)
     else:
         vals = g.astype(np.float64) if gain == 1.0 else g * gain
-    if (n != nmax).any():
-        # a person searching fewer steps reads nothing beyond them (those never win: a zero
-        # there has a larger penalty than a zero within)
-        vals *= (np.abs(st) <= n[:, None])[:, None, :]
     # Prefer the nearer edge among equals: a tiny penalty on |offset|.
     j = np.argmax(vals - penalty, axis=2)
-    strength = np.take_along_axis(vals, j[..., None], axis=2)[..., 0]
+    strength = vals.reshape(a * k, -1)[_arange(a * k), j.reshape(-1)].reshape(a, k)
     off = st[j]
     weak = strength < threshold
     strength[weak] = 0.0

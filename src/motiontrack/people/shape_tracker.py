@@ -27,6 +27,7 @@ and boxes are returned in original-frame pixels.
 from __future__ import annotations
 
 import logging
+import math
 from dataclasses import dataclass, field
 
 import cv2
@@ -695,10 +696,11 @@ def _search_window(box: np.ndarray, half: float, w: int, h: int
                    ) -> tuple[int, int, int, int] | None:
     """``(x1, y1, x2, y2)``: ``box`` (work px) grown by ``half`` on every side and cut to the
     ``w`` × ``h`` image; None when less than 3 px remain either way."""
-    x1 = int(max(0, np.floor(box[0] - half)))
-    y1 = int(max(0, np.floor(box[1] - half)))
-    x2 = int(min(w, np.ceil(box[0] + box[2] + half)))
-    y2 = int(min(h, np.ceil(box[1] + box[3] + half)))
+    x, y, bw, bh = box.tolist()
+    x1 = max(0, math.floor(x - half))
+    y1 = max(0, math.floor(y - half))
+    x2 = min(w, math.ceil(x + bw + half))
+    y2 = min(h, math.ceil(y + bh + half))
     if x2 - x1 < 3 or y2 - y1 < 3:
         return None
     return x1, y1, x2, y2
