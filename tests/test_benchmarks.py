@@ -151,3 +151,19 @@ def test_startup_benchmark_reports_every_case_against_the_opencv_floor():
                for v in rows.values()), out
     assert rows['python -c "import cv2"'][6:] == [1.0, 1.0], out
     assert len(re.findall(r"^target: .* < 0\.3 s wall \(median\): (met|NOT met)", out, re.M)) == 2
+
+
+@pytest.mark.slow
+def test_video_benchmark_reports_each_encoder_and_drawing_row(data):
+    data("pets09-s2l1", "video.avi")
+    out = subprocess.run([sys.executable, str(REPO / "benchmarks" / "video.py"), "--data",
+                          str(data_root()), "--encoders", "--drawing", "--frames", "5",
+                          "--rounds", "1", "--only", "VideoSink", "--only", "OpenCV mp4v"],
+                         capture_output=True, text=True, timeout=300, check=True).stdout
+    rows = re.findall(r"^(\S.*?)\s+(\d+\.\d\d)\s+(\d+\.\d\d)\s+(\d+\.\d)\s+(\d+\.\d\d)$", out, re.M)
+    assert [r[0] for r in rows] == ["OpenCV mp4v (MPEG-4 part 2, browsers do not play it)",
+                                    "motiontrack VideoSink vp80 (the default: static-thresh 1000)",
+                                    "motiontrack VideoSink h264 (ultrafast)"], out
+    assert all(float(r[1]) > 0 and float(r[3]) > 0 and float(r[4]) > 30 for r in rows), out
+    drawn = re.findall(r"^(legend|two zones|annotate).*?(\d+\.\d{3}) ms$", out, re.M)
+    assert len(drawn) == 5, out
