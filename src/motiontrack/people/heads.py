@@ -27,6 +27,7 @@ Widths are given in original-frame pixels and converted with the mask ``scale``.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Sequence
 
@@ -60,7 +61,7 @@ class Head:
     top: float
 
     def __post_init__(self) -> None:
-        if not (np.isfinite(self.x) and np.isfinite(self.y)) or self.width <= 0:
+        if not (math.isfinite(self.x) and math.isfinite(self.y)) or self.width <= 0:
             raise ValueError(f"head needs a finite position and width > 0, got {self}")
 
 
@@ -255,7 +256,8 @@ def _profiles(m: np.ndarray, boxes, scale: float, reach: int
     H, W = m.shape
     gap = np.full(reach + 1, np.inf)
     pieces: list[np.ndarray] = []
-    heights: list[np.ndarray] = []
+    heights: list[float] = []   # per profile and gap, laid out by one np.repeat
+    lengths: list[int] = []
     segs: list[tuple[int, int, int, int, int]] = []
     pos = 0
     for k, box in enumerate(boxes):
@@ -265,12 +267,13 @@ def _profiles(m: np.ndarray, boxes, scale: float, reach: int
         top = _median3(height_profile(m[y1:y2, x1:x2]))
         n = len(top)
         pieces += [top, gap]
-        heights += [np.full(n, float(y2 - y1)), np.zeros(len(gap))]
+        heights += [float(y2 - y1), 0.0]
+        lengths += [n, len(gap)]
         segs.append((k, pos, pos + n, x1, y1))
         pos += n + len(gap)
     if not segs:
         return np.zeros(0), np.zeros(0), segs
-    return np.concatenate(pieces), np.concatenate(heights), segs
+    return np.concatenate(pieces), np.repeat(heights, lengths), segs
 
 
 def detect_heads_in_regions(mask: np.ndarray, regions, scale: float = 1.0, **params) -> list[list[Head]]:

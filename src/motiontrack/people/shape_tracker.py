@@ -398,7 +398,8 @@ class ShapeTracker:
         tracks = list(tracks)
         if not tracks:
             return boxes_now
-        track_boxes = np.array([tr.box.as_array() for tr in tracks]) * view.to_work
+        track_boxes = np.array([(t.box.x, t.box.y, t.box.w, t.box.h) for t in tracks],
+                               np.float64) * view.to_work
         row = {tid: i for i, tid in enumerate(boxes_now)}
         # IoU of every person's outline box (rows) with every track's box (columns)
         iou = _iou_matrix(np.array(list(boxes_now.values())).reshape(-1, 4), track_boxes)
