@@ -258,9 +258,10 @@ def _weighted_similarities(s: np.ndarray, d: np.ndarray, w: np.ndarray, found: n
     fw = w.reshape(-1).compress(flat)
     total = np.array([fw[i:j].sum() for i, j in spans])
     wz = np.where(found, w, 0.0)[..., None]
-    with np.errstate(invalid="ignore", divide="ignore"):
-        ms = (wz * s).sum(axis=1) / total[:, None]
-        md = (wz * d).sum(axis=1) / total[:, None]
+    # (a person without weight gets the identity below; 1 keeps their division quiet)
+    safe = np.where(total > 0, total, 1.0)[:, None]
+    ms = (wz * s).sum(axis=1) / safe
+    md = (wz * d).sum(axis=1) / safe
     s0, d0 = s - ms[:, None, :], d - md[:, None, :]
     sx, sy, dx, dy = s0[..., 0], s0[..., 1], d0[..., 0], d0[..., 1]
     terms = np.empty((3, n, k))
