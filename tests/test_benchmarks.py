@@ -28,6 +28,19 @@ def test_stages_benchmark_reports_every_stage(data):
     assert abs(float(times["all stages"]) - sum(float(times[s]) for s in stages[1:])) < 0.02, out
 
 
+def test_people_stage_benchmark_replays_the_stage_identically_and_reports_its_parts(data):
+    data("pets09-s2l1", "video.avi")
+    out = subprocess.run([sys.executable, str(REPO / "benchmarks" / "people_stage.py"), "--data",
+                          str(data_root()), "--frames", "12", "--repeat", "1", "--chunk", "5"],
+                         capture_output=True, text=True, timeout=120, check=True).stdout
+    times = {k.strip(): float(v) for k, v in re.findall(r"^(.+?)\s+(\d+\.\d+) ms/frame$", out, re.M)}
+    assert out.startswith("PETS09-S2L1, 12 frames"), out
+    assert set(times) == {"people stage", "heads + splitting", "the rest (shapes)"}, out
+    assert times["people stage"] > 0 and times["heads + splitting"] > 0, out
+    assert abs(times["people stage"] - times["heads + splitting"]
+               - times["the rest (shapes)"]) < 0.02, out
+
+
 @pytest.mark.slow
 def test_detections_benchmark_reports_every_row(data):
     data("pets09-s2l1", "video.avi")
