@@ -324,13 +324,19 @@ def steps(n: int) -> tuple[np.ndarray, np.ndarray]:
     """The offsets ``-n … n`` (float) of a normal search and their penalties ``1e-6 |offset|``
     (among equal edges the nearer wins). Read only."""
     s = np.arange(-n, n + 1, dtype=np.float64)
-    return s, 1e-6 * np.abs(s)[None, :]
+    return _frozen(s), _frozen(1e-6 * np.abs(s)[None, :])
 
 
 @functools.lru_cache(maxsize=64)
 def _arange(n: int) -> np.ndarray:
     """``0 … n-1`` (read only)."""
-    return np.arange(n)
+    return _frozen(np.arange(n))
+
+
+def _frozen(a: np.ndarray) -> np.ndarray:
+    """``a`` made read-only (shared through a cache)."""
+    a.setflags(write=False)
+    return a
 
 
 def _remap(image: np.ndarray, at: np.ndarray, dst: np.ndarray) -> None:
