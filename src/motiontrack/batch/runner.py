@@ -97,14 +97,10 @@ class _Frames:
     def __init__(self, task: BatchTask, deadline: float | None) -> None:
         self.name, self.deadline = task.video.name, deadline
         self.worker = _this_worker() if task.progress_topic or task.stop_event else None
-        self.topic, self.stop_event = task.progress_topic, None
-        if self.worker is not None and task.stop_event:
-            try:
-                from distributed import Event
-
-                self.stop_event = Event(task.stop_event)
-            except Exception:   # noqa: BLE001 - without it the video just runs to its end
-                self.stop_event = None
+        self.topic = task.progress_topic
+        # the event is looked up at the first check, a second in: a short video never needs it
+        self.stop_name = task.stop_event if self.worker is not None else None
+        self.stop_event: Any = None
         self.frames, self.late, self.stopped = 0, False, False
         self.next_report = self.next_check = time.perf_counter() + REPORT_EVERY_S
 
@@ -120,12 +116,16 @@ class _Frames:
     def should_stop(self) -> bool:
         now = time.perf_counter()
         self.late = self.late or (self.deadline is not None and now > self.deadline)
-        if self.stop_event is not None and now >= self.next_check:
+        if self.stop_name is not None and now >= self.next_check:
             self.next_check = now + REPORT_EVERY_S
             try:
+                if self.stop_event is None:
+                    from distributed import Event
+
+                    self.stop_event = Event(self.stop_name)
                 self.stopped = self.stopped or self.stop_event.is_set()
             except Exception:   # noqa: BLE001 - the scheduler away: the client is gone too
-                self.stop_event = None
+                self.stop_name = None
         return self.late or self.stopped
 
 
@@ -412,30 +412,39 @@ def run_batch(sources: Sequence[str], results: str | Path, config: PipelineConfi
         if not tasks:
             return _finish(out, [rows[v.name] for v in videos])
         manager = dask_client(jobs, cluster) if client is None else _given(client)
-        with manager as cl:
-            workers = max(1, sum(w.get("nthreads", 1)
-                                 for w in cl.scheduler_info()["workers"].values()))
-            counts["running"] = min(len(tasks), workers)
-            report()
-            if topic is not None:
-                cl.subscribe_topic(topic, reported)
-            try:
-                map_tasks(cl, run_video, tasks, retries=retries, on_result=finished,
-                          on_lost=lambda i, exc, n: _lost_row(tasks[i], exc, n),
-                          key="motiontrack-batch",
-                          hard_timeout_s=None if timeout_s is None
-                          else timeout_s + max(10.0, timeout_s / 10),
-                          on_timeout=lambda i, n: _hung_row(tasks[i], n))
-            except KeyboardInterrupt:
-                _ask_to_stop(cl, f"{batch_id}-stop")
-                with lock:
-                    for t in tasks:
-                        rows.setdefault(t.video.name, _interrupted_row(t))
-                    save()
-                raise
-            finally:
+        stopped: list[BatchTask] = []
+        try:
+            with manager as cl:
+                workers = max(1, sum(w.get("nthreads", 1)
+                                     for w in cl.scheduler_info()["workers"].values()))
+                counts["running"] = min(len(tasks), workers)
+                report()
                 if topic is not None:
-                    cl.unsubscribe_topic(topic)
+                    cl.subscribe_topic(topic, reported)
+                try:
+                    map_tasks(cl, run_video, tasks, retries=retries, on_result=finished,
+                              on_lost=lambda i, exc, n: _lost_row(tasks[i], exc, n),
+                              key="motiontrack-batch",
+                              hard_timeout_s=None if timeout_s is None
+                              else timeout_s + max(10.0, timeout_s / 10),
+                              on_timeout=lambda i, n: _hung_row(tasks[i], n))
+                except KeyboardInterrupt:
+                    _ask_to_stop(cl, f"{batch_id}-stop")
+                    with lock:
+                        for t in tasks:
+                            if t.video.name not in rows:
+                                rows[t.video.name] = _interrupted_row(t)
+                                stopped.append(t)
+                        save()
+                    raise
+                finally:
+                    if topic is not None:
+                        cl.unsubscribe_topic(topic)
+        finally:
+            # a local cluster's workers are gone now, and a partial folder one of them wrote
+            # into after the first removal goes too (a remote worker removes its own)
+            for t in stopped:
+                shutil.rmtree(out / f".{t.video.name}.partial", ignore_errors=True)
         return _finish(out, [rows[v.name] for v in videos])
 
 
