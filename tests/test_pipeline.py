@@ -269,21 +269,26 @@ def test_frame_gaps_from_timestamps(stamps, gaps):
 def test_head_splitting_without_shapes_keeps_detection_in_its_worker_thread():
     # Heads need only the mask, so with shapes and HOG off the people stage does not force the
     # pipeline to run detection and tracking in one thread; the output is the same either way.
+    cfg = load_config(None, ["people.enabled=true", "people.shapes=false"])
+    outputs = [[(r.index, [(t.id, t.box) for t in r.tracks], len(r.people.heads) if r.people else 0)
+                for r in results] for _pipe, results in _threaded_then_sequential(
+                    cfg, "synth:crowd?n_frames=80")]
+    assert outputs[0] == outputs[1]
+    assert sum(n for _i, _t, n in outputs[0]) > 0
+
+
+def _threaded_then_sequential(cfg, spec):
+    """``(pipeline, its results on spec)`` with the pipeline's own threads, then with detection
+    and tracking forced into one thread; each pipeline is yielded before its results are read."""
     from motiontrack.io.sources import open_source
     from motiontrack.pipeline import Pipeline
 
-    cfg = load_config(None, ["people.enabled=true", "people.shapes=false"])
-    spec = "synth:crowd?n_frames=80"
-    outputs = []
     for sequential in (False, True):
         src = open_source(spec)
         pipe = Pipeline(cfg, (src.info.width, src.info.height), None, src.info.fps)
         assert pipe.sequential is False
         pipe.sequential = sequential
-        outputs.append([(r.index, [(t.id, t.box) for t in r.tracks], len(r.people.heads) if r.people else 0)
-                        for r in pipe.results(src)])
-    assert outputs[0] == outputs[1]
-    assert sum(n for _i, _t, n in outputs[0]) > 0
+        yield pipe, pipe.results(src)
 
 
 @pytest.mark.slow
@@ -295,17 +300,10 @@ def test_shapes_fit_the_background_of_their_own_frame_while_the_next_frame_is_de
     # shapes make the tracking thread the longest, so the detector's thread finds the regions.
     import threading
 
-    from motiontrack.io.sources import open_source
-    from motiontrack.pipeline import Pipeline
-
     cfg = load_config(None, ["people.enabled=true"])
-    spec = "synth:crossing?n_frames=60"
     outputs = []
-    for sequential in (False, True):
-        src = open_source(spec)
-        pipe = Pipeline(cfg, (src.info.width, src.info.height), None, src.info.fps)
-        assert pipe.sequential is False
-        pipe.sequential = sequential
+    for pipe, results in _threaded_then_sequential(cfg, "synth:crossing?n_frames=60"):
+        sequential = pipe.sequential
         threads = set()
         regions_of = pipe.regions_of
 
@@ -316,7 +314,7 @@ def test_shapes_fit_the_background_of_their_own_frame_while_the_next_frame_is_de
         pipe.regions_of = recorded
         outputs.append([(r.index, [(t.id, t.box) for t in r.tracks],
                          [(s.track_id, s.outline.tobytes()) for s in r.people.shapes])
-                        for r in pipe.results(src)])
+                        for r in results])
         assert (threading.main_thread() in threads) is sequential
     assert outputs[0] == outputs[1]
     assert sum(len(shapes) for _i, _t, shapes in outputs[0]) > 0
