@@ -180,11 +180,15 @@ def _track_job(out, codec="vp80"):
     return Job(src, TrackProcessor(cfg, src.info), writers, out), path
 
 
-def test_a_stop_mid_run_leaves_a_playable_video_of_every_finished_frame(tmp_path, monkeypatch):
-    # a slow encoder: frames are still queued when the stop comes
+def _slow_encoder(monkeypatch) -> None:
+    """PyAV's writer takes 20 ms more a frame: frames are still queued when a run ends."""
     real = video._PyAVWriter.write
     monkeypatch.setattr(video._PyAVWriter, "write",
                         lambda self, image: (threading.Event().wait(0.02), real(self, image)))
+
+
+def test_a_stop_mid_run_leaves_a_playable_video_of_every_finished_frame(tmp_path, monkeypatch):
+    _slow_encoder(monkeypatch)
     out = tmp_path / "o"
     job, path = _track_job(out)
     seen = []
@@ -204,9 +208,7 @@ def test_a_stop_mid_run_leaves_a_playable_video_of_every_finished_frame(tmp_path
 
 
 def test_a_run_failing_while_frames_are_queued_leaves_no_video(tmp_path, monkeypatch):
-    real = video._PyAVWriter.write
-    monkeypatch.setattr(video._PyAVWriter, "write",
-                        lambda self, image: (threading.Event().wait(0.02), real(self, image)))
+    _slow_encoder(monkeypatch)
     out = tmp_path / "o"
     job, path = _track_job(out)
     failing = TracksWriter.write
