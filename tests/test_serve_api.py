@@ -332,7 +332,10 @@ def test_sigterm_stops_cameras_and_commits_their_outputs(tmp_path):
             summary = json.loads((seg / "summary.json").read_text())
             assert summary["frames"] > 0
         last = json.loads((segments[-1] / "summary.json").read_text())
-        assert last["interrupted"] is True
+        # the stop ends the segment in progress, unless it came in the frame that rotated it:
+        # then that segment ended complete and no next one started
+        assert last["interrupted"] is True or (last["status"].startswith("segment rotated")
+                                               and not last["interrupted"]), last
 
 
 @pytest.mark.slow
