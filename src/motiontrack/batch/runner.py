@@ -194,25 +194,29 @@ def run_video(task: BatchTask, attempt: int = 1) -> dict[str, Any]:
     return row
 
 
-def _lost_row(task: BatchTask, exc: BaseException, attempts: int) -> dict[str, Any]:
-    """The ``failed`` row of a video whose worker died on every attempt."""
+def _unfinished_row(task: BatchTask, status: str, error: str, **extra: Any) -> dict[str, Any]:
+    """The row of a video that did not finish on a worker (its partial folder removed)."""
     import cv2
 
     v = task.video
     shutil.rmtree(Path(task.results) / f".{v.name}.partial", ignore_errors=True)
-    return {"name": v.name, "source": v.source, "status": "failed",
-            "error": f"its worker died on each of {attempts} attempts ({_one_line(exc)})",
-            "attempts": attempts, "config_hash": task.config_hash,
-            "motiontrack_version": __version__, "opencv_version": cv2.__version__}
+    return {"name": v.name, "source": v.source, "status": status, "error": error, **extra,
+            "config_hash": task.config_hash, "motiontrack_version": __version__,
+            "opencv_version": cv2.__version__}
+
+
+def _lost_row(task: BatchTask, exc: BaseException, attempts: int) -> dict[str, Any]:
+    """The ``failed`` row of a video whose worker died on every attempt."""
+    return _unfinished_row(task, "failed", f"its worker died on each of {attempts} attempts "
+                                           f"({_one_line(exc)})", attempts=attempts)
 
 
 def _hung_row(task: BatchTask, attempts: int) -> dict[str, Any]:
     """The ``timeout`` row of a video whose run did not stop itself (stuck inside a frame), so
     that its worker was restarted."""
-    row = _lost_row(task, TimeoutError(), attempts)
-    row.update(status="timeout", error=f"VideoTimeout: ran longer than --timeout-s "
-                                         f"{task.timeout_s:g} and did not stop; worker restarted")
-    return row
+    return _unfinished_row(task, "timeout", f"VideoTimeout: ran longer than --timeout-s "
+                                            f"{task.timeout_s:g} and did not stop; worker "
+                                            f"restarted", attempts=attempts)
 
 
 def _ask_to_stop(client: Any, name: str) -> None:
@@ -227,14 +231,7 @@ def _ask_to_stop(client: Any, name: str) -> None:
 
 def _interrupted_row(task: BatchTask) -> dict[str, Any]:
     """The row of a video the batch stopped before it finished (redone by ``--resume``)."""
-    import cv2
-
-    v = task.video
-    shutil.rmtree(Path(task.results) / f".{v.name}.partial", ignore_errors=True)
-    return {"name": v.name, "source": v.source, "status": "interrupted",
-            "error": "the batch stopped before this video finished",
-            "config_hash": task.config_hash, "motiontrack_version": __version__,
-            "opencv_version": cv2.__version__}
+    return _unfinished_row(task, "interrupted", "the batch stopped before this video finished")
 
 
 class _Rate:
