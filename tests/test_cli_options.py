@@ -9,7 +9,7 @@ import logging
 
 import pytest
 
-from motiontrack.cli import _configure_logging, build_parser
+from motiontrack.cli import _configure_logging, build_parser, command_module
 
 
 def _parsers(parser: argparse.ArgumentParser, path: str = "motiontrack"):
@@ -54,6 +54,44 @@ def test_every_option_of_every_command_has_help():
 def test_logging_options_work_before_and_after_the_command(argv, quiet, debug):
     args = build_parser().parse_args(argv)
     assert (args.quiet, args.debug) == (quiet, debug)
+
+
+def test_each_command_module_adds_the_command_named_after_it():
+    """What lets a command line that names a command build that command's parser alone."""
+    full = build_parser()
+    commands = next(a for a in full._actions if isinstance(a, argparse._SubParsersAction)).choices
+    for name, parser in commands.items():
+        module = command_module([name])
+        assert module == name.replace("-", "_"), name
+        alone = build_parser(module)
+        only = next(a for a in alone._actions if isinstance(a, argparse._SubParsersAction))
+        assert list(only.choices) == [name]
+        assert only.choices[name].format_help() == parser.format_help()
+
+
+@pytest.mark.parametrize("argv, module", [
+    (["track", "x.mp4"], "track"),
+    (["-q", "--debug", "evaluate-events", "a", "b"], "evaluate_events"),
+    (["calibrate", "show"], "calibrate"),
+    (["--help"], None),
+    ([], None),
+    (["no-such-command"], None),
+    (["_common"], None),        # a helper module, not a command
+    (["--", "track"], None),
+    (["../track"], None),
+])
+def test_the_command_a_command_line_names(argv, module):
+    assert command_module(argv) == module
+
+
+def test_an_unknown_command_is_refused_with_the_list_of_commands(capsys):
+    from motiontrack.cli import main
+
+    with pytest.raises(SystemExit) as exc:
+        main(["trak", "x.mp4"])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert "invalid choice: 'trak'" in err and "'track'" in err and "'evaluate'" in err
 
 
 def test_every_command_takes_the_logging_options_after_it():
