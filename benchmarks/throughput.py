@@ -4,6 +4,11 @@ stages in one process (--in-process).
 Whole-process rows (the default): each row is a fresh process timed from its start to its exit,
 as a user who types the command pays for it (interpreter start, imports, decoding, writing):
   decode only          — a tiny script reading every frame with cv2.VideoCapture (the floor)
+  motion stage alone   — a script running what every default run does first, in one thread:
+                         decoding, preprocessing, the KNN model and the mask clean-up
+                         (``Pipeline.motion``), no regions, tracking or outputs. Its CPU time
+                         over the tutorial's bounds what `track --no-video` can reach: the
+                         pipeline does this work and more, on the same two cores
   tutorial             — benchmarks/tutorial.py, the classic OpenCV tutorial (below), writing its
                          boxes to a MOT file
   tutorial + video     — the same drawing its boxes and writing them with cv2.VideoWriter, once per
@@ -240,6 +245,20 @@ DECODE = ("import sys, cv2\n"
           "while k < n and cap.read()[0]:\n"
           "    k += 1\n"
           "print(f'frames {k}')\n")
+MOTION = ("import sys, cv2\n"
+          "from motiontrack.config import PipelineConfig\n"
+          "from motiontrack.pipeline import Pipeline\n"
+          "from motiontrack.types import Frame\n"
+          "cap, n, k = cv2.VideoCapture(sys.argv[1]), int(sys.argv[2]) or sys.maxsize, 0\n"
+          "size = (int(cap.get(cv2.CAP_PROP_FRAME_WIDTH)), int(cap.get(cv2.CAP_PROP_FRAME_HEIGHT)))\n"
+          "pipe = Pipeline(PipelineConfig(), size, None, cap.get(cv2.CAP_PROP_FPS) or 25.0)\n"
+          "while k < n:\n"
+          "    ok, image = cap.read()\n"
+          "    if not ok:\n"
+          "        break\n"
+          "    pipe.motion(Frame(index=k, image=image, timestamp=k / 25.0))\n"
+          "    k += 1\n"
+          "print(f'frames {k}')\n")
 TUTORIAL = Path(__file__).with_name("tutorial.py")
 #: motiontrack's default codec (VP8 WebM) and OpenCV's fast writers
 TUTORIAL_FOURCCS = "VP80,mp4v,MJPG,XVID"
@@ -292,6 +311,7 @@ def process_rows(video: Path, frames: int | None, fourccs: list[str]) -> list[Pr
         return [py, str(TUTORIAL), src, "--frames", n, "--out", str(d / "boxes.txt")]
 
     rows = [ProcessRow("decode only", "decode", lambda d: [py, "-c", DECODE, src, n]),
+            ProcessRow("motion stage alone", "decode", lambda d: [py, "-c", MOTION, src, n]),
             ProcessRow("tutorial", "tutorial", tut)]
     for code in fourccs:
         ext = tutorial.FOURCC_EXTENSIONS.get(code, ".avi")
@@ -440,6 +460,12 @@ def whole_process(args: argparse.Namespace, video: Path, gt: Annotations) -> Non
                         "met": met})
         print(f"  {'met   ' if met else 'MISSED'}  {label}: {v:.2f} {how} "
               f"({value['min']:.2f}-{value['max']:.2f})")
+    motion = by_name["motion stage alone"]
+    cpu_ratio = [t / m for t, m in zip(plain.values("cpu_s"), motion.values("cpu_s"))]
+    print(f"  (info)  motion stage alone (decode, preprocess, KNN, clean-up; one thread): "
+          f"{cell(speedups(motion, plain), '{:.2f}')} x the tutorial's fps, "
+          f"{cell(cpu_ratio, '{:.2f}')} x less CPU than the tutorial (what the default model "
+          "leaves for --no-video's ratio on a machine the runs keep busy)")
     print(f"  (info)  track --preset people with video: {cell(people.values('fps'), '{:.0f}')} fps")
     for name, c in cost.items():
         print(f"  (info)  annotated video cost, {name}: {c['wall_s']['median']:.2f} ms/frame wall "
