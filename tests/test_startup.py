@@ -68,6 +68,10 @@ def test_track_help_lists_the_codecs_of_the_installation_from_its_cached_probe(t
     code, modules, again = _loaded(["track", "--help"], tmp_path)
     assert code == 0 and again == first
     assert _among(modules, NOT_FOR_HELP) == []
+    # the parser of the command named alone: no other command's module
+    commands = [m for m in modules if m.startswith("motiontrack.cli.")
+                and not m.startswith("motiontrack.cli._")]
+    assert commands == ["motiontrack.cli.track"]
     listed = " ".join(first.split())
     assert f"can encode: {', '.join(encodable_codecs())} (default vp80" in listed
 
