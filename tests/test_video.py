@@ -12,6 +12,7 @@ from motiontrack.errors import InputError
 from motiontrack.io import video
 from motiontrack.io.sources import open_source
 from motiontrack.io.video import VideoSink
+from video_files import read_frames
 
 # PyAV is a dev dependency (the ``video`` extra), so its tests run, never skip, under ``make test``
 
@@ -26,16 +27,6 @@ def _frames(n: int, w: int, h: int) -> list[np.ndarray]:
         cv2.rectangle(img, (5 + 3 * k, 10), (25 + 3 * k, 40), (40, 220, 250), -1)
         out.append(img)
     return out
-
-
-def _read(path) -> list[np.ndarray]:
-    cap = cv2.VideoCapture(str(path))
-    got = []
-    while True:
-        ok, img = cap.read()
-        if not ok:
-            return got
-        got.append(img)
 
 
 @pytest.mark.parametrize("backend, size", [
@@ -54,7 +45,7 @@ def test_webm_round_trip(tmp_path, backend, codec, size):
         assert not path.exists()  # written under a temporary name until closed
     assert path.read_bytes()[:4] == b"\x1a\x45\xdf\xa3"  # EBML (WebM) magic
     assert [p.name for p in tmp_path.iterdir()] == ["v.webm"]
-    got = _read(path)
+    got = read_frames(path)
     assert len(got) == len(frames)
     w, h = size
     assert got[0].shape[0] >= h and got[0].shape[1] >= w
@@ -151,7 +142,7 @@ def test_every_codec_listed_as_encodable_encodes(tmp_path):
         with VideoSink(path, 10.0, codec) as sink:
             for f in _frames(5, 64, 48):
                 sink.write(f)
-        assert len(_read(path)) == 5, codec
+        assert len(read_frames(path)) == 5, codec
 
 
 @pytest.fixture

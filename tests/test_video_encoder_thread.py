@@ -7,7 +7,6 @@ from __future__ import annotations
 import json
 import threading
 
-import cv2
 import numpy as np
 import pytest
 
@@ -21,6 +20,7 @@ from motiontrack.pipeline import open_configured_source
 from motiontrack.run import Job
 from motiontrack.run.processors import TrackProcessor
 from motiontrack.run.writers import TracksWriter, VideoWriter
+from video_files import read_frames
 
 
 def _numbered(n: int, w: int = 96, h: int = 64) -> list[np.ndarray]:
@@ -36,13 +36,7 @@ def _numbered(n: int, w: int = 96, h: int = 64) -> list[np.ndarray]:
 
 def _bar_positions(path) -> list[int]:
     """The column of the white bar in each decoded frame."""
-    cap = cv2.VideoCapture(str(path))
-    xs = []
-    while True:
-        ok, img = cap.read()
-        if not ok:
-            return xs
-        xs.append(int(np.argmax(img[:, :, 1].mean(axis=0) > 128)))
+    return [int(np.argmax(img[:, :, 1].mean(axis=0) > 128)) for img in read_frames(path)]
 
 
 @pytest.mark.parametrize("codec, backend", [("vp80", "pyav"), ("h264", "pyav"),
