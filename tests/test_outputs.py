@@ -19,7 +19,7 @@ from motiontrack.cli import main
 from motiontrack.config import load_config
 from motiontrack.errors import InputError
 from motiontrack.io import video
-from motiontrack.io.atomic import AtomicFile, DiskFullError, OutputLock
+from motiontrack.io.atomic import AtomicFile, DiskFullError, OutputLock, commit_leftovers
 from motiontrack.pipeline import open_configured_source
 from motiontrack.run import Job, Writer
 from motiontrack.run.processors import TrackProcessor
@@ -176,6 +176,45 @@ def test_a_killed_run_blocks_nobody_and_its_temporary_files_go_with_the_next_run
     assert main(["track", WALKER.format(n=5), "-o", str(out), "--codec", "mjpg"]) == 0
     assert _hidden(out) == []
     assert _files(out) == ["annotated.avi", "config.toml", "gt.txt", "summary.json", "tracks.txt"]
+
+
+def test_a_file_writes_out_what_it_collected_once_a_second(tmp_path, monkeypatch):
+    from motiontrack.io import atomic
+
+    clock = [100.0]
+    monkeypatch.setattr(atomic.time, "monotonic", lambda: clock[0])
+    f = AtomicFile(tmp_path / "tracks.txt")
+    f.write("1,1,10,20,30,40\n")
+    assert f.tmp.read_text() == ""                      # collected: far less than a block
+    clock[0] += atomic.FLUSH_S
+    f.write("2,1,11,21,30,40\n")
+    assert f.tmp.read_text() == "1,1,10,20,30,40\n2,1,11,21,30,40\n"
+    f.commit()
+
+
+def test_a_killed_writers_leftovers_are_committed_up_to_their_last_whole_line(tmp_path):
+    from motiontrack.io.atomic import temp_path_for
+
+    tracks = AtomicFile(tmp_path / "tracks.txt")
+    tracks.write("1,1,10,20,30,40\n2,1,11,21,30,40\n3,1,1")   # cut inside the third row
+    tracks._flush()                                               # on disk, as a killed run leaves it
+    events = AtomicFile(tmp_path / "events.jsonl")               # nothing reached the disk
+    video_tmp = temp_path_for(tmp_path / "annotated.webm")
+    video_tmp.write_bytes(b"\x1aE\xdf\xa3 webm as far as written")
+    still = temp_path_for(tmp_path / "heatmap.png")
+    still.write_bytes(b"\x89PNG cut short")
+    (tmp_path / "counts.csv").write_text("committed\n")
+    counts = AtomicFile(tmp_path / "counts.csv")                 # its final name is taken
+    counts.write("newer\n")
+    counts._flush()
+    kept = commit_leftovers(tmp_path)
+    assert kept == [tmp_path / "annotated.webm", tmp_path / "tracks.txt"]
+    assert (tmp_path / "tracks.txt").read_text() == "1,1,10,20,30,40\n2,1,11,21,30,40\n"
+    assert (tmp_path / "annotated.webm").read_bytes().endswith(b"as far as written")
+    assert not events.tmp.exists()                                # empty: removed
+    assert still.exists() and counts.tmp.exists()                 # left as they are
+    assert (tmp_path / "counts.csv").read_text() == "committed\n"
+    assert commit_leftovers(tmp_path) == []
 
 
 # ----------------------------------------------------------------------------- special files

@@ -306,6 +306,19 @@ def test_live_killed_camera_process_restarts_and_pictures_resume(server):
     frames = _mjpeg_frames(server.client, "/api/cameras/crossing/stream.mjpg", 2)
     assert len(frames) >= 2
     assert server.camera("walker")["status"] == "running"   # the other camera kept running
+    # what the killed process had written of its segment is kept there, under the usual names,
+    # with a summary that says how the segment ended
+    killed = server.out / "crossing" / before["segment"]
+    summary = json.loads((killed / "summary.json").read_text())
+    assert summary["status"] == "killed (exit code -9)" and summary["truncated"] is True
+    assert (summary["width"], summary["height"], summary["source_fps"]) == (640, 480, 25.0)
+    files = {f.name for f in killed.iterdir()}
+    assert not [f for f in files if ".part" in f], files
+    assert set(summary["outputs"]) <= {"tracks", "events"} and summary["outputs"]
+    for name in summary["outputs"]:
+        assert (killed / f"{name}.{'txt' if name == 'tracks' else 'jsonl'}").is_file()
+    if "tracks" in summary["outputs"]:
+        assert len(read_mot(killed / "tracks.txt")) > 0
 
 
 @pytest.mark.slow

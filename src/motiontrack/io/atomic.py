@@ -23,6 +23,7 @@ import shutil
 import stat
 import sys
 import tempfile
+import time
 from pathlib import Path
 from typing import IO, Iterable, Iterator
 
@@ -38,6 +39,9 @@ STDOUT = "-"
 
 #: bytes an :class:`AtomicFile` collects before writing them out
 BUFFER_SIZE = 1 << 16
+#: seconds after which an :class:`AtomicFile`'s next write writes out what it collected, however
+#: little: a process that is killed leaves at most about this much of its output unwritten
+FLUSH_S = 1.0
 
 #: errno values of a device without room: no space left, quota exceeded
 _FULL = {errno.ENOSPC, getattr(errno, "EDQUOT", errno.ENOSPC)}
@@ -114,7 +118,9 @@ class AtomicFile:
     """A file written under a temporary name beside ``path`` and renamed onto it by
     :meth:`commit`, or removed by :meth:`discard`: for outputs written across many calls.
 
-    Data is collected in memory and written in blocks of :data:`BUFFER_SIZE` bytes. When the
+    Data is collected in memory and written in blocks of :data:`BUFFER_SIZE` bytes, or after
+    :data:`FLUSH_S` seconds (what a killed process wrote can be committed later:
+    :func:`commit_leftovers`). When the
     device is full, :meth:`write` raises :class:`DiskFullError` and keeps what it could not
     write, so a later :meth:`commit` (after other files made room) still gives the whole file.
     ``mode`` is ``"w"`` (text, written with ``encoding``, newlines as given) or ``"wb"``.
@@ -129,14 +135,16 @@ class AtomicFile:
         self._fd: int | None
         self._fd, self.tmp = _mkstemp(self.path, f".{self.path.name}.", ".part")
         self._pending = bytearray()
+        self._written = time.monotonic()
 
     def write(self, data) -> None:
         self._pending += data.encode(self.encoding) if self.encoding else data
-        if len(self._pending) >= BUFFER_SIZE:
+        if len(self._pending) >= BUFFER_SIZE or time.monotonic() - self._written >= FLUSH_S:
             self._flush()
 
     def _flush(self) -> None:
         """Write the collected bytes; on an error the ones not written stay collected."""
+        self._written = time.monotonic()
         view = memoryview(self._pending)
         done = 0
         try:
@@ -309,6 +317,47 @@ def remove_leftover_temps(paths: Iterable[str | Path]) -> list[Path]:
                     q.unlink(missing_ok=True)
                     removed.append(q)
     return removed
+
+
+#: outputs made of lines: what a killed writer left is kept up to its last whole line
+LINE_SUFFIXES = frozenset({".txt", ".jsonl", ".csv"})
+#: outputs that play as far as they were written (WebM/Matroska is written as it goes)
+STREAM_SUFFIXES = frozenset({".webm", ".mkv"})
+
+
+def commit_leftovers(folder: str | Path) -> list[Path]:
+    """Commit, under their final names, the temporary files a killed writer left in ``folder``
+    (the names this module gives them) where the final name is free; returns the final paths.
+
+    Files of lines (:data:`LINE_SUFFIXES`) are kept up to their last whole line, a WebM or
+    Matroska video as written (it plays up to the last frame written); an empty one is removed.
+    The others (a picture or a summary written in one go, an MP4 whose index comes last) are
+    useless cut short and are left as they are. Call it while no process writes into ``folder``.
+    """
+    folder = Path(folder)
+    kept = []
+    for q in sorted(folder.glob(".*.part*")):
+        m = _TEMP_NAME.fullmatch(q.name)
+        if m is None or _kind(q) != "a regular file":
+            continue
+        final = folder / (m["name"] + (m["suffix"] or ""))
+        if os.path.lexists(final):
+            continue
+        suffix = final.suffix.lower()
+        if suffix in LINE_SUFFIXES:
+            data = q.read_bytes()
+            whole = data[:data.rfind(b"\n") + 1]
+            if len(whole) < len(data):
+                with open(q, "r+b") as fh:
+                    fh.truncate(len(whole))
+        elif suffix not in STREAM_SUFFIXES:
+            continue
+        if q.stat().st_size == 0:
+            q.unlink()
+            continue
+        os.replace(q, final)
+        kept.append(final)
+    return kept
 
 
 class OutputLock:

@@ -6,10 +6,13 @@ server's threads), the hub's reader threads and uvicorn. A camera process that d
 again after a back-off (1, 2, 4 ... at most 30 s; back to 1 s after a minute of running); one
 whose source ended (a file without ``loop``) stays ended. SIGTERM or SIGINT stops the cameras
 first (each commits its current segment's outputs), then the web server; the exit code is 0.
+What a camera process that was killed (the OOM killer's SIGKILL) had written of its segment is
+committed before it starts again (:func:`salvage_segments`).
 """
 
 from __future__ import annotations
 
+import json
 import logging
 import multiprocessing
 import signal
@@ -22,6 +25,7 @@ from typing import Any
 
 from ..config import load_config
 from ..errors import ConfigError
+from ..io.atomic import atomic_write_text, commit_leftovers
 from .app import create_app
 from .cameras import CameraSpec, load_cameras
 from .channel import Channel
@@ -31,7 +35,7 @@ from .worker import camera_main
 
 log = logging.getLogger(__name__)
 
-__all__ = ["serve", "Supervisor", "default_out"]
+__all__ = ["serve", "Supervisor", "default_out", "salvage_segments"]
 
 #: seconds a camera gets to commit its outputs after SIGTERM before it is killed
 STOP_TIMEOUT = 20.0
@@ -42,6 +46,32 @@ STABLE_S = 60.0
 
 def default_out(cameras_file: str | Path) -> Path:
     return Path("runs") / "serve" / Path(cameras_file).stem
+
+
+def salvage_segments(folder: Path, source: str, status: dict[str, Any], code: int | None
+                     ) -> list[Path]:
+    """Commit the segments a killed camera process left unfinished in ``folder`` (its output
+    folder): in each segment folder without ``summary.json``, the tracks and events written so
+    far (up to the last whole line; :func:`~motiontrack.io.atomic.commit_leftovers`) under their
+    names, and a ``summary.json`` that says so (``"status": "killed (exit code N)"``,
+    ``"truncated": true``, the frame size and rate from the camera's last ``status``, so that
+    ``motiontrack analyze`` reads the tracks as it reads a finished segment's). Call it while no
+    process of the camera runs. Returns the segment folders committed."""
+    done = []
+    segments = sorted(d for d in folder.iterdir() if d.is_dir()) if folder.is_dir() else []
+    for seg in segments:
+        if (seg / "summary.json").exists():
+            continue
+        kept = commit_leftovers(seg)
+        if not kept:
+            continue
+        summary = {"source": source, "width": status.get("width"), "height": status.get("height"),
+                   "source_fps": status.get("source_fps"), "status": f"killed (exit code {code})",
+                   "interrupted": True, "truncated": True,
+                   "outputs": {p.name.split(".")[0]: str(p) for p in kept}}
+        atomic_write_text(seg / "summary.json", json.dumps(summary, indent=2) + "\n")
+        done.append(seg)
+    return done
 
 
 @dataclass
@@ -116,6 +146,7 @@ class Supervisor:
             p.ended = True
             log.info("camera %s: its source ended", p.spec.name)
             return
+        self._salvage(p, code)
         if now - p.started >= STABLE_S:
             p.backoff = 1.0
         log.warning("camera %s: process ended (exit code %s); starting again in %.0f s",
@@ -123,6 +154,18 @@ class Supervisor:
         cam.set_status("restarting")
         p.restart_at = now + p.backoff
         p.backoff = min(p.backoff * 2, BACKOFF_MAX)
+
+    def _salvage(self, p: _Proc, code: int | None) -> None:
+        """What the dead process ``p`` had written of its segment, committed."""
+        cam = self.hub.get(p.spec.name)
+        with cam.lock:
+            status = dict(cam.status)
+        try:
+            for seg in salvage_segments(self.out / p.spec.name, str(p.spec.source), status, code):
+                log.warning("camera %s: the process ended (exit code %s) in segment %s; what it "
+                            "had written is kept there", p.spec.name, code, seg.name)
+        except OSError as exc:   # the camera starts again all the same
+            log.error("camera %s: cannot keep what the ended process wrote: %s", p.spec.name, exc)
 
     def stop(self) -> None:
         """SIGTERM to every camera, wait for each to commit its outputs (killed after
@@ -141,6 +184,7 @@ class Supervisor:
                                 STOP_TIMEOUT)
                     p.process.kill()
                     p.process.join(5)
+                    self._salvage(p, p.process.exitcode)
             for p in self.procs.values():
                 for t in p.readers:
                     t.done.set()

@@ -306,6 +306,7 @@ class _Camera:
                 "segment": self.segment, "pid": os.getpid(),
                 "width": self.source.info.width if self.source is not None else None,
                 "height": self.source.info.height if self.source is not None else None,
+                "source_fps": self.source.info.fps if self.source is not None else None,
             })
 
 
