@@ -91,7 +91,7 @@ def test_throughput_benchmark_measures_every_whole_process_row(data, tmp_path):
                          capture_output=True, text=True, timeout=300, check=True).stdout
     doc = json.loads(report.read_text())
     rows = doc["rows"]
-    assert list(rows) == ["decode only", "tutorial", "tutorial + video MJPG",
+    assert list(rows) == ["decode only", "motion stage alone", "tutorial", "tutorial + video MJPG",
                           "tutorial + video mp4v", "track", "track --no-video",
                           "track --preset people", "track --preset people --no-video"], out
     assert doc["frames"] == 20 and doc["tutorial_video_fourcc"] in ("MJPG", "mp4v"), out
@@ -99,8 +99,9 @@ def test_throughput_benchmark_measures_every_whole_process_row(data, tmp_path):
         (run,) = row["runs"]
         assert run["frames"] == 20 and run["wall_s"] > 0 and run["peak_rss_mb"] > 0, name
         assert run["cpu_s"] > 0 and run["fps"] == pytest.approx(20 / run["wall_s"]), name
-        # every row but the decoding one writes boxes, scored against the ground truth
-        assert (row["accuracy"] is None) == (name == "decode only"), name
+        # every row but the decoding and motion-stage scripts writes boxes, scored against the
+        # ground truth
+        assert (row["accuracy"] is None) == (name in ("decode only", "motion stage alone")), name
     # the tutorial writes the same boxes with and without its video; so does track
     assert rows["tutorial"]["accuracy"] == rows["tutorial + video mp4v"]["accuracy"]
     assert rows["track"]["accuracy"] == rows["track --no-video"]["accuracy"]
@@ -108,6 +109,9 @@ def test_throughput_benchmark_measures_every_whole_process_row(data, tmp_path):
     assert rows["track --no-video"]["x_tutorial"]["reference"] == "tutorial"
     assert [t["met"] in (True, False) for t in doc["targets"]] == [True] * 5
     assert out.count("met   ") + out.count("MISSED") == 5, out
+    # the motion stage alone: its fps and CPU against the tutorial's
+    assert rows["motion stage alone"]["x_tutorial"]["reference"] == "tutorial"
+    assert "motion stage alone (decode, preprocess, KNN, clean-up; one thread):" in out, out
 
 
 def test_tutorial_script_writes_its_boxes_and_annotated_video(data, tmp_path):
