@@ -197,7 +197,7 @@ def test_a_killed_writers_leftovers_are_committed_up_to_their_last_whole_line(tm
 
     tracks = AtomicFile(tmp_path / "tracks.txt")
     tracks.write("1,1,10,20,30,40\n2,1,11,21,30,40\n3,1,1")   # cut inside the third row
-    tracks._flush()                                               # on disk, as a killed run leaves it
+    tracks._flush()                                    # on disk, as a killed run leaves it
     events = AtomicFile(tmp_path / "events.jsonl")               # nothing reached the disk
     video_tmp = temp_path_for(tmp_path / "annotated.webm")
     video_tmp.write_bytes(b"\x1aE\xdf\xa3 webm as far as written")
