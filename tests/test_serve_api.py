@@ -50,6 +50,17 @@ def test_cameras_file_problems_name_the_key(data, message):
         parse_cameras(data, "/base")
 
 
+def test_an_event_stream_id_reads_back_or_is_ignored():
+    from motiontrack.serve.hub import Cursor
+
+    c = Cursor.parse("ab12.gate=12,lobby-2=40")
+    assert c == Cursor("ab12", {"gate": 12, "lobby-2": 40}) and str(c) == "ab12.gate=12,lobby-2=40"
+    assert Cursor.parse("ab12.") == Cursor("ab12", {})
+    for junk in (None, "", "x", "ab12", "ab12.gate", "ab12.gate=-1", "AB.gate=1", "ab12.g=1\n",
+                 "ab12.g=1;h=2"):
+        assert Cursor.parse(junk) is None, junk
+
+
 def test_cameras_file_paths_are_relative_to_the_file():
     (cam,) = parse_cameras({"camera": [{"name": "gate", "source": "clips/a.mp4",
                                         "scene": "gate.toml", "loop": True}]}, "/base")
@@ -270,6 +281,53 @@ def test_live_events_since_sse_and_counts(server):
     assert sum(len(v) for v in seen.values()) >= 3, seen
     for cam, s in seen.items():
         assert cam in CAMERAS and s == sorted(s) and len(set(s)) == len(s)
+
+
+def _sse(client, n_events: int, headers: dict | None = None, timeout: float = 30.0
+         ) -> tuple[str, list[tuple[str, dict]]]:
+    """The stream's first id (where it starts) and its first ``n_events`` messages as
+    ``(id, event)``, from ``/api/events``."""
+    start, got, current = None, [], None
+    end = time.monotonic() + timeout
+    with client.stream("GET", "/api/events", headers=headers or {}, timeout=timeout) as r:
+        for line in r.iter_lines():
+            if line.startswith("id: "):
+                current = line[4:]
+                start = start or current
+            elif line.startswith("data: "):
+                got.append((current, json.loads(line[6:])))
+            if (start is not None and len(got) >= n_events) or time.monotonic() > end:
+                break
+    return start, got
+
+
+@pytest.mark.slow
+def test_live_event_stream_resumes_where_the_last_one_ended(server):
+    """What a browser's EventSource does when its connection drops: it reconnects with the id of
+    the last message it received (Last-Event-ID), and the events it missed come first."""
+    c = server.client
+    start, _ = _sse(c, 0)
+    seqs = dict(kv.split("=") for kv in start.split(".", 1)[1].split(","))
+    assert set(seqs) == set(CAMERAS)
+    walker = int(seqs["walker"])
+    missed = server.wait("two walker events while no stream is open",
+                         lambda: (lambda e: e if len(e) >= 2 else None)(
+                             c.get(f"/api/cameras/walker/events?since={walker}").json()), 60)
+    again, got = _sse(c, 2 * len(missed) + 2, headers={"Last-Event-ID": start})
+    assert again == start                                   # it goes on from there
+    by_camera: dict[str, list[int]] = {}
+    for _, e in got:
+        by_camera.setdefault(e["camera"], []).append(e["seq"])
+    for cam, got_seqs in by_camera.items():                 # no gap, no repeat
+        assert got_seqs == list(range(int(seqs[cam]) + 1, int(seqs[cam]) + 1 + len(got_seqs)))
+    assert by_camera["walker"][:len(missed)] == [e["seq"] for e in missed]
+    # every message's id is the cursor after it: a reconnection there goes on after it
+    last_id, last = got[-1]
+    assert f"{last['camera']}={last['seq']}" in last_id
+    # another server's cursor (before a restart) or none: the stream starts now
+    fresh, _ = _sse(c, 0, headers={"Last-Event-ID": "0." + start.split(".", 1)[1]})
+    assert int(dict(kv.split("=") for kv in fresh.split(".", 1)[1].split(","))["walker"]) \
+        >= walker + len(missed)
 
 
 @pytest.mark.slow

@@ -22,7 +22,7 @@ from starlette.responses import JSONResponse, Response, StreamingResponse
 from starlette.routing import Route
 
 from ..errors import MotionTrackError
-from .hub import CameraState, Hub
+from .hub import CameraState, Cursor, Hub
 from .scenes import SceneFiles
 
 __all__ = ["create_app", "MAX_BODY"]
@@ -159,11 +159,23 @@ def create_app(hub: Hub, token: str | None = None,
                                  media_type=f"multipart/x-mixed-replace; boundary={_BOUNDARY}")
 
     async def event_stream(request: Request) -> Response:
+        # a reconnecting EventSource sends the id of the last message it received: the events
+        # it missed meanwhile come first (Cursor)
+        after = Cursor.parse(request.headers.get("last-event-id"))
+
         async def lines():
-            sub = hub.subscribe_events()
+            sub, cursor, missed = hub.subscribe_events(after=after)
             idle = 0.0
+
+            def message(item: dict) -> bytes:
+                cursor.seqs[item["camera"]] = item["seq"]
+                return f"id: {cursor}\ndata: {json.dumps(item)}\n\n".encode()
+
             try:
-                yield b": connected\n\n"
+                # the id alone: where this stream starts, for a reconnection before any event
+                yield f": connected\nid: {cursor}\n\n".encode()
+                for item in missed:
+                    yield message(item)
                 while not stopping():
                     try:
                         item = await asyncio.wait_for(sub.queue.get(), 1.0)
@@ -174,7 +186,7 @@ def create_app(hub: Hub, token: str | None = None,
                             yield b": keep-alive\n\n"
                         continue
                     idle = 0.0
-                    yield f"data: {json.dumps(item)}\n\n".encode()
+                    yield message(item)
             finally:
                 hub.unsubscribe_events(sub)
 

@@ -5,7 +5,9 @@ Reader threads (:meth:`Hub.attach`) take each camera's messages off its
 last :data:`EVENTS_KEPT` events each with a per-camera ``seq`` (1, 2, ...), and the counts. Each
 viewer (an MJPEG stream, an event stream) subscribes with a bounded asyncio queue of its own;
 when it is full the oldest item is dropped, so a slow or vanished viewer only loses its own
-pictures and never holds up a camera or another viewer.
+pictures and never holds up a camera or another viewer. An event stream can start where an
+earlier one ended (:meth:`Hub.subscribe_events` with a :class:`Cursor`): the kept events it
+missed come first.
 """
 
 from __future__ import annotations
@@ -14,10 +16,13 @@ import asyncio
 import collections
 import itertools
 import queue
+import re
+import secrets
 import threading
+from dataclasses import dataclass, field
 from typing import Any, Iterable
 
-__all__ = ["Hub", "CameraState", "Subscriber", "EVENTS_KEPT"]
+__all__ = ["Hub", "CameraState", "Subscriber", "Cursor", "EVENTS_KEPT"]
 
 #: events kept per camera for ``?since=``
 EVENTS_KEPT = 10_000
@@ -42,6 +47,32 @@ class Subscriber:
             self.queue.get_nowait()
             self.dropped += 1
         self.queue.put_nowait(item)
+
+
+_CURSOR = re.compile(r"(?P<boot>[0-9a-f]+)\.(?P<seqs>(?:[A-Za-z0-9_-]+=\d+(?:,|$))*)")
+
+
+@dataclass
+class Cursor:
+    """How far an event stream has gone: each camera's last ``seq`` sent, in the run of the
+    server ``boot`` (a restarted server numbers its events from 1 again). Written as the event
+    stream's ``id`` (``boot.gate=12,lobby=40``), which a browser's ``EventSource`` sends back
+    as ``Last-Event-ID`` when it reconnects."""
+
+    boot: str
+    seqs: dict[str, int] = field(default_factory=dict)
+
+    def __str__(self) -> str:
+        return f"{self.boot}." + ",".join(f"{n}={q}" for n, q in self.seqs.items())
+
+    @classmethod
+    def parse(cls, text: str | None) -> "Cursor | None":
+        """The cursor ``text`` writes, or None when it is not one."""
+        m = _CURSOR.fullmatch(text or "")
+        if m is None:
+            return None
+        pairs = (kv.split("=") for kv in m["seqs"].split(",") if kv)
+        return cls(m["boot"], {n: int(q) for n, q in pairs})
 
 
 class CameraState:
@@ -102,11 +133,15 @@ class CameraState:
     # ---------------------------------------------------------------------- reads
     def events_since(self, since: int, limit: int = EVENTS_KEPT) -> list[dict]:
         with self.lock:
-            if not self.events or since >= self.seq:
-                return []
-            first = self.events[0]["seq"]
-            start = max(0, since + 1 - first)
-            return list(itertools.islice(self.events, start, start + limit))
+            return self._events_after(since, limit)
+
+    def _events_after(self, since: int, limit: int) -> list[dict]:
+        """The kept events with ``seq`` above ``since``, at most ``limit`` (hold the lock)."""
+        if not self.events or since >= self.seq:
+            return []
+        first = self.events[0]["seq"]
+        start = max(0, since + 1 - first)
+        return list(itertools.islice(self.events, start, start + limit))
 
     def describe(self) -> dict[str, Any]:
         with self.lock:
@@ -124,6 +159,8 @@ class Hub:
     def __init__(self, cameras: Iterable[tuple[str, bool]]) -> None:
         self.cameras: dict[str, CameraState] = {n: CameraState(n, s) for n, s in cameras}
         self._stop = threading.Event()
+        #: this run of the server, in event-stream cursors
+        self.boot = secrets.token_hex(4)
 
     def get(self, name: str) -> CameraState | None:
         return self.cameras.get(name)
@@ -182,12 +219,27 @@ class Hub:
         with cam.lock:
             cam.frame_subs.discard(sub)
 
-    def subscribe_events(self, size: int = 1000) -> Subscriber:
+    def subscribe_events(self, size: int = 1000, after: Cursor | None = None
+                         ) -> tuple[Subscriber, Cursor, list[dict]]:
+        """Every camera's events from now on, through the returned subscriber, after the
+        events it missed: ``(subscriber, start, missed)``. When ``after`` is a cursor of this
+        server, ``start`` is it (for the cameras it names) and ``missed`` the kept events after
+        it (``camera`` added, each camera's in order), which the subscriber does not receive:
+        sent first, they continue the earlier stream with no gap and no repeat (but events no
+        longer kept). Otherwise, and for a camera ``after`` does not name, the stream starts
+        now: ``start`` is each camera's last ``seq`` and nothing is missed."""
         sub = Subscriber(asyncio.get_running_loop(), size)
+        mine = after is not None and after.boot == self.boot
+        start = Cursor(self.boot)
+        missed: list[dict] = []
         for cam in self.cameras.values():
             with cam.lock:
                 cam.event_subs.add(sub)
-        return sub
+                seq = after.seqs.get(cam.name, cam.seq) if mine else cam.seq
+                start.seqs[cam.name] = seq if seq <= cam.seq else cam.seq
+                missed += [{"camera": cam.name, **e}
+                           for e in cam._events_after(start.seqs[cam.name], EVENTS_KEPT)]
+        return sub, start, missed
 
     def unsubscribe_events(self, sub: Subscriber) -> None:
         for cam in self.cameras.values():
