@@ -195,6 +195,28 @@ def test_scene_put_is_validated_and_keeps_other_settings(tmp_path):
         assert c.put("/api/cameras/plain/scene", json=new).status_code == 409
 
 
+def test_scene_edits_in_metres_are_checked_with_the_cameras_calibration(tmp_path, data):
+    from motiontrack.calibrate import load_camera
+    from motiontrack.serve.scenes import SceneFiles, check_scene_files
+
+    xml = data("pets09-s2l1", "View_001.xml")
+    # the example scene's west line, on the ground plane (metres)
+    world = load_camera(xml).image_to_world([[300, 320], [300, 190]]).round(3).tolist()
+    scene = tmp_path / "scene.toml"
+    scene.write_text('anchor = "bottom_center"\n')
+    edit = {"lines": [{"name": "west", "world": world}]}
+    with pytest.raises(ConfigError, match="needs a camera"):
+        SceneFiles({"pets": scene}).write("pets", edit)        # no calibration: refused
+    files = SceneFiles({"pets": scene}, {"pets": xml})
+    saved = files.write("pets", edit, (768, 576))
+    assert saved["lines"] == [{"name": "west", "world": world}]
+    assert read_toml(scene)["anchor"] == "bottom_center"
+    check_scene_files({"pets": scene}, {"pets": xml})           # the server starts with it
+    with pytest.raises(ConfigError, match="world"):             # one point is no line
+        files.write("pets", {"lines": [{"name": "west", "world": world[:1]}]}, (768, 576))
+    assert read_toml(scene)["line"][0]["world"] == world        # the file is unchanged
+
+
 # ------------------------------------------------------------------------- a live server
 def _serve(root: Path, *args: str) -> ServeProcess:
     """``motiontrack serve`` with the cameras walker and crossing, looping with their scenes."""

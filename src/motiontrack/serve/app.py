@@ -219,8 +219,10 @@ def create_app(hub: Hub, token: str | None = None,
             payload = json.loads(body)
         except (ValueError, UnicodeDecodeError):
             return _error(400, "the body must be a JSON object")
+        with cam.lock:
+            w, h = cam.status.get("width"), cam.status.get("height")
         try:
-            saved = files.write(cam.name, payload)
+            saved = files.write(cam.name, payload, (w, h) if w and h else None)
         except MotionTrackError as exc:
             return _error(400, str(exc))
         return JSONResponse(saved)

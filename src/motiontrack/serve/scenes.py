@@ -3,9 +3,10 @@
 The editor sees a scene as ``{"lines": [{"name", "points"}], "zones": [{"name", "polygon",
 "loiter_s"?}]}`` (pixels). Saving replaces the file's ``[[line]]`` and ``[[zone]]`` tables and
 keeps its other settings (``anchor``, ``[stationary]``...); the result is validated as
-``track --scene`` would read it (:func:`~motiontrack.analytics.parse_scene`) and written under
-a temporary name then renamed, so the camera, which reloads the file when it changes, never
-reads half a file.
+``track --scene`` would read it (:func:`~motiontrack.analytics.parse_scene`, with the camera's
+calibration when the cameras file gives one, so ``world`` geometry in metres is checked as the
+camera will project it) and written under a temporary name then renamed, so the camera, which
+reloads the file when it changes, never reads half a file.
 """
 
 from __future__ import annotations
@@ -38,11 +39,25 @@ def _clean(v: Any, where: str) -> Any:
     return v
 
 
-class SceneFiles:
-    """Camera name → its scene file (None: the camera has no scene file)."""
+def _calibration(path: Path | None, size: tuple[int, int] | None) -> Any:
+    """The camera model of the calibration file ``path`` (None: none), fitted to frames of
+    ``size`` when it is known."""
+    if path is None:
+        return None
+    from ..calibrate import fit_to_image, load_camera
 
-    def __init__(self, files: Mapping[str, Path | None]) -> None:
+    camera = load_camera(path)
+    return fit_to_image(camera, *size, str(path)) if size else camera
+
+
+class SceneFiles:
+    """Camera name → its scene file (None: the camera has no scene file), and its calibration
+    file (``cameras``; absent or None: none)."""
+
+    def __init__(self, files: Mapping[str, Path | None],
+                 cameras: Mapping[str, Path | None] | None = None) -> None:
         self.files = dict(files)
+        self.cameras = dict(cameras or {})
         self._lock = threading.Lock()
 
     def path(self, name: str) -> Path | None:
@@ -56,9 +71,11 @@ class SceneFiles:
         data = read_toml(path, "scene file") if path.exists() else {}
         return {"lines": list(data.get("line", [])), "zones": list(data.get("zone", []))}
 
-    def write(self, name: str, payload: Any) -> dict[str, Any]:
+    def write(self, name: str, payload: Any, size: tuple[int, int] | None = None
+              ) -> dict[str, Any]:
         """Validate the editor's ``payload`` merged into the scene file and write it atomically;
-        the new editor's view. Bad geometry is a :class:`ConfigError` naming the key."""
+        the new editor's view. Bad geometry is a :class:`ConfigError` naming the key. ``size``:
+        the camera's frame size, when known (its calibration is fitted to it)."""
         path = self.path(name)
         if path is None:
             raise ConfigError(f"camera {name} has no scene file in the cameras file")
@@ -75,7 +92,7 @@ class SceneFiles:
                 del data["line"]
             if not data["zone"]:
                 del data["zone"]
-            parse_scene(data, None, source=str(path))
+            parse_scene(data, _calibration(self.cameras.get(name), size), source=str(path))
             try:
                 text = tomli_w.dumps(data)
             except (TypeError, ValueError) as exc:
@@ -85,9 +102,12 @@ class SceneFiles:
         return self.read(name)
 
 
-def check_scene_files(files: Mapping[str, Path | None]) -> None:
+def check_scene_files(files: Mapping[str, Path | None],
+                      cameras: Mapping[str, Path | None] | None = None) -> None:
     """Every named scene file readable and valid before any camera starts (an absent file is
-    an error: the editor writes only files that exist)."""
+    an error: the editor writes only files that exist), with the camera's calibration when
+    ``cameras`` gives one."""
+    cameras = cameras or {}
     for name, path in files.items():
         if path is None:
             continue
@@ -95,7 +115,7 @@ def check_scene_files(files: Mapping[str, Path | None]) -> None:
             raise InputError(f"camera {name}: scene file {path} does not exist")
         data = read_toml(path, "scene file")
         try:
-            parse_scene(data, None, source=str(path))
+            parse_scene(data, _calibration(cameras.get(name), None), source=str(path))
         except ConfigError as exc:
             if "needs a camera calibration" not in str(exc):
                 raise ConfigError(f"camera {name}: scene file {path.name}: {exc}") from None

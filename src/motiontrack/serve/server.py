@@ -208,7 +208,8 @@ def serve(cameras_file: str | Path, host: str = "127.0.0.1", port: int = 8080,
     specs = load_cameras(cameras_file)
     _check_configs(specs)
     scenes = {s.name: s.scene for s in specs}
-    check_scene_files(scenes)
+    calibrations = {s.name: s.camera for s in specs}
+    check_scene_files(scenes, calibrations)
     if not (rotate_s > 0):
         raise ConfigError(f"--rotate-s must be > 0 seconds, got {rotate_s}")
     if rotate_mb < 0:
@@ -219,7 +220,7 @@ def serve(cameras_file: str | Path, host: str = "127.0.0.1", port: int = 8080,
     hub = Hub([(s.name, s.scene is not None) for s in specs])
     sup = Supervisor(specs, out_dir, hub, rotate_s=rotate_s, rotate_mb=rotate_mb,
                      log_level=log_level)
-    app = create_app(hub, token, SceneFiles(scenes), stopping=sup.stopping.is_set)
+    app = create_app(hub, token, SceneFiles(scenes, calibrations), stopping=sup.stopping.is_set)
 
     class _Server(uvicorn.Server):
         def handle_exit(self, sig: int, frame: Any) -> None:
