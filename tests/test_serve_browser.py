@@ -333,3 +333,50 @@ def test_a_zone_drawn_closes_with_enter_and_a_deleted_item_leaves_the_scene_file
     server.wait("the counts following the saved scene",
                 lambda: (c := server.get(f"/api/cameras/{name}/counts"))
                 and "kerb" in c["zones"] and "gate" not in c["lines"], timeout=15)
+
+
+def test_items_in_metres_are_listed_and_saved_back_as_they_are(server, page):
+    """A scene's lines and zones given in metres (``world``) have no pixels to draw: the editor
+    lists them and sends them back unchanged with the scene it saves (the page's requests for
+    the scene are answered here, as a camera with a calibration would have them)."""
+    from selenium.webdriver.support.ui import Select
+
+    name = "south"
+    scene = server.get(f"/api/cameras/{name}/scene")
+    far = {"name": "far", "world": [[1.5, 2.0], [3.0, 4.25]]}
+    yard = {"name": "yard", "world": [[0, 0], [5, 0], [5, 5]], "loiter_s": 3}
+    _js(page, """
+        const [far, yard] = arguments, real = window.fetch;
+        window.sentScenes = [];
+        window.fetch = async (url, options = {}) => {
+          if (!String(url).includes("/scene")) return real(url, options);
+          if (options.method === "PUT") {
+            window.sentScenes.push(JSON.parse(options.body));
+            return new Response(options.body, {headers: {"content-type": "application/json"}});
+          }
+          const got = await (await real(url, options)).json();
+          got.lines.push(far);
+          got.zones.push(yard);
+          return new Response(JSON.stringify(got), {headers: {"content-type": "application/json"}});
+        };
+    """, far, yard)
+    Select(page.find_element("css selector", '[data-testid="editor-camera"]')).select_by_value(name)
+    server.wait("the editor listing the items in metres too",
+                lambda: [e.get_attribute("value") for e in page.find_elements(
+                    "css selector", '[data-testid^="editor-line-name-"]')]
+                == [line["name"] for line in scene["lines"]] + ["far"], timeout=10)
+    zone_names = [e.get_attribute("value") for e in
+                  page.find_elements("css selector", '[data-testid^="editor-zone-name-"]')]
+    assert zone_names == [z["name"] for z in scene["zones"]] + ["yard"]
+    far_input = page.find_element("css selector",
+                                  f'[data-testid="editor-line-name-{len(scene["lines"])}"]')
+    assert "metres" in far_input.get_attribute("title")
+    assert not page.find_element("css selector", '[data-testid="editor-error"]').is_displayed()
+    page.find_element("css selector", '[data-testid="editor-save"]').click()
+    server.wait("the scene sent", lambda: _js(page, "return window.sentScenes.length") == 1,
+                timeout=10)
+    (sent,) = _js(page, "return window.sentScenes")
+    assert sent["lines"] == scene["lines"] + [far]
+    assert sent["zones"] == scene["zones"] + [yard]
+    logged = [e["message"] for e in page.get_log("browser") if e["level"] == "SEVERE"]
+    assert logged == [], logged

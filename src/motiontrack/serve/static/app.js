@@ -287,8 +287,10 @@ const editor = {
     try {
       const scene = await api(cameraPath(name, "scene"));
       this.scene = scene;
-      this.lines = (scene.lines || []).map((l) => ({ ...l, points: l.points.map((p) => [...p]) }));
-      this.zones = (scene.zones || []).map((z) => ({ ...z, polygon: z.polygon.map((p) => [...p]) }));
+      // items given in metres (`world`) have no pixels to draw: they are listed, kept and sent
+      // back as they are (the server checks them with the camera's calibration)
+      this.lines = (scene.lines || []).map((l) => structuredClone(l));
+      this.zones = (scene.zones || []).map((z) => structuredClone(z));
     } catch (err) {
       this.scene = null;
       this.lines = [];
@@ -375,6 +377,7 @@ const editor = {
       ul.replaceChildren(...items.map((item, i) => {
         const input = el("input", {
           type: "text", value: item.name, "aria-label": "Name of " + kind + " " + (i + 1),
+          title: item.world ? "in metres: not drawn on the picture" : "",
           "data-testid": "editor-" + kind + "-name-" + i,
           oninput: (e) => { item.name = e.target.value; this.dirty = true; this.message("unsaved changes"); this.draw(); },
         });
@@ -404,11 +407,13 @@ const editor = {
       if (close) ctx.closePath();
     };
     for (const z of this.zones) {
+      if (!z.polygon) continue;
       ctx.strokeStyle = "#ffb000"; ctx.fillStyle = "rgba(255, 176, 0, 0.15)";
       path(z.polygon, true); ctx.fill(); ctx.stroke();
       ctx.fillStyle = "#ffb000"; ctx.fillText(z.name, z.polygon[0][0] + 4 * u, z.polygon[0][1] + 16 * u);
     }
     for (const l of this.lines) {
+      if (!l.points) continue;
       ctx.strokeStyle = "#00e0ff"; path(l.points, false); ctx.stroke();
       ctx.fillStyle = "#00e0ff"; ctx.fillText(l.name, l.points[0][0] + 4 * u, l.points[0][1] - 4 * u);
     }
