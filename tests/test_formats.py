@@ -412,7 +412,8 @@ def test_auto_reads_mot17_gt(data):
 
 @pytest.mark.data
 def test_auto_reads_viper_through_its_reader(data):
-    viper = pytest.importorskip("motiontrack.io.viper", reason="ViPER reader not available yet")
+    from motiontrack.io import viper
+
     p = data("viper-sample-001", "test-truth.xml")
     assert detect_format(p) == "viper"
     a = read_annotations(p)
