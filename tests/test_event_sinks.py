@@ -256,6 +256,55 @@ def test_bad_sink_option_is_one_line_and_exit_2_before_the_run(tmp_path, walker,
     assert message in capsys.readouterr().err and not out.exists()
 
 
+@pytest.mark.parametrize("args, message", [
+    (["--sink-queue", "0"], "--sink-queue must be at least 1, got 0"),
+    (["--sink-timeout", "0"], "--sink-timeout must be seconds > 0"),
+    (["--sink-timeout", "nan"], "--sink-timeout must be seconds > 0"),
+    (["--sink-retries", "-1"], "--sink-retries must be 0 or more"),
+    (["--sink-wait", "-2"], "--sink-wait must be seconds >= 0"),
+])
+def test_bad_sink_settings_are_one_line_and_exit_2_before_the_run(tmp_path, walker, capsys, args,
+                                                                message):
+    out = tmp_path / "out"
+    assert _analyze(walker, out, "--webhook", "http://h/", *args) == 2
+    err = capsys.readouterr().err.strip()
+    assert message in err and len(err.splitlines()) == 1
+    assert not out.exists()
+    assert main(["track", "synth:walker", "-o", str(out), "--scene", str(walker[0]),
+                 "--webhook", "http://h/", *args]) == 2
+    assert message in capsys.readouterr().err and not out.exists()
+
+
+def test_the_sink_options_default_to_the_sinks_own_settings():
+    from motiontrack.cli import build_parser
+    from motiontrack.cli._sinks import sink_settings
+    from motiontrack.io.sinks import SinkSettings
+
+    for command in (["track", "x.mp4"], ["analyze", "t.txt", "--scene", "s.toml", "-o", "o"]):
+        args = build_parser().parse_args([*command, "--webhook", "http://h/"])
+        assert sink_settings(args) == SinkSettings()
+
+
+def test_sink_settings_reach_every_delivery():
+    from motiontrack.io.sinks import SinkSettings, parse_mqtt, parse_webhook
+    from motiontrack.run.event_sinks import deliveries
+
+    hook, mqtt = parse_webhook("http://127.0.0.1:9/e"), parse_mqtt("mqtt://127.0.0.1:9")
+    st = SinkSettings(queue_size=3, timeout_s=1.5, retries=2, flush_s=0.5)
+    try:
+        webhook, broker = deliveries([hook, mqtt], "cam", st)
+    except ConfigError:   # paho-mqtt missing: the webhook alone
+        (webhook,), broker = deliveries([hook], "cam", st), None
+    try:
+        assert (webhook.timeout_s, webhook.max_retries, webhook._queue.maxsize) == (1.5, 2, 3)
+        if broker is not None:
+            assert broker._queue.maxsize == 3
+    finally:
+        for d in (webhook, broker):
+            if d is not None:
+                d.close(deadline=time.monotonic())
+
+
 def test_track_sinks_need_a_scene(tmp_path, capsys):
     out = tmp_path / "out"
     assert main(["track", "synth:walker", "-o", str(out), "--webhook", "http://h/"]) == 2
@@ -331,6 +380,12 @@ def test_webhook_that_never_answers_does_not_stall_the_run(tmp_path, walker):
     sink = json.loads((out / "summary.json").read_text())["sinks"][0]
     assert (sink["events"], sink["delivered"], sink["dropped"]) == (3, 0, 3)
     assert len(_events_of(out)) == 3
+    # --sink-wait shortens the wait at the end
+    t0 = time.monotonic()
+    with silent_receiver() as url:
+        assert _analyze(walker, tmp_path / "short", "--webhook", url, "--sink-wait", "0.5",
+                        "--sink-timeout", "0.2") == 0
+    assert time.monotonic() - t0 < FLUSH_S - 1.0
 
 
 def test_full_queue_drops_instead_of_blocking_and_counts_add_up():

@@ -19,6 +19,18 @@ def add_sink_options(p: argparse.ArgumentParser, default_name: str) -> None:
     g.add_argument("--camera-name", metavar="NAME",
                    help="the camera's name in every sent event (\"camera\") and in the MQTT "
                         f"topic (default: {default_name})")
+    g.add_argument("--sink-queue", type=int, default=1000, metavar="N",
+                   help="events each sink holds while its receiver is slow or away; more are "
+                        "dropped and counted in summary.json (default 1000)")
+    g.add_argument("--sink-timeout", type=float, default=5.0, metavar="S",
+                   help="seconds a webhook request or an MQTT connection attempt may take "
+                        "(default 5)")
+    g.add_argument("--sink-retries", type=int, default=5, metavar="N",
+                   help="times a webhook event is sent again after a failure, with growing "
+                        "back-off (default 5)")
+    g.add_argument("--sink-wait", type=float, default=5.0, metavar="S",
+                   help="seconds the run waits at its end for the sinks to send what they "
+                        "hold (default 5)")
 
 
 def sink_targets(args: argparse.Namespace) -> list:
@@ -36,11 +48,24 @@ def sink_targets(args: argparse.Namespace) -> list:
     return targets
 
 
-def sinks_writer(targets: list, camera_name: str | None, default_name: str):
-    """The writer sending events to ``targets`` (None without targets)."""
+def sink_settings(args: argparse.Namespace):
+    """The :class:`~motiontrack.io.sinks.SinkSettings` of the ``--sink-*`` options, checked
+    (None without ``--webhook`` or ``--mqtt``: a run without sinks does not load them)."""
+    if not (args.webhook or args.mqtt):
+        return None
+    from ..io.sinks import SinkSettings
+
+    return SinkSettings(queue_size=args.sink_queue, timeout_s=args.sink_timeout,
+                        retries=args.sink_retries, flush_s=args.sink_wait)
+
+
+def sinks_writer(targets: list, camera_name: str | None, default_name: str, settings=None):
+    """The writer sending events to ``targets`` as ``settings`` say (None without targets)."""
     if not targets:
         return None
+    from ..io.sinks import FLUSH_S
     from ..run.event_sinks import EventSinksWriter, deliveries
 
     name = camera_name or default_name
-    return EventSinksWriter(deliveries(targets, name), name)
+    return EventSinksWriter(deliveries(targets, name, settings), name,
+                            settings.flush_s if settings is not None else FLUSH_S)

@@ -49,9 +49,10 @@ def cmd_analyze(args: argparse.Namespace) -> int:
     from ..run.analyze import analyze_tracks, frame_rate_beside, frame_size_beside
     from ..run.folders import source_name
     from ..run.heatmaps import median_background
-    from ._sinks import sink_targets, sinks_writer
+    from ._sinks import sink_settings, sink_targets, sinks_writer
 
     targets = sink_targets(args)
+    settings = sink_settings(args)
     fps = args.fps if args.fps is not None else frame_rate_beside(args.tracks)
     if fps is None:
         raise ConfigError(f"analyze needs the frame rate of {args.tracks.name}: give --fps")
@@ -65,7 +66,8 @@ def cmd_analyze(args: argparse.Namespace) -> int:
                              force=args.force, source=str(args.tracks), size=size,
                              background=background,
                              sinks=sinks_writer(targets, args.camera_name,
-                                                source_name(args.tracks.resolve().parent)))
+                                                source_name(args.tracks.resolve().parent),
+                                                settings))
     totals = summary["analytics"]
     n = sum(totals["events"].values())
     lines = ", ".join(f"{k} in {v['in']} out {v['out']}" for k, v in totals["lines"].items())

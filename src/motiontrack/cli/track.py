@@ -132,9 +132,10 @@ def cmd_track(args) -> int:
     from ..io.mot import read_mot
     from ..run import track_job
     from ._common import frame_loop, output_folder, read_gt
-    from ._sinks import sink_targets
+    from ._sinks import sink_settings, sink_targets
 
     sinks = sink_targets(args)
+    settings = sink_settings(args)
     cfg = _build_config(args)
     gt = read_gt(args.gt) if args.gt else None
     det = None
@@ -149,6 +150,7 @@ def cmd_track(args) -> int:
                         detections=det, show=_viewer() if window else None, save=args.save,
                         mask_images=args.mask_images, scoring=args.scoring, scene=args.scene,
                         bin_s=args.bin_s, sinks=sinks, camera_name=args.camera_name,
+                        sink_settings=settings,
                         writers=[view.writer()] if view else ())
         log.info("source %s", job.info.describe())
         with frame_loop(job.expected_frames()) as loop:

@@ -25,6 +25,7 @@ import base64
 import http.client
 import json
 import logging
+import math
 import queue
 import re
 import threading
@@ -41,7 +42,7 @@ from ..errors import ConfigError, printable
 log = logging.getLogger(__name__)
 
 __all__ = ["WebhookTarget", "MqttTarget", "parse_webhook", "parse_mqtt", "check_camera_name",
-           "Delivery", "WebhookDelivery", "MqttDelivery", "QUEUE_SIZE", "FLUSH_S"]
+           "Delivery", "WebhookDelivery", "MqttDelivery", "SinkSettings", "QUEUE_SIZE", "FLUSH_S"]
 
 #: events a sink holds while its receiver is slow or away; more are dropped (and counted)
 QUEUE_SIZE = 1000
@@ -57,6 +58,30 @@ MQTT_WINDOW = 100
 MQTT_CONNECT_TIMEOUT_S = 5.0
 
 _CAMERA = re.compile(r"^[\w.-]{1,64}$")
+
+
+@dataclass(frozen=True)
+class SinkSettings:
+    """How every sink of a run sends (``--sink-queue``, ``--sink-timeout``, ``--sink-retries``,
+    ``--sink-wait``): the events it may hold while its receiver is slow or away, the seconds a
+    webhook request (or an MQTT connection attempt) may take, a webhook's retries of one event,
+    and the seconds the run waits at its end for what the sinks still hold."""
+
+    queue_size: int = QUEUE_SIZE
+    timeout_s: float = TIMEOUT_S
+    retries: int = RETRIES
+    flush_s: float = FLUSH_S
+
+    def __post_init__(self) -> None:
+        checks = (("--sink-queue", self.queue_size, self.queue_size >= 1, "at least 1"),
+                  ("--sink-timeout", self.timeout_s,
+                   math.isfinite(self.timeout_s) and self.timeout_s > 0, "seconds > 0"),
+                  ("--sink-retries", self.retries, self.retries >= 0, "0 or more"),
+                  ("--sink-wait", self.flush_s,
+                   math.isfinite(self.flush_s) and self.flush_s >= 0, "seconds >= 0"))
+        for option, value, ok, want in checks:
+            if not ok:
+                raise ConfigError(f"{option} must be {want}, got {value}")
 
 
 # ----------------------------------------------------------------------------------- targets

@@ -14,8 +14,8 @@ import logging
 import time
 from typing import Any, Sequence
 
-from ..io.sinks import (FLUSH_S, Delivery, MqttDelivery, MqttTarget, WebhookDelivery,
-                        WebhookTarget, check_camera_name, encode)
+from ..io.sinks import (FLUSH_S, Delivery, MqttDelivery, MqttTarget, SinkSettings,
+                        WebhookDelivery, WebhookTarget, check_camera_name, encode)
 from ..types import FrameResult, SceneFrame
 from .job import JobContext, JobSummary, Writer
 
@@ -26,15 +26,18 @@ __all__ = ["EventSinksWriter", "deliveries"]
 Target = WebhookTarget | MqttTarget
 
 
-def deliveries(targets: Sequence[Target], camera: str, **options: Any) -> list[Delivery]:
-    """One delivery per target (``options`` go to each, e.g. ``queue_size``)."""
+def deliveries(targets: Sequence[Target], camera: str,
+               settings: SinkSettings | None = None) -> list[Delivery]:
+    """One delivery per target, sending as ``settings`` say (default :class:`SinkSettings`)."""
+    st = settings or SinkSettings()
     out: list[Delivery] = []
     for t in targets:
         if isinstance(t, WebhookTarget):
-            out.append(WebhookDelivery(t, **options))
+            out.append(WebhookDelivery(t, queue_size=st.queue_size, timeout_s=st.timeout_s,
+                                       retries=st.retries))
         else:
-            mqtt = {k: v for k, v in options.items() if k in ("queue_size",)}
-            out.append(MqttDelivery(t, camera, **mqtt))
+            out.append(MqttDelivery(t, camera, queue_size=st.queue_size,
+                                    connect_timeout_s=st.timeout_s))
     return out
 
 

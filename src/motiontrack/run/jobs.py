@@ -59,7 +59,8 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
               save: Iterable[str] | str = (), mask_images: str | Path | None = None,
               scoring: str = DEFAULT_SCORING, scene: str | Path | None = None,
               bin_s: float = 60.0, sinks: Sequence[Any] = (),
-              camera_name: str | None = None, writers: Sequence[Writer] = ()) -> Job:
+              camera_name: str | None = None, sink_settings: Any = None,
+              writers: Sequence[Writer] = ()) -> Job:
     """``motiontrack track``: ``tracks.txt``, the annotated video, the mask video and the
     intermediate movies as ``cfg.output`` and ``save`` ask, the mask of every frame as
     ``bin%06d.png`` in the folder ``mask_images``, the live view with ``show``, ``gt.txt`` and
@@ -69,7 +70,8 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
     the tracks of each frame: ``events.jsonl`` and ``counts.csv`` (rows of ``bin_s`` seconds),
     the lines and zones with their counts on the annotated video. ``sinks`` (webhook and MQTT
     targets, :mod:`motiontrack.io.sinks`) receive every event too, named ``camera_name``
-    (default: the source's name, :func:`~motiontrack.run.folders.source_name`). ``writers``
+    (default: the source's name, :func:`~motiontrack.run.folders.source_name`), sent as
+    ``sink_settings`` say (a :class:`~motiontrack.io.sinks.SinkSettings`). ``writers``
     are more outputs, given every frame after the others (``serve``'s live view)."""
     out = Path(out_dir)
     ignores_zero_marked(scoring)   # an unknown name fails before the source opens
@@ -144,9 +146,12 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
             writers.append(ScoreWriter(out, truth, tracks,
                                        functools.partial(score_run, scoring=scoring)))
         if sinks:
+            from ..io.sinks import FLUSH_S
             from .event_sinks import EventSinksWriter, deliveries
 
-            writers.append(EventSinksWriter(deliveries(sinks, camera_name), camera_name))
+            writers.append(EventSinksWriter(
+                deliveries(sinks, camera_name, sink_settings), camera_name,
+                sink_settings.flush_s if sink_settings is not None else FLUSH_S))
         return Job(src, proc, [*writers, *more], out, force=force, config=(save_config, cfg))
 
     return _opened(source, cfg.source, build)
