@@ -6,6 +6,20 @@ from __future__ import annotations
 import argparse
 
 
+#: the --sink-* options: flag, type, default (those of motiontrack.io.sinks.SinkSettings, which
+#: a plain run does not import), what it sets
+_SETTINGS = (
+    ("--sink-queue", int, 1000, "events each sink holds while its receiver is slow or away; "
+                                "more are dropped and counted in summary.json"),
+    ("--sink-timeout", float, 5.0, "seconds a webhook request or an MQTT connection attempt "
+                                   "may take"),
+    ("--sink-retries", int, 5, "times a webhook event is sent again after a failure, with "
+                               "growing back-off"),
+    ("--sink-wait", float, 5.0, "seconds the run waits at its end for the sinks to send what "
+                                "they hold"),
+)
+
+
 def add_sink_options(p: argparse.ArgumentParser, default_name: str) -> None:
     g = p.add_argument_group("event sinks (with --scene; docs/analytics.md)")
     g.add_argument("--webhook", action="append", default=[], metavar="URL",
@@ -19,18 +33,9 @@ def add_sink_options(p: argparse.ArgumentParser, default_name: str) -> None:
     g.add_argument("--camera-name", metavar="NAME",
                    help="the camera's name in every sent event (\"camera\") and in the MQTT "
                         f"topic (default: {default_name})")
-    g.add_argument("--sink-queue", type=int, default=1000, metavar="N",
-                   help="events each sink holds while its receiver is slow or away; more are "
-                        "dropped and counted in summary.json (default 1000)")
-    g.add_argument("--sink-timeout", type=float, default=5.0, metavar="S",
-                   help="seconds a webhook request or an MQTT connection attempt may take "
-                        "(default 5)")
-    g.add_argument("--sink-retries", type=int, default=5, metavar="N",
-                   help="times a webhook event is sent again after a failure, with growing "
-                        "back-off (default 5)")
-    g.add_argument("--sink-wait", type=float, default=5.0, metavar="S",
-                   help="seconds the run waits at its end for the sinks to send what they "
-                        "hold (default 5)")
+    for flag, kind, default, what in _SETTINGS:
+        g.add_argument(flag, type=kind, default=default, metavar="N" if kind is int else "S",
+                       help=f"{what} (default {default:g})")
 
 
 def sink_targets(args: argparse.Namespace) -> list:
