@@ -68,9 +68,6 @@ def sinks_writer(targets: list, camera_name: str | None, default_name: str, sett
     """The writer sending events to ``targets`` as ``settings`` say (None without targets)."""
     if not targets:
         return None
-    from ..io.sinks import FLUSH_S
-    from ..run.event_sinks import EventSinksWriter, deliveries
+    from ..run.event_sinks import sinks_writer as writer
 
-    name = camera_name or default_name
-    return EventSinksWriter(deliveries(targets, name, settings), name,
-                            settings.flush_s if settings is not None else FLUSH_S)
+    return writer(targets, camera_name or default_name, settings)

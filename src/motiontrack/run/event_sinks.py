@@ -21,7 +21,7 @@ from .job import JobContext, JobSummary, Writer
 
 log = logging.getLogger(__name__)
 
-__all__ = ["EventSinksWriter", "deliveries"]
+__all__ = ["EventSinksWriter", "deliveries", "sinks_writer"]
 
 Target = WebhookTarget | MqttTarget
 
@@ -39,6 +39,14 @@ def deliveries(targets: Sequence[Target], camera: str,
             out.append(MqttDelivery(t, camera, queue_size=st.queue_size,
                                     connect_timeout_s=st.timeout_s))
     return out
+
+
+def sinks_writer(targets: Sequence[Target], camera: str,
+                 settings: SinkSettings | None = None) -> "EventSinksWriter":
+    """The writer sending every event to ``targets`` and waiting for them at the end of the
+    run, as ``settings`` say (default :class:`SinkSettings`)."""
+    st = settings or SinkSettings()
+    return EventSinksWriter(deliveries(targets, camera, st), camera, st.flush_s)
 
 
 class EventSinksWriter(Writer):

@@ -146,12 +146,9 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
             writers.append(ScoreWriter(out, truth, tracks,
                                        functools.partial(score_run, scoring=scoring)))
         if sinks:
-            from ..io.sinks import FLUSH_S
-            from .event_sinks import EventSinksWriter, deliveries
+            from .event_sinks import sinks_writer
 
-            writers.append(EventSinksWriter(
-                deliveries(sinks, camera_name, sink_settings), camera_name,
-                sink_settings.flush_s if sink_settings is not None else FLUSH_S))
+            writers.append(sinks_writer(sinks, camera_name, sink_settings))
         return Job(src, proc, [*writers, *more], out, force=force, config=(save_config, cfg))
 
     return _opened(source, cfg.source, build)
