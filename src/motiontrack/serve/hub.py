@@ -236,7 +236,7 @@ class Hub:
             with cam.lock:
                 cam.event_subs.add(sub)
                 seq = after.seqs.get(cam.name, cam.seq) if mine else cam.seq
-                start.seqs[cam.name] = seq if seq <= cam.seq else cam.seq
+                start.seqs[cam.name] = min(seq, cam.seq)
                 missed += [{"camera": cam.name, **e}
                            for e in cam._events_after(start.seqs[cam.name], EVENTS_KEPT)]
         return sub, start, missed
