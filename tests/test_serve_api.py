@@ -270,6 +270,25 @@ def test_live_pictures_snapshot_and_mjpeg(server):
     assert cam["fps"] > 5 and cam["reconnects"] == 0 and cam["scene"] is True
 
 
+def _sse(client, n_events: int, headers: dict | None = None, timeout: float = 30.0
+         ) -> tuple[str, list[tuple[str, dict]]]:
+    """The stream's first id (where it starts) and its first ``n_events`` messages as
+    ``(id, event)``, from ``/api/events``."""
+    start, got, current = None, [], None
+    end = time.monotonic() + timeout
+    with client.stream("GET", "/api/events", headers=headers or {}, timeout=timeout) as r:
+        assert r.headers["content-type"].startswith("text/event-stream")
+        for line in r.iter_lines():
+            if line.startswith("id: "):
+                current = line[4:]
+                start = start or current
+            elif line.startswith("data: "):
+                got.append((current, json.loads(line[6:])))
+            if (start is not None and len(got) >= n_events) or time.monotonic() > end:
+                break
+    return start, got
+
+
 @pytest.mark.slow
 def test_live_events_since_sse_and_counts(server):
     # walker's person enters the plaza at frame 95 and crosses the gate at frame 139 (25 fps)
@@ -291,36 +310,11 @@ def test_live_events_since_sse_and_counts(server):
     assert counts["zones"]["plaza"]["entered"] >= 1
 
     seen: dict[str, list[int]] = {}
-    end = time.monotonic() + 25
-    with server.client.stream("GET", "/api/events", timeout=30) as r:
-        assert r.headers["content-type"].startswith("text/event-stream")
-        for line in r.iter_lines():
-            if line.startswith("data: "):
-                e = json.loads(line[6:])
-                seen.setdefault(e["camera"], []).append(e["seq"])
-            if sum(len(v) for v in seen.values()) >= 3 or time.monotonic() > end:
-                break
+    for _, e in _sse(server.client, 3, timeout=25)[1]:
+        seen.setdefault(e["camera"], []).append(e["seq"])
     assert sum(len(v) for v in seen.values()) >= 3, seen
     for cam, s in seen.items():
         assert cam in CAMERAS and s == sorted(s) and len(set(s)) == len(s)
-
-
-def _sse(client, n_events: int, headers: dict | None = None, timeout: float = 30.0
-         ) -> tuple[str, list[tuple[str, dict]]]:
-    """The stream's first id (where it starts) and its first ``n_events`` messages as
-    ``(id, event)``, from ``/api/events``."""
-    start, got, current = None, [], None
-    end = time.monotonic() + timeout
-    with client.stream("GET", "/api/events", headers=headers or {}, timeout=timeout) as r:
-        for line in r.iter_lines():
-            if line.startswith("id: "):
-                current = line[4:]
-                start = start or current
-            elif line.startswith("data: "):
-                got.append((current, json.loads(line[6:])))
-            if (start is not None and len(got) >= n_events) or time.monotonic() > end:
-                break
-    return start, got
 
 
 @pytest.mark.slow
