@@ -120,9 +120,9 @@ class AtomicFile:
 
     Data is collected in memory and written in blocks of :data:`BUFFER_SIZE` bytes, or after
     :data:`FLUSH_S` seconds (what a killed process wrote can be committed later:
-    :func:`commit_leftovers`). When the
-    device is full, :meth:`write` raises :class:`DiskFullError` and keeps what it could not
-    write, so a later :meth:`commit` (after other files made room) still gives the whole file.
+    :func:`commit_leftovers`). When the device is full, :meth:`write` raises
+    :class:`DiskFullError` and keeps what it could not write, so a later :meth:`commit` (after
+    other files made room) still gives the whole file.
     ``mode`` is ``"w"`` (text, written with ``encoding``, newlines as given) or ``"wb"``.
     """
 
