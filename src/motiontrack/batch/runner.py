@@ -21,11 +21,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, Mapping, Sequence
 
-from .. import __version__
 from ..config import PipelineConfig, apply_overrides, from_dict, to_dict
 from ..errors import ConfigError, printable
 from ..io.atomic import OutputLock, atomic_write_bytes, atomic_write_text
 from ..run.executor import dask_client, map_tasks
+from ..version import __version__
 from .combined import write_combined
 from .sources import Video, expand_sources, with_files
 
