@@ -21,7 +21,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, Mapping, Sequence
 
-from ..config import PipelineConfig, apply_overrides, from_dict, to_dict
+from ..config import PipelineConfig, apply_overrides, from_dict, load_config, to_dict
 from ..errors import ConfigError, printable
 from ..io.atomic import OutputLock, atomic_write_bytes, atomic_write_text
 from ..run.executor import dask_client, map_tasks
@@ -349,8 +349,8 @@ def _check_names(videos: Sequence[Video]) -> None:
                               "with '.' nor hold slashes or control characters")
 
 
-def run_batch(sources: Sequence[str], results: str | Path,
-              config: PipelineConfig | None = None, *, jobs: int = 1,
+def run_batch(sources: str | Sequence[str], results: str | Path,
+              config: PipelineConfig | str | Path | None = None, *, jobs: int = 1,
               cluster: str | None = None, client: Any = None, resume: bool = False,
               retries: int = 2, timeout_s: float | None = 3600, scene: str | None = None,
               camera: str | None = None, gt_from: str | None = None,
@@ -358,8 +358,10 @@ def run_batch(sources: Sequence[str], results: str | Path,
               ) -> list[dict[str, Any]]:
     """Track every video of ``sources`` into ``results`` and return the index rows.
 
-    ``sources`` are files, folders, globs, manifest ``.toml`` files, ``synth:`` scenes
-    (:func:`~motiontrack.batch.sources.expand_sources`); ``config`` None for the defaults. Runs on ``client`` (a ``distributed.Client``, left open) when given, else on the
+    ``sources`` is one SOURCE or a list of them (files, folders, globs, manifest ``.toml``
+    files, ``synth:`` scenes: :func:`~motiontrack.batch.sources.expand_sources`); ``config`` a
+    :class:`~motiontrack.config.PipelineConfig`, the path of a TOML config, or None for the
+    defaults. Runs on ``client`` (a ``distributed.Client``, left open) when given, else on the
     scheduler at ``cluster``, else on a local cluster of ``jobs`` worker processes. ``scene``
     and ``camera`` files apply to every video without its own (from a manifest); ``gt_from`` is
     a manifest giving videos their ground truth (:func:`~motiontrack.batch.sources.with_files`).
@@ -373,8 +375,9 @@ def run_batch(sources: Sequence[str], results: str | Path,
     propagates.
     """
     _check_limits(timeout_s=timeout_s, retries=retries, jobs=jobs)
-    cfg = config if config is not None else PipelineConfig()
-    videos = with_files(expand_sources(sources), scene=scene, camera=camera, gt_from=gt_from)
+    cfg = _config_of(config)
+    specs = [sources] if isinstance(sources, (str, Path)) else list(sources)
+    videos = with_files(expand_sources(specs), scene=scene, camera=camera, gt_from=gt_from)
     _check_names(videos)
     out = Path(results)
     out.mkdir(parents=True, exist_ok=True)
@@ -401,6 +404,14 @@ def _check_limits(*, timeout_s: float | None, retries: int, jobs: int) -> None:
         raise ConfigError(f"--retries must be >= 0, got {retries}")
     if jobs < 1:
         raise ConfigError(f"-j must be >= 1, got {jobs}")
+
+
+def _config_of(config: PipelineConfig | str | Path | None) -> PipelineConfig:
+    """The config a batch runs with: ``config`` itself, the TOML file it names, or the
+    defaults."""
+    if config is None:
+        return PipelineConfig()
+    return config if isinstance(config, PipelineConfig) else load_config(config)
 
 
 def _resumed_rows(out: Path, videos: Sequence[Video], chash: str) -> dict[str, dict[str, Any]]:
