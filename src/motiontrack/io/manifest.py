@@ -78,7 +78,8 @@ def default_sequence_name(source: str) -> str:
     if source.startswith("synth:"):
         return source[len("synth:"):].split("?")[0] or "synth"
     p = Path(source)
-    return (p.parent.name if p.stem in ("video", "input", "img1") and p.parent.name else p.stem) or "seq"
+    named_by_folder = p.stem in ("video", "input", "img1") and p.parent.name
+    return (p.parent.name if named_by_folder else p.stem) or "seq"
 
 
 def absolute_path(path: str | None, base: Path | None = None) -> str | None:
@@ -130,8 +131,8 @@ def read_manifest_entries(path: str | Path, files: Sequence[str] = ()) -> list[d
             if key in it and not isinstance(it[key], str):
                 raise InputError(f"{shown}: sequence {i}: {key} must be a string, got {it[key]!r}")
         try:
-            src = it["source"] if it["source"].startswith("synth:") else absolute_path(it["source"], p.parent)
-            entry = {"name": it.get("name") or default_sequence_name(it["source"]), "source": src,
+            entry = {"name": it.get("name") or default_sequence_name(it["source"]),
+                     "source": absolute_path(it["source"], p.parent),  # synth: as written
                      "gt": absolute_path(it.get("gt"), p.parent), "group": it.get("group", "")}
             entry.update({k: absolute_path(it[k], p.parent) for k in files if k in it})
         except ValueError as exc:  # a NUL in a path
