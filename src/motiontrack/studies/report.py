@@ -30,7 +30,7 @@ from ..config_activity import inactive_in_study
 from ..errors import ConfigError, printable
 from ..io.atomic import atomic_write_text
 from .plots import BEST_METRIC, best_point
-from .study_file import STUDY_FILE, read_study_meta
+from .study_file import read_study_meta
 from .sweep import SUMMARY_FILE, TABLE_FILE
 from .table import read_table
 
