@@ -5,6 +5,8 @@ from __future__ import annotations
 import csv
 import json
 import os
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -12,9 +14,9 @@ import pytest
 pytest.importorskip("distributed")
 
 import motiontrack  # noqa: E402
-from motiontrack.batch import expand_sources, run_batch  # noqa: E402
+from motiontrack.batch import config_hash, expand_sources, run_batch  # noqa: E402
 from motiontrack.cli import main  # noqa: E402
-from motiontrack.config import PipelineConfig, apply_overrides  # noqa: E402
+from motiontrack.config import PipelineConfig, apply_overrides, save_config  # noqa: E402
 from motiontrack.errors import ConfigError  # noqa: E402
 from motiontrack.io.mot import read_mot  # noqa: E402
 from motiontrack.run.executor import dask_client  # noqa: E402
@@ -203,10 +205,23 @@ def test_resume_with_another_config_redoes_everything(tmp_path, client):
     assert rows[0]["config_hash"] != first_hash
 
 
+def test_the_batch_subpackage_is_an_attribute_of_the_package_loaded_on_first_use():
+    # a new process: this one has imported motiontrack.batch already
+    probe = ("import sys, motiontrack; loaded = 'motiontrack.batch' in sys.modules; "
+             "print(loaded, motiontrack.batch.run_batch.__module__)")
+    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
+                         check=True, timeout=120).stdout.split()
+    assert out == ["False", "motiontrack.batch.runner"]
+
+
 @pytest.mark.slow
 def test_python_api_and_cli_write_the_index(tmp_path, client, capsys):
-    rows = motiontrack.batch([SCENES[0]], _cfg(), client, out=tmp_path / "api")
+    # one SOURCE and the config as a TOML file, as the command takes them
+    save_config(_cfg(), tmp_path / "cfg.toml")
+    rows = motiontrack.batch.run_batch(SCENES[0], tmp_path / "api", str(tmp_path / "cfg.toml"),
+                                       client=client)
     assert [r["status"] for r in rows] == ["done"]
+    assert rows[0]["config_hash"] == config_hash(_cfg())
     code = main(["batch", SCENES[0], "-o", str(tmp_path / "cli"), "-j", "1",
                  "--set", "output.video=false"])
     assert code == 0

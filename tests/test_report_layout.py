@@ -8,7 +8,8 @@ import re
 
 from motiontrack.config import load_config
 from motiontrack.studies.report import build_report
-from motiontrack.studies.sweep import study_from_args, summarise_runs, versions, write_table
+from motiontrack.studies.sweep import study_from_args, versions
+from motiontrack.studies.table import summarise_runs, write_table
 
 WALKER = "synth:walker?n_frames=10"
 

@@ -182,7 +182,8 @@ def test_study_records_its_scoring_and_a_study_without_one_replays_with_ignore_r
 def test_sweep_scores_each_run_in_the_studys_convention(tmp_path):
     from motiontrack.config import load_config, to_dict
     from motiontrack.io.mot import read_mot
-    from motiontrack.studies.sweep import RunSpec, SequenceSpec, execute_run
+    from motiontrack.io.manifest import SequenceSpec
+    from motiontrack.studies.sweep import RunSpec, execute_run
     from motiontrack.synth import parse_synth_spec
 
     # the person behind the column is marked zero while mostly hidden, and the tracker keeps a

@@ -14,9 +14,10 @@ import motiontrack.studies.sweep as sw
 from motiontrack.cli import main
 from motiontrack.config import load_config
 from motiontrack.errors import ConfigError, InputError
+from motiontrack.io.manifest import read_manifest
 from motiontrack.studies.report import build_report
-from motiontrack.studies.sweep import (MAX_RUNS, load_study, read_manifest, read_table,
-                                       study_from_args, versions, write_table)
+from motiontrack.studies.sweep import MAX_RUNS, load_study, study_from_args, versions
+from motiontrack.studies.table import read_table, write_table
 
 WALKER = "synth:walker?n_frames=20"
 CROSSING = "synth:crossing?n_frames=20"

@@ -9,10 +9,10 @@ import pytest
 
 from motiontrack.config import PipelineConfig, load_config
 from motiontrack.errors import ConfigError, InputError
-from motiontrack.studies.sweep import (
-    SequenceSpec, Study, load_study, parse_param, read_manifest, read_table, run_sweep,
-    study_from_args, summarise_runs, write_table,
-)
+from motiontrack.io.manifest import SequenceSpec, read_manifest
+from motiontrack.studies.params import parse_param
+from motiontrack.studies.sweep import Study, load_study, run_sweep, study_from_args
+from motiontrack.studies.table import read_table, summarise_runs, write_table
 
 SCENE = "synth:walker?n_frames=80"
 
@@ -318,7 +318,7 @@ def test_interrupted_sweep_keeps_finished_runs(tmp_path, monkeypatch, capsys):
     assert code == 130
     summary = _json.loads((out / "summary.json").read_text())
     assert summary == {"interrupted": True, "runs_done": 2, "runs": 4}
-    rows = sw.read_table(out / "results.csv")
+    rows = read_table(out / "results.csv")
     assert [r["motion.median.threshold"] for r in rows] == [0.1, 0.2]
     assert (out / "runs" / "r001" / "walker" / "tracks.txt").is_file()
     assert "interrupted" in capsys.readouterr().err

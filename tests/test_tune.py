@@ -6,7 +6,7 @@ import pytest
 
 from motiontrack.config import load_config
 from motiontrack.errors import ConfigError
-from motiontrack.studies.sweep import SequenceSpec
+from motiontrack.io.manifest import SequenceSpec
 from motiontrack.studies.tune import SearchParam, parse_space
 
 optuna = pytest.importorskip("optuna", reason="optuna not installed (pip install optuna)")
@@ -36,7 +36,7 @@ def test_parse_space_rejects(text):
 
 @pytest.mark.parametrize("text", ["motion.median.threshold=0.02:0.2:0.02", "regions.min_area=1:6:2"])
 def test_stepped_search_range_proposes_only_the_sweep_grid_values(text):
-    from motiontrack.studies.sweep import parse_param
+    from motiontrack.studies.params import parse_param
 
     grid = set(parse_param(text)[1])
     dim = parse_space(text)

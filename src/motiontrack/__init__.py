@@ -5,16 +5,18 @@ Python API::
     import motiontrack
     for result in motiontrack.track("video.mp4"):
         print(result.index, [(t.id, t.box) for t in result.tracks])
+
+    rows = motiontrack.batch.run_batch(["videos/"], "results")   # one track run per video, on Dask
 """
 
 from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
-__version__ = "0.1.0"
+from .version import __version__
 
 __all__ = [
-    "Annotations", "Box", "Frame", "FrameResult", "Region", "Track", "TrackState", "batch", "track",
+    "Annotations", "Box", "Frame", "FrameResult", "Region", "Track", "TrackState", "track",
     "__version__",
 ]
 
@@ -28,6 +30,11 @@ if TYPE_CHECKING:  # pragma: no cover
     from .types import Annotations, Box, Frame, FrameResult, Region, Track, TrackState
 
 
+#: the subpackages offered here, imported on first use (``motiontrack.batch.run_batch`` after a
+#: plain ``import motiontrack``): the package alone loads neither Dask's client nor the pipeline
+_SUBPACKAGES = frozenset({"batch"})
+
+
 def __getattr__(name: str) -> Any:
     if name in _TYPES:
         from . import types
@@ -35,11 +42,16 @@ def __getattr__(name: str) -> Any:
         value = getattr(types, name)
         globals()[name] = value
         return value
+    if name in _SUBPACKAGES:
+        import importlib
+
+        # importing the subpackage sets it as this module's attribute: no later lookup here
+        return importlib.import_module(f"{__name__}.{name}")
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def __dir__() -> list[str]:
-    return sorted({*globals(), *_TYPES})
+    return sorted({*globals(), *_TYPES, *_SUBPACKAGES})
 
 
 def track(source: Any, config: "PipelineConfig | str | None" = None, **kwargs: Any) -> "TrackRun":
@@ -59,24 +71,3 @@ def track(source: Any, config: "PipelineConfig | str | None" = None, **kwargs: A
     from .pipeline import run
 
     return run(source, config, **kwargs)
-
-
-def batch_videos(sources: Any, config: "PipelineConfig | str | None" = None, client: Any = None,
-                 *, out: Any = "batch-results", **kwargs: Any) -> "list[dict[str, Any]]":
-    """Track every video of ``sources`` (files, folders, globs, manifest ``.toml`` files,
-    ``synth:`` scenes) into ``out/<name>/`` and return the rows of ``out/index.csv``.
-
-    ``client`` is a ``distributed.Client`` to run on; without one a local cluster of
-    ``jobs=N`` worker processes is started (``cluster="tcp://host:8786"``: an existing
-    scheduler). More options: :func:`motiontrack.batch.run_batch`."""
-    from .batch import run_batch
-    from .config import load_config
-
-    cfg = load_config(config) if config is None or isinstance(config, str) else config
-    srcs = [sources] if isinstance(sources, str) else list(sources)
-    return run_batch(srcs, out, cfg, client=client, **kwargs)
-
-
-# importing the subpackage motiontrack.batch replaces this name with the package, which is
-# callable the same way
-batch = batch_videos

@@ -21,11 +21,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, Mapping, Sequence
 
-from .. import __version__
-from ..config import PipelineConfig, apply_overrides, from_dict, to_dict
+from ..config import PipelineConfig, apply_overrides, from_dict, load_config, to_dict
 from ..errors import ConfigError, printable
 from ..io.atomic import OutputLock, atomic_write_bytes, atomic_write_text
 from ..run.executor import dask_client, map_tasks
+from ..version import __version__
 from .combined import write_combined
 from .sources import Video, expand_sources, with_files
 
@@ -134,17 +134,64 @@ def _one_line(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {text[0] if text else ''}".strip()
 
 
+def _partial_folder(results: Path, name: str) -> Path:
+    """The folder a video runs into until its run is complete: ``RESULTS/.<name>.partial``."""
+    return results / f".{name}.partial"
+
+
+def _rewrite_summary(partial: Path, final: Path, task: BatchTask) -> None:
+    """``summary.json`` of the run in ``partial`` made the final folder's: the paths it names
+    those of ``final``, and the batch's entry (the video's name, the config hash) added."""
+    meta = json.loads((partial / "summary.json").read_text(encoding="utf-8"))
+    meta["outputs"] = {k: str(final / Path(p).name) for k, p in meta.get("outputs", {}).items()}
+    meta["batch"] = {"name": task.video.name, "config_hash": task.config_hash}
+    atomic_write_text(partial / "summary.json", json.dumps(meta, indent=2) + "\n")
+
+
+def _move_into_place(partial: Path, final: Path) -> None:
+    """Rename the complete run ``partial`` to ``final``; the folder of a redone video goes as
+    the new one arrives."""
+    if final.exists():
+        old = final.with_name(f".{final.name}.old")
+        shutil.rmtree(old, ignore_errors=True)
+        final.rename(old)
+        partial.rename(final)
+        shutil.rmtree(old, ignore_errors=True)
+    else:
+        partial.rename(final)
+
+
+def _run_track_job(task: BatchTask, partial: Path, t0: float) -> Any:
+    """Run the video's ``track`` job into ``partial``: its summary. :class:`VideoTimeout` when
+    it ran over ``--timeout-s``, :class:`BatchStopped` when the batch asked it to stop."""
+    from ..io.annotations import read_annotations
+    from ..run.jobs import track_job
+
+    v = task.video
+    overrides = [f"measure.camera={json.dumps(v.camera)}"] if v.camera else []
+    cfg = apply_overrides(from_dict(PipelineConfig, dict(task.config)), overrides)
+    gt = read_annotations(v.gt, mot_kind="gt") if v.gt else None
+    job = track_job(v.source, cfg, partial, force=True, gt=gt, scene=v.scene)
+    frames = _Frames(task, None if task.timeout_s is None else t0 + task.timeout_s)
+    # polled after each frame: a run over its time stops itself, so its worker is free
+    try:
+        return job.run(progress=frames, should_stop=frames.should_stop)
+    except KeyboardInterrupt:
+        if frames.late:
+            raise VideoTimeout(f"ran longer than --timeout-s {task.timeout_s:g}") from None
+        if frames.stopped:
+            raise BatchStopped("the batch stopped before this video finished") from None
+        raise
+
+
 def run_video(task: BatchTask, attempt: int = 1) -> dict[str, Any]:
     """Run one video into ``RESULTS/<name>`` and return its index row; every error becomes a
     ``failed`` row (its partial folder removed), only an interruption propagates."""
     import cv2
 
-    from ..io.annotations import read_annotations
-    from ..run.jobs import track_job
-
     v = task.video
     out = Path(task.results)
-    partial, final = out / f".{v.name}.partial", out / v.name
+    partial, final = _partial_folder(out, v.name), out / v.name
     t0 = time.perf_counter()
     row: dict[str, Any] = {"name": v.name, "source": v.source, "status": "failed", "error": "",
                            "worker": _worker_name(), "attempts": attempt,
@@ -152,33 +199,9 @@ def run_video(task: BatchTask, attempt: int = 1) -> dict[str, Any]:
                            "opencv_version": cv2.__version__}
     try:
         shutil.rmtree(partial, ignore_errors=True)   # of a killed attempt
-        overrides = [f"measure.camera={json.dumps(v.camera)}"] if v.camera else []
-        cfg = apply_overrides(from_dict(PipelineConfig, dict(task.config)), overrides)
-        gt = read_annotations(v.gt, mot_kind="gt") if v.gt else None
-        job = track_job(v.source, cfg, partial, force=True, gt=gt, scene=v.scene)
-        frames = _Frames(task, None if task.timeout_s is None else t0 + task.timeout_s)
-        # polled after each frame: a run over its time stops itself, so its worker is free
-        try:
-            summary = job.run(progress=frames, should_stop=frames.should_stop)
-        except KeyboardInterrupt:
-            if frames.late:
-                raise VideoTimeout(f"ran longer than --timeout-s {task.timeout_s:g}") from None
-            if frames.stopped:
-                raise BatchStopped("the batch stopped before this video finished") from None
-            raise
-        meta = json.loads((partial / "summary.json").read_text(encoding="utf-8"))
-        # the paths the summary names are those of the finished folder
-        meta["outputs"] = {k: str(final / Path(p).name) for k, p in meta.get("outputs", {}).items()}
-        meta["batch"] = {"name": v.name, "config_hash": task.config_hash}
-        atomic_write_text(partial / "summary.json", json.dumps(meta, indent=2) + "\n")
-        if final.exists():   # a redone video: the old folder goes as the new one arrives
-            old = out / f".{v.name}.old"
-            shutil.rmtree(old, ignore_errors=True)
-            final.rename(old)
-            partial.rename(final)
-            shutil.rmtree(old, ignore_errors=True)
-        else:
-            partial.rename(final)
+        summary = _run_track_job(task, partial, t0)
+        _rewrite_summary(partial, final, task)
+        _move_into_place(partial, final)
         row.update(status="done", frames=summary.frames, fps=round(summary.fps, 3),
                    tracks=summary.tracks)
         row.update({k: summary.accuracy[k] for k in METRICS if k in (summary.accuracy or {})})
@@ -199,7 +222,7 @@ def _unfinished_row(task: BatchTask, status: str, error: str, **extra: Any) -> d
     import cv2
 
     v = task.video
-    shutil.rmtree(Path(task.results) / f".{v.name}.partial", ignore_errors=True)
+    shutil.rmtree(_partial_folder(Path(task.results), v.name), ignore_errors=True)
     return {"name": v.name, "source": v.source, "status": status, "error": error, **extra,
             "config_hash": task.config_hash, "motiontrack_version": __version__,
             "opencv_version": cv2.__version__}
@@ -326,123 +349,174 @@ def _check_names(videos: Sequence[Video]) -> None:
                               "with '.' nor hold slashes or control characters")
 
 
-def run_batch(sources: Sequence[str], results: str | Path, config: PipelineConfig | None = None,
-              *, jobs: int = 1, cluster: str | None = None, client: Any = None,
-              resume: bool = False, retries: int = 2, timeout_s: float | None = 3600,
-              scene: str | None = None, camera: str | None = None, gt_from: str | None = None,
+def run_batch(sources: str | Sequence[str], results: str | Path,
+              config: PipelineConfig | str | Path | None = None, *, jobs: int = 1,
+              cluster: str | None = None, client: Any = None, resume: bool = False,
+              retries: int = 2, timeout_s: float | None = 3600, scene: str | None = None,
+              camera: str | None = None, gt_from: str | None = None,
               progress: Callable[[Mapping[str, float]], None] | None = None
               ) -> list[dict[str, Any]]:
     """Track every video of ``sources`` into ``results`` and return the index rows.
 
-    Runs on ``client`` when given, else on the scheduler at ``cluster``, else on a local
-    cluster of ``jobs`` worker processes. ``scene`` and ``camera`` files apply to every video
-    without its own (from a manifest); ``gt_from`` is a manifest giving videos their ground
-    truth (:func:`~motiontrack.batch.sources.with_files`). With ``resume``, videos whose folder
-    holds a complete run with this config keep it (and their index row). A video still running
-    after ``timeout_s`` seconds (None: no limit) stops and is a ``timeout`` row. ``progress`` is
-    called with counts ``done``, ``failed`` (timeouts included), ``running``, ``total``, the
-    ``frames`` tracked so far and the cluster's ``fps`` (over the last few seconds) whenever a
-    video finishes and as workers report frames (every :data:`REPORT_EVERY_S` seconds).
-    Interrupted (``KeyboardInterrupt``), the batch cancels its tasks and writes the videos not
-    finished as ``interrupted`` rows before the interruption propagates.
+    ``sources`` is one SOURCE or a list of them (files, folders, globs, manifest ``.toml``
+    files, ``synth:`` scenes: :func:`~motiontrack.batch.sources.expand_sources`); ``config`` a
+    :class:`~motiontrack.config.PipelineConfig`, the path of a TOML config, or None for the
+    defaults. Runs on ``client`` (a ``distributed.Client``, left open) when given, else on the
+    scheduler at ``cluster``, else on a local cluster of ``jobs`` worker processes. ``scene``
+    and ``camera`` files apply to every video without its own (from a manifest); ``gt_from`` is
+    a manifest giving videos their ground truth (:func:`~motiontrack.batch.sources.with_files`).
+    With ``resume``, videos whose folder holds a complete run with this config keep it (and
+    their index row). A video still running after ``timeout_s`` seconds (None: no limit) stops
+    and is a ``timeout`` row. ``progress`` is called with counts ``done``, ``failed`` (timeouts
+    included), ``running``, ``total``, the ``frames`` tracked so far and the cluster's ``fps``
+    (over the last few seconds) whenever a video finishes and as workers report frames (every
+    :data:`REPORT_EVERY_S` seconds). Interrupted (``KeyboardInterrupt``), the batch cancels its
+    tasks and writes the videos not finished as ``interrupted`` rows before the interruption
+    propagates.
     """
+    _check_limits(timeout_s=timeout_s, retries=retries, jobs=jobs)
+    cfg = _config_of(config)
+    specs = [sources] if isinstance(sources, (str, Path)) else list(sources)
+    videos = with_files(expand_sources(specs), scene=scene, camera=camera, gt_from=gt_from)
+    _check_names(videos)
+    out = Path(results)
+    out.mkdir(parents=True, exist_ok=True)
+    chash = config_hash(cfg)
+    with OutputLock(out):
+        index = _Index(out, videos, _resumed_rows(out, videos, chash) if resume else {},
+                       progress)
+        index.save()
+        batch_id = f"motiontrack-batch-{uuid.uuid4().hex[:12]}"
+        topic = batch_id if progress is not None else None
+        tasks = [BatchTask(v, str(out.resolve()), to_dict(cfg), chash, timeout_s, topic,
+                           f"{batch_id}-stop") for v in videos if v.name not in index.rows]
+        if tasks:
+            manager = dask_client(jobs, cluster) if client is None else _given(client)
+            _run_tasks(manager, tasks, index, retries=retries, timeout_s=timeout_s)
+        return _finish(out, [index.rows[v.name] for v in videos])
+
+
+def _check_limits(*, timeout_s: float | None, retries: int, jobs: int) -> None:
+    """:class:`ConfigError` for a batch option out of its range."""
     if timeout_s is not None and not timeout_s > 0:
         raise ConfigError(f"--timeout-s must be > 0, got {timeout_s}")
     if retries < 0:
         raise ConfigError(f"--retries must be >= 0, got {retries}")
     if jobs < 1:
         raise ConfigError(f"-j must be >= 1, got {jobs}")
-    cfg = config if config is not None else PipelineConfig()
-    videos = with_files(expand_sources(sources), scene=scene, camera=camera, gt_from=gt_from)
-    _check_names(videos)
-    out = Path(results)
-    out.mkdir(parents=True, exist_ok=True)
-    chash = config_hash(cfg)
-    with OutputLock(out):
-        old = read_index(out / INDEX_FILE)
-        rows: dict[str, dict[str, Any]] = {}
-        if resume:
-            for v in videos:
-                if _complete(out, v.name, chash):
-                    rows[v.name] = dict(old.get(v.name) or {"name": v.name, "source": v.source,
-                                                             "status": "done",
-                                                             "config_hash": chash})
-            log.info("resuming: %d of %d videos are done", len(rows), len(videos))
-        todo = [v for v in videos if v.name not in rows]
-        order = {v.name: i for i, v in enumerate(videos)}
-        counts = {"done": len(rows), "failed": 0,
-                  "running": 0, "total": len(videos)}
 
-        def save() -> None:
-            write_index(sorted(rows.values(), key=lambda r: order[r["name"]]), out / INDEX_FILE)
 
-        rate = _Rate()
-        lock = threading.Lock()   # finished videos and workers' reports come on two threads
+def _config_of(config: PipelineConfig | str | Path | None) -> PipelineConfig:
+    """The config a batch runs with: ``config`` itself, the TOML file it names, or the
+    defaults."""
+    if config is None:
+        return PipelineConfig()
+    return config if isinstance(config, PipelineConfig) else load_config(config)
 
-        def report() -> None:
-            if progress is not None:
-                progress({**counts, "frames": rate.total(), "fps": rate.fps()})
 
-        def finished(i: int, row: dict[str, Any], attempts: int) -> None:
-            row["attempts"] = attempts
-            with lock:
-                rows[row["name"]] = row
-                counts["done" if row["status"] == "done" else "failed"] += 1
-                left = len(videos) - counts["done"] - counts["failed"]
-                counts["running"] = min(left, workers)
-                rate.seen(row["name"], int(row.get("frames") or 0))
-                save()
-                report()
+def _resumed_rows(out: Path, videos: Sequence[Video], chash: str) -> dict[str, dict[str, Any]]:
+    """The index rows, by name, of the videos whose folder holds a complete run made with the
+    config ``chash``: the row of the old index, or a ``done`` row when it has none."""
+    old = read_index(out / INDEX_FILE)
+    rows = {v.name: dict(old.get(v.name) or {"name": v.name, "source": v.source,
+                                             "status": "done", "config_hash": chash})
+            for v in videos if _complete(out, v.name, chash)}
+    log.info("resuming: %d of %d videos are done", len(rows), len(videos))
+    return rows
 
-        def reported(event: tuple[float, Any]) -> None:
-            msg = event[1]
-            with lock:
-                if isinstance(msg, dict) and msg.get("name") not in rows:
-                    rate.seen(str(msg.get("name")), int(msg.get("frames", 0)))
-                    report()
 
-        save()
-        batch_id = f"motiontrack-batch-{uuid.uuid4().hex[:12]}"
-        topic = batch_id if progress is not None else None
-        tasks = [BatchTask(v, str(out.resolve()), to_dict(cfg), chash, timeout_s, topic,
-                           f"{batch_id}-stop") for v in todo]
-        if not tasks:
-            return _finish(out, [rows[v.name] for v in videos])
-        manager = dask_client(jobs, cluster) if client is None else _given(client)
-        stopped: list[BatchTask] = []
-        try:
-            with manager as cl:
-                workers = max(1, sum(w.get("nthreads", 1)
-                                     for w in cl.scheduler_info()["workers"].values()))
-                counts["running"] = min(len(tasks), workers)
-                report()
-                if topic is not None:
-                    cl.subscribe_topic(topic, reported)
-                try:
-                    map_tasks(cl, run_video, tasks, retries=retries, on_result=finished,
-                              on_lost=lambda i, exc, n: _lost_row(tasks[i], exc, n),
-                              key="motiontrack-batch",
-                              hard_timeout_s=None if timeout_s is None
-                              else timeout_s + max(10.0, timeout_s / 10),
-                              on_timeout=lambda i, n: _hung_row(tasks[i], n))
-                except KeyboardInterrupt:
-                    _ask_to_stop(cl, f"{batch_id}-stop")
-                    with lock:
-                        for t in tasks:
-                            if t.video.name not in rows:
-                                rows[t.video.name] = _interrupted_row(t)
-                                stopped.append(t)
-                        save()
-                    raise
-                finally:
-                    if topic is not None:
-                        cl.unsubscribe_topic(topic)
-        finally:
-            # a local cluster's workers are gone now, and a partial folder one of them wrote
-            # into after the first removal goes too (a remote worker removes its own)
+class _Index:
+    """The rows of a batch by name as its videos finish, ``index.csv`` rewritten after each,
+    and the counts its ``progress`` callback is given. Finished videos and the workers' frame
+    reports arrive on two threads: one lock guards both."""
+
+    def __init__(self, out: Path, videos: Sequence[Video], rows: Mapping[str, dict[str, Any]],
+                 progress: Callable[[Mapping[str, float]], None] | None) -> None:
+        self.path = out / INDEX_FILE
+        self.order = {v.name: i for i, v in enumerate(videos)}
+        self.rows = dict(rows)
+        self.counts = {"done": len(rows), "failed": 0, "running": 0, "total": len(videos)}
+        self.progress = progress
+        self.rate = _Rate()
+        self.lock = threading.Lock()
+        self.workers = 1
+
+    def save(self) -> None:
+        write_index(sorted(self.rows.values(), key=lambda r: self.order[r["name"]]), self.path)
+
+    def report(self) -> None:
+        if self.progress is not None:
+            self.progress({**self.counts, "frames": self.rate.total(), "fps": self.rate.fps()})
+
+    def started(self, workers: int, tasks: int) -> None:
+        """The cluster is up with ``workers`` threads for ``tasks`` videos."""
+        self.workers = workers
+        self.counts["running"] = min(tasks, workers)
+        self.report()
+
+    def finished(self, i: int, row: dict[str, Any], attempts: int) -> None:
+        """A video's row (``map_tasks``' ``on_result``)."""
+        row["attempts"] = attempts
+        with self.lock:
+            self.rows[row["name"]] = row
+            self.counts["done" if row["status"] == "done" else "failed"] += 1
+            left = self.counts["total"] - self.counts["done"] - self.counts["failed"]
+            self.counts["running"] = min(left, self.workers)
+            self.rate.seen(row["name"], int(row.get("frames") or 0))
+            self.save()
+            self.report()
+
+    def reported(self, event: tuple[float, Any]) -> None:
+        """A worker's report of a running video's frames (a Dask topic's handler)."""
+        msg = event[1]
+        with self.lock:
+            if isinstance(msg, dict) and msg.get("name") not in self.rows:
+                self.rate.seen(str(msg.get("name")), int(msg.get("frames", 0)))
+                self.report()
+
+    def interrupted(self, tasks: Sequence[BatchTask]) -> list[BatchTask]:
+        """Write the videos of ``tasks`` not finished as ``interrupted`` rows; those tasks."""
+        with self.lock:
+            stopped = [t for t in tasks if t.video.name not in self.rows]
             for t in stopped:
-                shutil.rmtree(out / f".{t.video.name}.partial", ignore_errors=True)
-        return _finish(out, [rows[v.name] for v in videos])
+                self.rows[t.video.name] = _interrupted_row(t)
+            self.save()
+        return stopped
+
+
+def _run_tasks(manager: Any, tasks: Sequence[BatchTask], index: _Index, *, retries: int,
+               timeout_s: float | None) -> None:
+    """Run ``tasks`` on the cluster ``manager`` opens, each row into ``index`` as it comes.
+    Interrupted, the running videos are asked to stop and the unfinished ones written as
+    ``interrupted`` rows before the interruption propagates."""
+    topic, stop_event = tasks[0].progress_topic, tasks[0].stop_event
+    stopped: list[BatchTask] = []
+    try:
+        with manager as cl:
+            index.started(max(1, sum(w.get("nthreads", 1)
+                                     for w in cl.scheduler_info()["workers"].values())),
+                          len(tasks))
+            if topic is not None:
+                cl.subscribe_topic(topic, index.reported)
+            try:
+                map_tasks(cl, run_video, tasks, retries=retries, on_result=index.finished,
+                          on_lost=lambda i, exc, n: _lost_row(tasks[i], exc, n),
+                          key="motiontrack-batch",
+                          hard_timeout_s=None if timeout_s is None
+                          else timeout_s + max(10.0, timeout_s / 10),
+                          on_timeout=lambda i, n: _hung_row(tasks[i], n))
+            except KeyboardInterrupt:
+                _ask_to_stop(cl, stop_event)
+                stopped = index.interrupted(tasks)
+                raise
+            finally:
+                if topic is not None:
+                    cl.unsubscribe_topic(topic)
+    finally:
+        # a local cluster's workers are gone now, and a partial folder one of them wrote
+        # into after the first removal goes too (a remote worker removes its own)
+        for t in stopped:
+            shutil.rmtree(_partial_folder(Path(t.results), t.video.name), ignore_errors=True)
 
 
 def _finish(out: Path, rows: list[dict[str, Any]]) -> list[dict[str, Any]]:

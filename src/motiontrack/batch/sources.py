@@ -10,7 +10,7 @@ from typing import Iterable, Sequence
 
 from ..errors import ConfigError, printable
 from ..run.folders import source_name
-from ..studies.sweep import read_manifest_entries
+from ..io.manifest import read_manifest_entries
 
 __all__ = ["Video", "VIDEO_SUFFIXES", "expand_sources", "with_files"]
 

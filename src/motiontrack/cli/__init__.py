@@ -17,8 +17,8 @@ import pkgutil
 import sys
 import traceback
 
-from .. import __version__
 from ..errors import MotionTrackError, describe_os_error, printable
+from ..version import __version__
 
 log = logging.getLogger("motiontrack")
 

@@ -104,7 +104,7 @@ def cmd_sweep(args) -> int:
 
 
 def _print_best(rows, keys) -> None:
-    from ..studies.sweep import summarise_runs
+    from ..studies.table import summarise_runs
 
     summary = summarise_runs(rows, keys)
     hdr = ["run"] + list(keys) + ["det_pixel_precision", "det_pixel_recall", "det_object_f1", "HOTA", "MOTA"]

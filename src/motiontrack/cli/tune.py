@@ -47,7 +47,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def _sequences(items, what):
     from ..errors import ConfigError
-    from ..studies.sweep import SequenceSpec, _abs, _default_name, read_manifest
+    from ..io.manifest import SequenceSpec, absolute_path, default_sequence_name, read_manifest
 
     out = []
     for it in items:
@@ -58,8 +58,9 @@ def _sequences(items, what):
         if gt == "":
             raise ConfigError(f"--{'train' if what == 'training' else 'val'} {it!r}: no ground "
                               "truth after '='")
-        out.append(SequenceSpec(name=_default_name(src), source=src if src.startswith("synth:")
-                                else _abs(src), gt=_abs(gt)))
+        source = src if src.startswith("synth:") else absolute_path(src)
+        out.append(SequenceSpec(name=default_sequence_name(src), source=source,
+                                gt=absolute_path(gt)))
     names = [s.name for s in out]
     if len(set(names)) != len(names):
         raise ConfigError(f"{what} sequence names must be unique, got {names}")

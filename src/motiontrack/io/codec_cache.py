@@ -23,6 +23,8 @@ import tempfile
 import zlib
 from pathlib import Path
 
+from ..version import __version__
+
 log = logging.getLogger(__name__)
 
 #: the packages whose builds decide what can be encoded
@@ -51,8 +53,6 @@ def encodable_codec_names() -> list[str]:
 
 def installation_key() -> dict[str, object]:
     """What the probe's answer depends on (see the module's description)."""
-    from .. import __version__
-
     return {"python": sys.version, "prefix": sys.prefix, "motiontrack": __version__,
             "video.py": _file_state(Path(__file__).with_name("video.py")),
             **{name: _package_state(name) for name in _PROBED_PACKAGES}}

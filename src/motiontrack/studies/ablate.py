@@ -12,7 +12,9 @@ from typing import Any, Mapping, Sequence
 from ..config import PipelineConfig, load_config, to_dict
 from ..errors import ConfigError
 from ..evaluate.scoring import DEFAULT_SCORING, ignores_zero_marked
-from .sweep import RunSpec, SequenceSpec, execute, parse_param
+from ..io.manifest import SequenceSpec
+from .params import parse_param
+from .sweep import RunSpec, execute
 
 __all__ = ["ROWS", "COLUMNS", "select_rows", "row_settings", "run_ablation", "format_table"]
 

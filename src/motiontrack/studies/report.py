@@ -30,7 +30,9 @@ from ..config_activity import inactive_in_study
 from ..errors import ConfigError, printable
 from ..io.atomic import atomic_write_text
 from .plots import BEST_METRIC, best_point
-from .sweep import STUDY_FILE, SUMMARY_FILE, TABLE_FILE, read_study_meta, read_table
+from .study_file import read_study_meta
+from .sweep import SUMMARY_FILE, TABLE_FILE
+from .table import read_table
 
 log = logging.getLogger(__name__)
 

@@ -8,7 +8,8 @@ object precision/recall) and the confirmed tracks with the same framewise metric
 CLEAR-MOT / Identity / HOTA (:func:`~motiontrack.evaluate.mot.evaluate_tracking`, zero-marked
 ground truth counted as the study's ``scoring`` names, :mod:`motiontrack.evaluate.scoring`).
 
-Grid syntax (one ``--param`` per parameter, the grid is their Cartesian product)::
+Grid syntax (one ``--param`` per parameter, the grid is their Cartesian product; parsed by
+:func:`~motiontrack.studies.params.parse_param`)::
 
     motion.median.threshold=0.05,0.1,0.2      explicit values (TOML literals or bare strings)
     regions.min_size=0:0.004:0.001            a:b:step, both ends inclusive
@@ -28,10 +29,8 @@ a sweep stopped part-way continues where it stopped (``run_sweep(..., resume=Tru
 
 from __future__ import annotations
 
-import csv
 import functools
 import hashlib
-import io
 import itertools
 import json
 import logging
@@ -39,18 +38,15 @@ import math
 import multiprocessing
 import os
 import platform
-import sys
 import tempfile
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
-from decimal import Decimal, DecimalException, InvalidOperation
 from pathlib import Path
 from typing import Any, Callable, Iterable, Mapping, Sequence
 
 import cv2
 import numpy as np
 
-from .. import __version__
 from ..config import PipelineConfig, apply_overrides, from_dict, save_config, to_dict
 from ..config_activity import check_study_keys
 from ..errors import ConfigError, InputError, printable
@@ -58,33 +54,31 @@ from ..evaluate.framewise import evaluate_framewise
 from ..evaluate.mot import evaluate_tracking
 from ..evaluate.scoring import DEFAULT_SCORING, ignores_zero_marked
 from ..io.annotations import read_annotations
-from ..io.atomic import (OutputLock, atomic_write_bytes, atomic_write_text, check_writable,
-                         remove_leftover_temps, remove_outputs)
+from ..io.atomic import (OutputLock, atomic_write_text, check_writable, remove_leftover_temps,
+                         remove_outputs)
+from ..io.manifest import SequenceSpec, absolute_path, default_sequence_name, read_manifest
 from ..io.mot import read_mot
-from ..io.tomlfile import read_toml
 from ..pipeline import completes_tracks, fill_gap_frames, open_configured_source
 from ..run.executor import dask_client, map_tasks
 from ..run.job import Job
 from ..run.processors import TrackProcessor
 from ..run.writers import IntermediateWriter, RegionsWriter, TracksWriter
 from ..synth import parse_synth_spec
+from ..version import __version__
+from .params import format_value, parse_param
 from .plots import study_figures
-
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
+from .study_file import (STUDY_FILE, read_study_meta, settings_differences, settings_key,
+                         study_meta_problem)
+from .table import summarise_runs, write_table
 
 log = logging.getLogger(__name__)
 
 __all__ = [
-    "parse_param", "format_value", "SequenceSpec", "Study", "RunSpec", "read_manifest",
-    "execute_run", "execute", "run_sweep", "load_study", "write_table", "read_table",
-    "summarise_runs", "read_study_meta", "study_meta_problem", "STUDY_FILE", "TABLE_FILE",
-    "RUN_RECORD_FILE", "MAX_RUNS", "FRAMEWISE_PAIRS",
+    "Study", "RunSpec", "SweepResult", "execute_run", "execute", "run_sweep", "load_study",
+    "study_from_args", "check_ground_truth", "versions", "study_key", "TABLE_FILE",
+    "SUMMARY_FILE", "RUN_RECORD_FILE", "MAX_RUNS", "FRAMEWISE_PAIRS", "TRACKING_KEYS",
 ]
 
-STUDY_FILE = "study.json"
 TABLE_FILE = "results.csv"
 SUMMARY_FILE = "summary.csv"
 STUDY_FORMAT = 1
@@ -111,207 +105,6 @@ TRACKING_KEYS = ("HOTA", "DetA", "AssA", "LocA", "MOTA", "MOTP", "IDF1", "IDP", 
 
 #: intermediate streams a run may save (see motiontrack.intermediate)
 SAVE_STREAMS = ("background", "difference", "motion", "annotated")
-
-
-# ------------------------------------------------------------------------------- grid parsing
-def _parse_literal(text: str) -> Any:
-    """A TOML literal (``3``, ``0.5``, ``true``, ``"a"``) or, failing that, the bare string."""
-    try:
-        return tomllib.loads(f"v = {text}")["v"]
-    except tomllib.TOMLDecodeError:
-        return text
-
-
-def _range_values(a: str, b: str, step: str, item: str) -> tuple[Any, ...]:
-    """Inclusive arithmetic range ``a, a+step, ..., <= b`` computed in decimal (no float drift:
-    ``0:0.3:0.1`` gives exactly 0, 0.1, 0.2, 0.3)."""
-    try:
-        da, db, ds = Decimal(a.strip()), Decimal(b.strip()), Decimal(step.strip())
-    except InvalidOperation:
-        raise ConfigError(f"--param {item!r}: a:b:step needs three numbers") from None
-    if not all(d.is_finite() for d in (da, db, ds)):
-        raise ConfigError(f"--param {item!r}: a, b and step must be finite")
-    if ds <= 0:
-        raise ConfigError(f"--param {item!r}: step must be > 0, got {step.strip()}")
-    if db < da:
-        raise ConfigError(f"--param {item!r}: a:b:step needs a <= b")
-    try:
-        n = int((db - da) / ds) + 1
-    except DecimalException:  # (b - a) / step beyond what decimal represents: far too many
-        raise ConfigError(f"--param {item!r}: far too many values (at most 10000)") from None
-    if n > 10000:
-        raise ConfigError(f"--param {item!r}: {n} values is too many (at most 10000)")
-    is_int = all(d == d.to_integral_value() and "." not in t and "e" not in t.lower()
-                 for d, t in ((da, a), (db, b), (ds, step)))
-    vals = [da + i * ds for i in range(n)]
-    return tuple(int(v) for v in vals) if is_int else tuple(float(v) for v in vals)
-
-
-def parse_param(item: str) -> tuple[str, tuple[Any, ...]]:
-    """Parse one ``--param``: ``stage.name=v1,v2,...`` or ``stage.name=a:b:step``.
-
-    Returns
-    -------
-    key : str
-        Dotted config key, e.g. ``"motion.median.threshold"``.
-    values : tuple
-        The values in the order given (ints, floats, bools or strings).
-
-    Raises
-    ------
-    ConfigError
-        Malformed text, empty or repeated values, a bad range.
-    """
-    if "=" not in item:
-        raise ConfigError(f"--param expects stage.name=v1,v2,... or stage.name=a:b:step, got {item!r}")
-    key, text = item.split("=", 1)
-    key, text = key.strip(), text.strip()
-    if not key or any(not p for p in key.split(".")):
-        raise ConfigError(f"--param expects a dotted config key before '=', got {item!r}")
-    if not text:
-        raise ConfigError(f"--param {item!r} has no values")
-    if text.count(":") == 2 and "," not in text and not text.startswith(("'", '"')):
-        if text.rsplit(":", 1)[1].strip().lower() == "log":
-            raise ConfigError(f"--param {item!r}: a grid needs a step, a:b:step (a:b:log is a "
-                              "search range of motiontrack tune)")
-        values = _range_values(*text.split(":"), item=item)
-    elif ":" in text and "," not in text and not text.startswith(("'", '"')) and text.count(":") == 1:
-        raise ConfigError(f"--param {item!r}: a grid needs a step, a:b:step (a:b without a step "
-                          "is a search range of motiontrack tune)")
-    else:
-        parts = [p.strip() for p in text.split(",")]
-        if any(not p for p in parts):
-            raise ConfigError(f"--param {item!r} has an empty value")
-        values = tuple(_parse_literal(p) for p in parts)
-    if len(set(map(repr, values))) != len(values):
-        raise ConfigError(f"--param {item!r} repeats a value")
-    return key, values
-
-
-def format_value(v: Any) -> str:
-    """A value as a TOML literal for ``--set``-style overrides."""
-    if isinstance(v, bool):
-        return "true" if v else "false"
-    if isinstance(v, (int, float)):
-        return repr(v)
-    return json.dumps(str(v))  # a TOML basic string
-
-
-# ------------------------------------------------------------------------------- sequences
-@dataclass(frozen=True)
-class SequenceSpec:
-    """One sequence of a study.
-
-    Parameters
-    ----------
-    name : str
-        Short unique name (table column ``sequence``).
-    source : str
-        Anything :func:`~motiontrack.io.sources.open_source` accepts (file, folder, ``synth:...``).
-    gt : str or None
-        Ground-truth file (any supported format); ``None`` only for ``synth:`` sources, whose
-        exact ground truth is rendered with the scene.
-    group : str
-        Sequence type (the thesis' table 4.1 groups sequences by type); plots average per study.
-    """
-
-    name: str
-    source: str
-    gt: str | None = None
-    group: str = ""
-
-    def __post_init__(self) -> None:
-        for what, value in (("name", self.name), ("source", self.source), ("group", self.group)):
-            if not isinstance(value, str):
-                raise ConfigError(f"sequence {what} must be a string, got {value!r}")
-        if self.gt is not None and not isinstance(self.gt, str):
-            raise ConfigError(f"sequence {self.name!r}: gt must be a file name, got {self.gt!r}")
-        # the name is a folder of runs/rNNN/: one plain path component
-        if (not self.name or self.name in (".", "..") or any(c in self.name for c in "/\\")
-                or not self.name.isprintable()):
-            raise ConfigError(f"sequence name must be non-empty, not . or .., without slashes or "
-                              f"control characters, got {self.name!r}")
-        if not self.source:
-            raise ConfigError(f"sequence {self.name!r} has no source")
-        if self.gt is None and not self.source.startswith("synth:"):
-            raise ConfigError(f"sequence {self.name!r}: --gt is required for non-synthetic source "
-                              f"{self.source!r}")
-
-    def as_dict(self) -> dict[str, Any]:
-        return {"name": self.name, "source": self.source, "gt": self.gt, "group": self.group}
-
-
-def _default_name(source: str) -> str:
-    if source.startswith("synth:"):
-        return source[len("synth:"):].split("?")[0] or "synth"
-    p = Path(source)
-    return (p.parent.name if p.stem in ("video", "input", "img1") and p.parent.name else p.stem) or "seq"
-
-
-def _abs(path: str | None, base: Path | None = None) -> str | None:
-    if path is None or str(path).startswith("synth:"):
-        return path
-    p = Path(path)
-    if not p.is_absolute() and base is not None:
-        p = base / p
-    return str(p.resolve())
-
-
-def read_manifest(path: str | Path) -> tuple[SequenceSpec, ...]:
-    """Read a sequences manifest (TOML)::
-
-        [[sequence]]
-        name = "pets-s2l1"              # optional (default: derived from the source)
-        source = "pets09-s2l1/video.avi" # relative paths are relative to the manifest
-        gt = "pets09-s2l1/gt_mot15.txt"  # optional for synth: sources
-        group = "outdoor, medium crowd"  # optional: the sequence type (thesis table 4.1)
-    """
-    out = []
-    for i, entry in enumerate(read_manifest_entries(path), 1):
-        try:
-            out.append(SequenceSpec(**entry))
-        except ConfigError as exc:
-            raise InputError(f"{printable(Path(path))}: sequence {i}: {printable(exc)}") from None
-    return tuple(out)
-
-
-def read_manifest_entries(path: str | Path, files: Sequence[str] = ()) -> list[dict[str, Any]]:
-    """The ``[[sequence]]`` tables of a manifest as dicts of ``name``, ``source``, ``gt``,
-    ``group`` and, when given, the keys ``files`` (more file names per entry, such as ``scene``
-    and ``camera`` for ``motiontrack batch``), paths made absolute (relative ones are relative to
-    the manifest). Whether a sequence needs ground truth is the caller's rule."""
-    p = Path(path)
-    data = read_toml(p, "sequences manifest")
-    shown = printable(p)
-    items = data.get("sequence")
-    if not isinstance(items, list) or not items:
-        raise InputError(f"{shown}: expected one or more [[sequence]] tables")
-    out = []
-    valid = ("name", "source", "gt", "group", *files)
-    for i, it in enumerate(items, 1):
-        if not isinstance(it, dict):
-            raise InputError(f"{shown}: sequence {i} is not a table")
-        unknown = sorted(set(it) - set(valid))
-        if unknown:
-            raise InputError(f"{shown}: sequence {i}: unknown key(s) "
-                             f"{printable(', '.join(unknown))}; valid: {', '.join(valid)}")
-        if not isinstance(it.get("source"), str):
-            raise InputError(f"{shown}: sequence {i} needs source = \"...\"")
-        for key in ("name", "gt", "group", *files):
-            if key in it and not isinstance(it[key], str):
-                raise InputError(f"{shown}: sequence {i}: {key} must be a string, got {it[key]!r}")
-        try:
-            src = it["source"] if it["source"].startswith("synth:") else _abs(it["source"], p.parent)
-            entry = {"name": it.get("name") or _default_name(it["source"]), "source": src,
-                     "gt": _abs(it.get("gt"), p.parent), "group": it.get("group", "")}
-            entry.update({k: _abs(it[k], p.parent) for k in files if k in it})
-        except ValueError as exc:  # a NUL in a path
-            raise InputError(f"{shown}: sequence {i}: {printable(exc)}") from None
-        out.append(entry)
-    names = [s["name"] for s in out]
-    if len(set(names)) != len(names):
-        raise InputError(f"{shown}: sequence names must be unique, got {names}")
-    return out
 
 
 # ------------------------------------------------------------------------------- the study
@@ -450,99 +243,10 @@ class Study:
         )
 
 
-def _json_type(v: Any) -> str:
-    """The JSON type of a parsed value, for messages."""
-    if v is None:
-        return "null"
-    for types, name in ((bool, "a boolean"), ((int, float), "a number"), (str, "a string"),
-                        (list, "a list"), (dict, "an object")):
-        if isinstance(v, types):
-            return name
-    return type(v).__name__  # pragma: no cover - json.loads gives only the types above
-
-
-def _is_number(v: Any) -> bool:
-    return isinstance(v, (int, float)) and not isinstance(v, bool)
-
-
-def study_meta_problem(meta: Any) -> str | None:
-    """What is wrong with the JSON shape of a ``study.json`` object, in one phrase, or None.
-
-    Checked: the object, ``sequences`` (objects with string ``name`` and ``source``, string or
-    null ``gt``, string ``group``), ``grid`` (``{"key": string, "values": [number | boolean |
-    string, ...]}``), ``base_config`` and ``evaluation`` objects with a number ``xi`` (and a
-    string ``scoring`` when present), and when
-    present ``save`` (strings), ``versions`` (an object) and ``runs`` (a number). The values
-    themselves are checked by :class:`Study`.
-    """
-    if not isinstance(meta, dict):
-        return f"expected a JSON object, got {_json_type(meta)}"
-    missing = [k for k in ("sequences", "grid", "base_config", "evaluation") if k not in meta]
-    if missing:
-        return "no " + ", ".join(f'"{k}"' for k in missing)
-    seqs = meta["sequences"]
-    if not isinstance(seqs, list) or not seqs:
-        return f'"sequences" must be a non-empty list, got {_json_type(seqs)}'
-    for i, s in enumerate(seqs, 1):
-        if not isinstance(s, dict):
-            return f"sequence {i} must be an object, got {_json_type(s)}"
-        unknown = sorted(set(s) - {"name", "source", "gt", "group"})
-        if unknown:
-            return f"sequence {i}: unknown key(s) {', '.join(map(json.dumps, unknown))}"
-        for key, ok, what in (("name", str, "a string"), ("source", str, "a string"),
-                              ("gt", (str, type(None)), "a string or null"),
-                              ("group", str, "a string")):
-            if (key in s or key in ("name", "source")) and not isinstance(s.get(key), ok):
-                return f'sequence {i}: "{key}" must be {what}, got {_json_type(s.get(key))}'
-    grid = meta["grid"]
-    if not isinstance(grid, list) or not grid:
-        return f'"grid" must be a non-empty list, got {_json_type(grid)}'
-    for i, g in enumerate(grid, 1):
-        if not (isinstance(g, dict) and isinstance(g.get("key"), str)
-                and isinstance(g.get("values"), list)):
-            return f'grid entry {i} must be {{"key": string, "values": list}}'
-        if not g["values"] or not all(isinstance(v, (str, bool)) or _is_number(v) for v in g["values"]):
-            return (f'grid entry {i} ({json.dumps(g["key"])}): "values" must be a non-empty list '
-                    "of numbers, booleans or strings")
-    for key in ("base_config", "evaluation") + tuple(k for k in ("versions",) if k in meta):
-        if not isinstance(meta[key], dict):
-            return f'"{key}" must be an object, got {_json_type(meta[key])}'
-    if not _is_number(meta["evaluation"].get("xi")):
-        return f'"evaluation" needs a number "xi", got {_json_type(meta["evaluation"].get("xi"))}'
-    if not isinstance(meta["evaluation"].get("scoring", ""), str):
-        got = _json_type(meta["evaluation"]["scoring"])
-        return f'"evaluation": "scoring" must be a string, got {got}'
-    save = meta.get("save", [])
-    if not isinstance(save, list) or not all(isinstance(x, str) for x in save):
-        return '"save" must be a list of strings'
-    if "runs" in meta and not _is_number(meta["runs"]):
-        return f'"runs" must be a number, got {_json_type(meta["runs"])}'
-    return None
-
-
 def versions() -> dict[str, str]:
     """Versions that can change the numbers of a study."""
     return {"motiontrack": __version__, "python": platform.python_version(), "numpy": np.__version__,
             "opencv": cv2.__version__, "platform": platform.platform()}
-
-
-def read_study_meta(folder: str | Path) -> dict[str, Any]:
-    """The ``study.json`` object of a study folder, its JSON shape checked
-    (:func:`study_meta_problem`); :class:`InputError` naming the file otherwise."""
-    p = Path(folder) / STUDY_FILE
-    if not p.is_file():
-        raise InputError(f"no {STUDY_FILE} in {printable(folder)}: not a sweep output folder")
-    try:
-        meta = json.loads(p.read_text(encoding="utf-8"))
-    except UnicodeDecodeError as exc:
-        raise InputError(f"malformed {printable(p)}: not UTF-8 text (byte {exc.start})") from None
-    # JSONDecodeError, an integer of too many digits (both ValueError), nesting too deep
-    except (ValueError, RecursionError) as exc:
-        raise InputError(f"malformed {printable(p)}: {printable(exc)}") from None
-    problem = study_meta_problem(meta)
-    if problem:
-        raise InputError(f"malformed {printable(p)}: {problem}")
-    return meta
 
 
 def load_study(folder: str | Path) -> tuple[Study, dict[str, Any]]:
@@ -699,188 +403,10 @@ def execute(specs: Sequence[RunSpec], jobs: int = 1, cluster: str | None = None,
     return results  # type: ignore[return-value]
 
 
-# ------------------------------------------------------------------------------- tables
-def _cell(v: Any) -> str:
-    if isinstance(v, bool):
-        return "true" if v else "false"
-    if isinstance(v, float):
-        return "nan" if math.isnan(v) else repr(v)
-    return str(v)
-
-
-def write_table(rows: Sequence[Mapping[str, Any]], path: str | Path) -> list[str]:
-    """Write rows (all with the same keys, in order) as CSV (atomic), and as Parquet next to it
-    when ``pyarrow`` is installed. Floats are written with ``repr`` (exact round trip).
-
-    Returns the paths written.
-    """
-    path = Path(path)
-    cols = list(rows[0].keys()) if rows else ["run", "sequence"]
-    buf = io.StringIO()
-    w = csv.writer(buf, lineterminator="\n")
-    w.writerow(cols)
-    for r in rows:
-        w.writerow([_cell(r.get(c, "")) for c in cols])
-    atomic_write_text(path, buf.getvalue())
-    written = [str(path)]
-    try:
-        import pyarrow as pa
-        import pyarrow.parquet as pq
-    except ImportError:
-        log.debug("pyarrow not installed: no Parquet table")
-        return written
-    table = pa.table({c: [r.get(c) for r in rows] for c in cols})
-    sink = pa.BufferOutputStream()
-    pq.write_table(table, sink)
-    pq_path = path.with_suffix(".parquet")
-    atomic_write_bytes(pq_path, sink.getvalue().to_pybytes())
-    written.append(str(pq_path))
-    return written
-
-
-def _uncell(text: str) -> Any:
-    if text in ("true", "false"):
-        return text == "true"
-    try:
-        return int(text)
-    except ValueError:
-        pass
-    try:
-        return float(text)
-    except ValueError:
-        return text
-
-
-def read_table(path: str | Path, required: Sequence[str] = ()) -> list[dict[str, Any]]:
-    """Read a table written by :func:`write_table` (numbers parsed back to int/float).
-
-    Raises
-    ------
-    InputError
-        No such file, not UTF-8 text, no header, a repeated column or one of ``required``
-        missing, a row with more or fewer fields than the header, a ``run`` that is not an
-        integer.
-    """
-    p = Path(path)
-    shown = printable(p)
-    if not p.is_file():
-        raise InputError(f"results table not found: {shown}")
-    try:
-        with open(p, newline="", encoding="utf-8") as fh:
-            header, *body = [r for r in csv.reader(fh) if r] or [[]]
-    except UnicodeDecodeError as exc:
-        raise InputError(f"malformed {shown}: not UTF-8 text (byte {exc.start})") from None
-    except csv.Error as exc:  # e.g. a field over the csv module's size limit
-        raise InputError(f"malformed {shown}: {printable(exc)}") from None
-    if not header:
-        raise InputError(f"malformed {shown}: empty, expected a header row")
-    if len(set(header)) != len(header):
-        raise InputError(f"malformed {shown}: repeated column names in the header")
-    missing = [c for c in required if c not in header]
-    if missing:
-        raise InputError(f"malformed {shown}: no {', '.join(missing)} "
-                         f"column{'s' if len(missing) > 1 else ''}")
-    rows = []
-    for n, r in enumerate(body, 2):
-        if len(r) != len(header):
-            raise InputError(f"malformed {shown}: row {n} has {len(r)} fields, the header "
-                             f"{len(header)}")
-        row = {k: (v if k in ("sequence", "group") else _uncell(v)) for k, v in zip(header, r)}
-        if "run" in row and (isinstance(row["run"], bool) or not isinstance(row["run"], int)):
-            raise InputError(f"malformed {shown}: row {n}: run must be an integer, got "
-                             f"{printable(repr(r[header.index('run')][:20]))}")
-        rows.append(row)
-    return rows
-
-
-def summarise_runs(rows: Sequence[Mapping[str, Any]], keys: Sequence[str]) -> list[dict[str, Any]]:
-    """Average every metric over the sequences of each run (nan-aware): one row per run, with
-    ``sequences`` = how many were averaged."""
-    out: list[dict[str, Any]] = []
-    by_run: dict[int, list[Mapping[str, Any]]] = {}
-    for r in rows:
-        by_run.setdefault(int(r["run"]), []).append(r)
-    for run in sorted(by_run):
-        rs = by_run[run]
-        row: dict[str, Any] = {"run": run, "sequences": len(rs)}
-        row.update({k: rs[0][k] for k in keys})
-        for c in rs[0]:
-            if c in ("run", "sequence", "group") or c in keys:
-                continue
-            vals = np.array([float(x[c]) for x in rs], dtype=np.float64)
-            finite = vals[~np.isnan(vals)]
-            row[c] = float(finite.mean()) if len(finite) else float("nan")
-        out.append(row)
-    return out
-
-
 # ------------------------------------------------------------------------------- resuming
-#: the parts of study.json that decide a run's numbers (versions and run counts do not)
-SETTINGS = ("format", "sequences", "grid", "base_config", "evaluation", "save")
-
-
-def _settings(meta: Mapping[str, Any]) -> dict[str, Any]:
-    """The settings of a study as plain JSON values (tuples become lists, as in study.json)."""
-    return json.loads(json.dumps({k: meta.get(k) for k in SETTINGS}))
-
-
-def _canonical(value: Any) -> str:
-    return json.dumps(value, sort_keys=True, separators=(",", ":"))
-
-
 def study_key(study: Study) -> str:
     """SHA-256 of the study's settings: a run record made under other settings is not reused."""
-    return hashlib.sha256(_canonical(_settings(study.as_dict())).encode("utf-8")).hexdigest()
-
-
-def _flat_items(value: Any, prefix: str = "") -> dict[str, Any]:
-    """The leaves of nested JSON objects by dotted key (``""`` for a value that is no object)."""
-    if isinstance(value, dict) and value:
-        out: dict[str, Any] = {}
-        for k, v in value.items():
-            out.update(_flat_items(v, f"{prefix}{k}."))
-        return out
-    return {prefix[:-1]: value}
-
-
-def _value_diffs(label: str, old: Any, new: Any) -> list[str]:
-    """``label key: OLD there, NEW now`` for every leaf that differs (values as JSON, so that
-    control characters stay escaped)."""
-    a, b = _flat_items(old), _flat_items(new)
-    out = []
-    for k in list(a) + [k for k in b if k not in a]:
-        there = _canonical(a[k]) if k in a else "(absent)"
-        now = _canonical(b[k]) if k in b else "(absent)"
-        if there != now:
-            out.append(f"{label}{' ' + printable(k) if k else ''}: {there} there, {now} now")
-    return out
-
-
-def settings_differences(old: Mapping[str, Any], new: Mapping[str, Any]) -> list[str]:
-    """What differs between the settings of two ``study.json`` objects, one phrase each
-    (empty when a study may be resumed)."""
-    a, b = _settings(old), _settings(new)
-    out: list[str] = []
-    if _canonical(a["format"]) != _canonical(b["format"]):
-        out += _value_diffs("study format", a["format"], b["format"])
-    if _canonical(a["sequences"]) != _canonical(b["sequences"]):
-        if len(a["sequences"]) != len(b["sequences"]):
-            out.append(f"sequences: {len(a['sequences'])} there, {len(b['sequences'])} now")
-        else:
-            for i, (sa, sb) in enumerate(zip(a["sequences"], b["sequences"]), 1):
-                out += _value_diffs(f"sequence {i}", sa, sb)
-    ga = [(g["key"], g["values"]) for g in a["grid"]]
-    gb = [(g["key"], g["values"]) for g in b["grid"]]
-    if [k for k, _ in ga] != [k for k, _ in gb]:
-        out.append(f"swept parameters: {printable(', '.join(k for k, _ in ga))} there, "
-                   f"{printable(', '.join(k for k, _ in gb))} now")
-    else:
-        out += [f"values of {printable(k)}: {_canonical(va)} there, {_canonical(vb)} now"
-                for (k, va), (_, vb) in zip(ga, gb) if _canonical(va) != _canonical(vb)]
-    out += _value_diffs("base config", a["base_config"], b["base_config"])
-    out += _value_diffs("evaluation", a["evaluation"], b["evaluation"])
-    out += _value_diffs("--save", a["save"] or [], b["save"] or [])
-    return out
+    return settings_key(study.as_dict())
 
 
 def _check_resumable(out: Path, study: Study) -> bool:
@@ -973,7 +499,8 @@ def run_sweep(study: Study, out_dir: str | Path, *, jobs: int = 1, cluster: str 
     old study in it (:data:`STUDY_OUTPUTS`, ``runs/``, ``figures/``) is removed before anything
     is written, so that old and new runs never mix.
 
-    With ``resume``, a folder that holds this study (same settings, :data:`SETTINGS`) is
+    With ``resume``, a folder that holds this study (same settings,
+    :data:`~motiontrack.studies.study_file.SETTINGS`) is
     continued: a run whose ``row.json`` was written under these settings and whose files match
     its digests is not run again, and the table is the one an uninterrupted sweep writes. A
     folder with other settings is refused (:class:`InputError` naming them); one without
@@ -985,6 +512,21 @@ def run_sweep(study: Study, out_dir: str | Path, *, jobs: int = 1, cluster: str 
         raise ConfigError("--resume continues a study and --force starts it over: give one of them")
     check_ground_truth(study.sequences)  # a replayed study may name files this machine lacks
     out = Path(out_dir)
+    resuming = _prepare_folder(study, out, force=force, resume=resume)
+    specs = study.specs(out)
+    log.info("sweep: %d runs x %d sequences = %d jobs", len(study.points()), len(study.sequences),
+             len(specs))
+    key = study_key(study)
+    finished = _resumed_runs(out, specs, key, progress) if resuming else {}
+    finished = _run_remaining(specs, finished, out, key, jobs=jobs, cluster=cluster,
+                              progress=progress)
+    rows = [finished[i]["row"] for i in range(len(specs))]
+    return SweepResult(rows=rows, out_dir=out, outputs=_write_results(rows, study, out, figures))
+
+
+def _prepare_folder(study: Study, out: Path, *, force: bool, resume: bool) -> bool:
+    """Make ``out`` ready for ``study`` (refusals, ``--force`` removals, leftovers of a killed
+    sweep, ``study.json`` and ``config.toml``) and say whether the study is resumed."""
     resuming = resume and _check_resumable(out, study)
     if not resuming:
         check_writable([out / STUDY_FILE, out / TABLE_FILE], force)
@@ -992,24 +534,35 @@ def run_sweep(study: Study, out_dir: str | Path, *, jobs: int = 1, cluster: str 
         remove_outputs([out / n for n in STUDY_OUTPUTS], folders=[out / "runs", out / "figures"])
     remove_leftover_temps([out / n for n in STUDY_OUTPUTS])  # of a killed sweep
     out.mkdir(parents=True, exist_ok=True)
-    meta = study.as_dict()
-    meta["versions"] = versions()
-    meta["runs"] = len(study.points())
     if not resuming:  # a resumed study keeps the versions it was started with
+        meta = study.as_dict()
+        meta["versions"] = versions()
+        meta["runs"] = len(study.points())
         atomic_write_text(out / STUDY_FILE, json.dumps(meta, indent=2) + "\n")
     save_config(from_dict(PipelineConfig, dict(study.base_config)), out / "config.toml")
-    specs = study.specs(out)
-    log.info("sweep: %d runs x %d sequences = %d jobs", len(study.points()), len(study.sequences),
-             len(specs))
-    key = study_key(study)
-    finished: dict[int, dict[str, Any]] = {}
-    if resuming:
-        finished = {i: res for i, s in enumerate(specs) if (res := _finished_run(out, s, key))}
-        log.info("resuming: %d of %d runs were done, %d to run", len(finished), len(specs),
-                 len(specs) - len(finished))
-        if progress is not None and finished:
-            progress(len(finished))
-    todo = [i for i in range(len(specs)) if i not in finished]
+    return resuming
+
+
+def _resumed_runs(out: Path, specs: Sequence[RunSpec], key: str,
+                  progress: Callable[[int], None] | None) -> dict[int, dict[str, Any]]:
+    """The results of the runs of ``specs`` finished in ``out`` under the study ``key``, by
+    index (counted as progress at once)."""
+    finished = {i: res for i, s in enumerate(specs) if (res := _finished_run(out, s, key))}
+    log.info("resuming: %d of %d runs were done, %d to run", len(finished), len(specs),
+             len(specs) - len(finished))
+    if progress is not None and finished:
+        progress(len(finished))
+    return finished
+
+
+def _run_remaining(specs: Sequence[RunSpec], finished: Mapping[int, dict[str, Any]], out: Path,
+                   key: str, *, jobs: int, cluster: str | None,
+                   progress: Callable[[int], None] | None) -> dict[int, dict[str, Any]]:
+    """Run the specs not in ``finished`` and return the results of all specs by index, with
+    ``summary.json`` written. Interrupted, the table of the finished runs and ``summary.json``
+    are written before the interruption propagates."""
+    done = dict(finished)
+    todo = [i for i in range(len(specs)) if i not in done]
 
     def save_run(j: int, res: dict[str, Any]) -> None:
         # each run's files are written as soon as it finishes: an interruption keeps them; the
@@ -1018,26 +571,38 @@ def run_sweep(study: Study, out_dir: str | Path, *, jobs: int = 1, cluster: str 
         for rel, text in res["files"].items():
             atomic_write_text(out / rel, text)
         atomic_write_text(out / specs[i].run_dir() / RUN_RECORD_FILE, _run_record(res, key))
-        finished[i] = res
-
-    def status(interrupted: bool) -> None:
-        atomic_write_text(out / "summary.json", json.dumps(
-            {"interrupted": interrupted, "runs_done": len(finished), "runs": len(specs)}, indent=2) + "\n")
+        done[i] = res
 
     try:
         execute([specs[i] for i in todo], jobs=jobs, cluster=cluster, progress=progress,
                 on_result=save_run)
     except KeyboardInterrupt:
-        rows = [finished[i]["row"] for i in sorted(finished)]
-        if rows:
-            write_table(rows, out / TABLE_FILE)
-        status(interrupted=True)
-        log.warning("sweep interrupted after %d of %d runs%s (continue with --resume)",
-                    len(finished), len(specs),
-                    f"; their table is in {printable(out / TABLE_FILE)}" if rows else "")
+        _write_interrupted(out, done, len(specs))
         raise
-    status(interrupted=False)
-    rows = [finished[i]["row"] for i in range(len(specs))]
+    _write_status(out, interrupted=False, runs_done=len(done), runs=len(specs))
+    return done
+
+
+def _write_status(out: Path, *, interrupted: bool, runs_done: int, runs: int) -> None:
+    """``summary.json``: whether the sweep was interrupted and how many runs it finished."""
+    atomic_write_text(out / "summary.json", json.dumps(
+        {"interrupted": interrupted, "runs_done": runs_done, "runs": runs}, indent=2) + "\n")
+
+
+def _write_interrupted(out: Path, done: Mapping[int, dict[str, Any]], runs: int) -> None:
+    """The table of the runs finished before an interruption, and ``summary.json`` saying so."""
+    rows = [done[i]["row"] for i in sorted(done)]
+    if rows:
+        write_table(rows, out / TABLE_FILE)
+    _write_status(out, interrupted=True, runs_done=len(done), runs=runs)
+    log.warning("sweep interrupted after %d of %d runs%s (continue with --resume)",
+                len(done), runs, f"; their table is in {printable(out / TABLE_FILE)}" if rows else "")
+
+
+def _write_results(rows: list[dict[str, Any]], study: Study, out: Path,
+                   figures: bool) -> dict[str, list[str]]:
+    """The table, the per-run summary and, with ``figures`` (and matplotlib), the figures of a
+    finished sweep; the paths written by kind."""
     outputs = {"table": write_table(rows, out / TABLE_FILE),
                "summary": write_table(summarise_runs(rows, study.keys), out / SUMMARY_FILE)[:1]}
     if figures:
@@ -1047,7 +612,7 @@ def run_sweep(study: Study, out_dir: str | Path, *, jobs: int = 1, cluster: str 
             log.warning("matplotlib is not installed: no figures (pip install 'motiontrack[plot]')")
         else:
             outputs["figures"] = study_figures(rows, study, out / "figures")
-    return SweepResult(rows=rows, out_dir=out, outputs=outputs)
+    return outputs
 
 
 def check_ground_truth(sequences: Iterable[SequenceSpec]) -> None:
@@ -1072,8 +637,8 @@ def study_from_args(sources: Sequence[str], gt: Sequence[str] | None, params: It
             raise ConfigError(f"give one --gt per SOURCE ({len(sources)} sources, {len(gts)} --gt)")
         for i, s in enumerate(sources):
             g = gts[i] if gts else None
-            src = s if s.startswith("synth:") else _abs(s)
-            seqs.append(SequenceSpec(name=_default_name(s), source=src, gt=_abs(g)))
+            src = s if s.startswith("synth:") else absolute_path(s)
+            seqs.append(SequenceSpec(name=default_sequence_name(s), source=src, gt=absolute_path(g)))
     if not seqs:
         raise ConfigError("give a SOURCE or --sequences manifest.toml")
     names = [s.name for s in seqs]

@@ -32,8 +32,10 @@ from ..config_activity import check_study_keys
 from ..errors import ConfigError
 from ..evaluate.scoring import DEFAULT_SCORING, ignores_zero_marked
 from ..io.atomic import atomic_write_text
-from .sweep import (RunSpec, SequenceSpec, _parse_literal, _range_values, check_ground_truth,
-                    execute, format_value, write_table)
+from ..io.manifest import SequenceSpec
+from .params import format_value, parse_literal, range_values
+from .sweep import RunSpec, check_ground_truth, execute
+from .table import write_table
 
 log = logging.getLogger(__name__)
 
@@ -119,12 +121,12 @@ def parse_space(item: str) -> SearchParam:
             raise ConfigError(f"--param {item!r}: lo and hi must be numbers") from None
         if len(parts) == 3 and not use_log:
             # the values of the sweep grid lo:hi:step (hi is the last of them, as in the grid)
-            values = _range_values(*parts, item=item)
+            values = range_values(*parts, item=item)
             kind = "int" if isinstance(values[0], int) else "float"
             return SearchParam(key, kind, lo, float(values[-1]), step=float(parts[2]))
         is_int = all(p.lstrip("+-").isdigit() for p in parts[:2])
         return SearchParam(key, "int" if is_int else "float", lo, hi, log=use_log)
-    choices = tuple(_parse_literal(p.strip()) for p in text.split(",") if p.strip())
+    choices = tuple(parse_literal(p.strip()) for p in text.split(",") if p.strip())
     if not all(isinstance(c, (bool, int, float, str)) for c in choices):
         raise ConfigError(f"--param {item!r}: choices must be numbers, booleans or strings")
     if len(set(map(repr, choices))) != len(choices):
@@ -176,6 +178,37 @@ def _score(rows: Sequence[dict[str, Any]], metric: str) -> float:
     return sum(vals) / len(vals) if vals else float("nan")
 
 
+def _checked_search(train: Sequence[SequenceSpec], validation: Sequence[SequenceSpec],
+                    space: Sequence[SearchParam], base_config: Any, *, direction: str,
+                    n_trials: int, xi: float, jobs: int, scoring: str) -> dict[str, Any]:
+    """The base config of a search as a dict, once every argument of :func:`tune` is checked
+    (:class:`ConfigError` for the first that is wrong): here rather than in the first trial,
+    whose failure Optuna would log as its own."""
+    if not train:
+        raise ConfigError("tune needs at least one training sequence")
+    if not space:
+        raise ConfigError("tune needs at least one --param")
+    if direction not in ("maximize", "minimize"):
+        raise ConfigError(f"direction must be maximize or minimize, got {direction!r}")
+    if n_trials < 1:
+        raise ConfigError(f"--trials must be >= 1, got {n_trials}")
+    if jobs < 1:
+        raise ConfigError(f"-j must be >= 1, got {jobs}")
+    if not 0.0 <= xi <= 1.0:
+        raise ConfigError(f"--xi must be in [0, 1], got {xi}")
+    ignores_zero_marked(scoring)
+    keys = [p.key for p in space]
+    if len(set(keys)) != len(keys):
+        raise ConfigError(f"--param keys must be distinct, got {keys}")
+    base = to_dict(base_config)
+    for key in keys:
+        _check_key(base, key)
+    # a key no point of the space switches on: every trial would score the same
+    check_study_keys(base, {p.key: p.domain for p in space}, "search")
+    check_ground_truth([*train, *validation])
+    return base
+
+
 def tune(train: Sequence[SequenceSpec], validation: Sequence[SequenceSpec], space: Sequence[SearchParam],
          base_config: Any, *, metric: str = "det_object_f1", direction: str = "maximize",
          n_trials: int = 20, seed: int = 0, xi: float = 0.75, jobs: int = 1,
@@ -198,29 +231,8 @@ def tune(train: Sequence[SequenceSpec], validation: Sequence[SequenceSpec], spac
         (:data:`~motiontrack.evaluate.scoring.SCORING`).
     """
     optuna = require_optuna()
-    if not train:
-        raise ConfigError("tune needs at least one training sequence")
-    if not space:
-        raise ConfigError("tune needs at least one --param")
-    if direction not in ("maximize", "minimize"):
-        raise ConfigError(f"direction must be maximize or minimize, got {direction!r}")
-    if n_trials < 1:
-        raise ConfigError(f"--trials must be >= 1, got {n_trials}")
-    # checked here rather than in the first trial, whose failure Optuna would log as its own
-    if jobs < 1:
-        raise ConfigError(f"-j must be >= 1, got {jobs}")
-    if not 0.0 <= xi <= 1.0:
-        raise ConfigError(f"--xi must be in [0, 1], got {xi}")
-    ignores_zero_marked(scoring)
-    keys = [p.key for p in space]
-    if len(set(keys)) != len(keys):
-        raise ConfigError(f"--param keys must be distinct, got {keys}")
-    base = to_dict(base_config)
-    for key in keys:
-        _check_key(base, key)
-    # a key no point of the space switches on: every trial would score the same
-    check_study_keys(base, {p.key: p.domain for p in space}, "search")
-    check_ground_truth([*train, *validation])
+    base = _checked_search(train, validation, space, base_config, direction=direction,
+                           n_trials=n_trials, xi=xi, jobs=jobs, scoring=scoring)
 
     def specs(params: dict[str, Any], seqs: Sequence[SequenceSpec], run: int) -> list[RunSpec]:
         return [RunSpec(run=run, params=tuple(params.items()), sequence=s, base_config=base, xi=xi,
