@@ -20,7 +20,7 @@ from motiontrack.io.mot import read_mot  # noqa: E402
 from motiontrack.run.executor import dask_client  # noqa: E402
 from motiontrack.run.jobs import track_job  # noqa: E402
 
-from conftest import communicate_or_dump  # noqa: E402
+from helpers import communicate_or_dump  # noqa: E402
 
 SCENES = ["synth:walker?n_frames=30", "synth:crossing?n_frames=30", "synth:walker?n_frames=25&seed=3"]
 

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import pytest
 
-from conftest import free_port
+from helpers import free_port
 from motiontrack.cli import main
 from motiontrack.errors import ConfigError
 from motiontrack.io.mot import write_mot

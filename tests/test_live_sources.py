@@ -19,7 +19,7 @@ import cv2
 import numpy as np
 import pytest
 
-from mjpeg_server import MjpegServer, moving_box, serve_folder
+from helpers.mjpeg_server import MjpegServer, moving_box, serve_folder
 from motiontrack.cli import main
 from motiontrack.config import load_config
 from motiontrack.errors import ConfigError, SourceError

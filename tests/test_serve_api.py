@@ -28,7 +28,7 @@ from motiontrack.io.events import read_events  # noqa: E402
 from motiontrack.io.mot import read_mot  # noqa: E402
 from motiontrack.io.tomlfile import read_toml  # noqa: E402
 from motiontrack.serve.cameras import parse_cameras  # noqa: E402
-from serve_process import ServeProcess, synth_cameras  # noqa: E402
+from helpers.serve_process import ServeProcess, synth_cameras  # noqa: E402
 
 CAMERAS = ("walker", "crossing")
 

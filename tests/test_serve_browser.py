@@ -9,7 +9,7 @@ token on or fail with 401.
 Without ``chromium``/``chromedriver`` (Debian packages ``chromium`` and ``chromium-driver``;
 ``.ci/run`` installs them) or Selenium the tests skip, except under
 ``MOTIONTRACK_REQUIRE_DATA=1``, where they fail — as the tests that need real data do
-(tests/conftest.py).
+(tests/helpers/data.py).
 
 Screenshots a person can look at are written under each test's temporary folder
 (``pytest --basetemp DIR`` keeps them in a known place).
@@ -27,7 +27,7 @@ import pytest
 
 from motiontrack.io.tomlfile import parse_toml
 from motiontrack.types import EVENT_TYPES
-from serve_process import ServeProcess, synth_cameras
+from helpers.serve_process import ServeProcess, synth_cameras
 
 pytestmark = pytest.mark.slow
 
