@@ -21,3 +21,25 @@ def scene_runs(tmp_path_factory):
     from helpers.runs import SceneRuns
 
     return SceneRuns(tmp_path_factory.mktemp("scene-runs"))
+
+
+@pytest.fixture(scope="session")
+def dask_session_client():
+    """One local Dask cluster of 2 worker processes for the whole session, for the tests of the
+    batch and sweep logic (starting a cluster takes seconds). The tests that kill or interrupt
+    workers start their own."""
+    pytest.importorskip("distributed", reason="dask[distributed] not installed")
+    from motiontrack.run.executor import dask_client
+
+    with dask_client(jobs=2) as client:
+        yield client
+
+
+@pytest.fixture
+def shared_dask(dask_session_client):
+    """The session's Dask client, lent to every local cluster a command opens during the test
+    (``motiontrack batch -j N`` runs on it instead of starting one)."""
+    from motiontrack.run.executor import reusing_client
+
+    with reusing_client(dask_session_client) as client:
+        yield client

@@ -35,9 +35,8 @@ def _index(results: Path) -> dict[str, dict[str, str]]:
 
 
 @pytest.fixture(scope="module")
-def client():
-    with dask_client(jobs=2) as cl:
-        yield cl
+def client(dask_session_client):
+    return dask_session_client
 
 
 @pytest.fixture(scope="module")
@@ -127,7 +126,7 @@ def test_missing_and_corrupt_files_are_failed_rows_and_the_rest_done(first_batch
 
 
 @pytest.mark.slow
-def test_combined_metrics_are_the_videos_combined_as_trackeval_does(tmp_path, client, capsys):
+def test_combined_metrics_are_the_videos_combined_as_trackeval_does(tmp_path, shared_dask, capsys):
     from motiontrack.evaluate import mot
     from motiontrack.io.sources import open_source
 
@@ -204,7 +203,7 @@ def test_resume_with_another_config_redoes_everything(tmp_path, client):
 
 
 @pytest.mark.slow
-def test_python_api_and_cli_write_the_index(tmp_path, client, capsys):
+def test_python_api_and_cli_write_the_index(tmp_path, client, shared_dask, capsys):
     rows = motiontrack.batch([SCENES[0]], _cfg(), client, out=tmp_path / "api")
     assert [r["status"] for r in rows] == ["done"]
     code = main(["batch", SCENES[0], "-o", str(tmp_path / "cli"), "-j", "1",
@@ -282,19 +281,19 @@ def _sleep_or_return(item, attempt):
 
 
 @pytest.mark.slow
-def test_a_task_that_never_returns_is_cancelled_and_its_worker_restarted():
+def test_a_task_that_never_returns_is_cancelled_and_its_worker_restarted(client):
     from motiontrack.run.executor import map_tasks
 
-    with dask_client(jobs=2) as cl:
-        done = []
-        res = map_tasks(cl, _sleep_or_return, ["hang", "quick"], hard_timeout_s=2.0,
-                        on_timeout=lambda i, n: f"timeout {i} after {n}",
-                        on_result=lambda i, r, n: done.append(i))
-        assert res == ["timeout 0 after 1", "quick"]
-        assert sorted(done) == [0, 1]
-        # both workers are back: two tasks run at the same time again
-        assert map_tasks(cl, _sleep_or_return, ["a", "b"]) == ["a", "b"]
-        assert len(cl.scheduler_info()["workers"]) == 2
+    cl = client   # the session's cluster: the restarted worker rejoins it
+    done = []
+    res = map_tasks(cl, _sleep_or_return, ["hang", "quick"], hard_timeout_s=2.0,
+                    on_timeout=lambda i, n: f"timeout {i} after {n}",
+                    on_result=lambda i, r, n: done.append(i))
+    assert res == ["timeout 0 after 1", "quick"]
+    assert sorted(done) == [0, 1]
+    # both workers are back: two tasks run at the same time again
+    assert map_tasks(cl, _sleep_or_return, ["a", "b"]) == ["a", "b"]
+    assert len(cl.scheduler_info()["workers"]) == 2
 
 
 # ------------------------------------------------------------- scene, camera and ground truth
@@ -347,7 +346,7 @@ def test_batch_files_apply_to_videos_without_their_own_and_gt_from_matches_name_
 
 @pytest.mark.slow
 def test_batch_scene_and_gt_from_give_each_video_the_events_and_metrics_of_track_alone(
-        tmp_path, client):
+        tmp_path, shared_dask):
     from motiontrack.io.events import read_events
     from motiontrack.io.mot import read_mot as read_gt
     video, gt = _synth_video(tmp_path)
