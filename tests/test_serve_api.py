@@ -397,7 +397,7 @@ def test_live_killed_camera_process_restarts_and_pictures_resume(server):
 
 @pytest.mark.slow
 def test_sigterm_stops_cameras_and_commits_their_outputs(tmp_path):
-    with _serve(tmp_path, "--rotate-s", "4") as srv:
+    with _serve(tmp_path, "--rotate-s", "2") as srv:
         srv.wait_running(frames=5, timeout=60)
         srv.wait("a rotated segment", lambda: len(list((srv.out / "walker").iterdir())) >= 2, 20)
         t0 = time.monotonic()
