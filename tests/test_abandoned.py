@@ -226,12 +226,10 @@ def test_no_abandoned_event_on_the_pets_clip(data, caplog):
 
 
 @pytest.mark.slow
-def test_track_scene_writes_the_abandoned_event_that_evaluate_events_matches(tmp_path, capsys):
-    gt = tmp_path / "gt"
-    assert main(["synth-events", "synth:leftbag?seed=3", "-o", str(gt)]) == 0
-    run = tmp_path / "run"
-    assert main(["track", "synth:leftbag?seed=3", "--scene", str(gt / "scene.toml"),
-                 "--no-video", "-o", str(run)]) == 0
+def test_track_scene_writes_the_abandoned_event_that_evaluate_events_matches(scene_runs, capsys):
+    # synth-events, then track --scene with the scene file it wrote (helpers.runs)
+    r = scene_runs("leftbag", 3)
+    gt, run = r.gt_dir, r.run_dir
     (e,) = [e for e in read_events(run / "events.jsonl").events if e.type == "abandoned"]
     assert e.owner == 1 and e.duration_s > 5
     capsys.readouterr()
