@@ -20,8 +20,8 @@ tests/test_abandoned.py); this script runs the same scenarios over many seeds. T
     ``walker``, ``crossing`` and ``crowd`` seeds 0-2 give no abandoned event.
 
 Each sweep prints one row per seed that misses and a summary; the exit status is 1 when a check
-of ``events`` or ``abandoned`` fails at any seed. A run takes 1-3 s; the defaults run about
-200 of them.
+of ``events`` or ``abandoned`` fails at any seed. A run takes 1-3 s; the defaults make
+about 150 of them.
 
 Run: .venv/bin/python benchmarks/seed_sweeps.py [identity] [events] [abandoned]
          [--seeds 0-39] [--event-seeds 0-9]
