@@ -22,7 +22,7 @@ from motiontrack.io.mot import read_mot  # noqa: E402
 from motiontrack.run.executor import dask_client  # noqa: E402
 from motiontrack.run.jobs import track_job  # noqa: E402
 
-from conftest import communicate_or_dump  # noqa: E402
+from helpers import communicate_or_dump  # noqa: E402
 
 SCENES = ["synth:walker?n_frames=30", "synth:crossing?n_frames=30", "synth:walker?n_frames=25&seed=3"]
 
@@ -37,9 +37,8 @@ def _index(results: Path) -> dict[str, dict[str, str]]:
 
 
 @pytest.fixture(scope="module")
-def client():
-    with dask_client(jobs=2) as cl:
-        yield cl
+def client(dask_session_client):
+    return dask_session_client
 
 
 @pytest.fixture(scope="module")
@@ -129,7 +128,7 @@ def test_missing_and_corrupt_files_are_failed_rows_and_the_rest_done(first_batch
 
 
 @pytest.mark.slow
-def test_combined_metrics_are_the_videos_combined_as_trackeval_does(tmp_path, client, capsys):
+def test_combined_metrics_are_the_videos_combined_as_trackeval_does(tmp_path, shared_dask, capsys):
     from motiontrack.evaluate import mot
     from motiontrack.io.sources import open_source
 
@@ -215,7 +214,7 @@ def test_the_batch_subpackage_is_an_attribute_of_the_package_loaded_on_first_use
 
 
 @pytest.mark.slow
-def test_python_api_and_cli_write_the_index(tmp_path, client, capsys):
+def test_python_api_and_cli_write_the_index(tmp_path, client, shared_dask, capsys):
     # one SOURCE and the config as a TOML file, as the command takes them
     save_config(_cfg(), tmp_path / "cfg.toml")
     rows = motiontrack.batch.run_batch(SCENES[0], tmp_path / "api", str(tmp_path / "cfg.toml"),
@@ -297,19 +296,19 @@ def _sleep_or_return(item, attempt):
 
 
 @pytest.mark.slow
-def test_a_task_that_never_returns_is_cancelled_and_its_worker_restarted():
+def test_a_task_that_never_returns_is_cancelled_and_its_worker_restarted(client):
     from motiontrack.run.executor import map_tasks
 
-    with dask_client(jobs=2) as cl:
-        done = []
-        res = map_tasks(cl, _sleep_or_return, ["hang", "quick"], hard_timeout_s=2.0,
-                        on_timeout=lambda i, n: f"timeout {i} after {n}",
-                        on_result=lambda i, r, n: done.append(i))
-        assert res == ["timeout 0 after 1", "quick"]
-        assert sorted(done) == [0, 1]
-        # both workers are back: two tasks run at the same time again
-        assert map_tasks(cl, _sleep_or_return, ["a", "b"]) == ["a", "b"]
-        assert len(cl.scheduler_info()["workers"]) == 2
+    cl = client   # the session's cluster: the restarted worker rejoins it
+    done = []
+    res = map_tasks(cl, _sleep_or_return, ["hang", "quick"], hard_timeout_s=2.0,
+                    on_timeout=lambda i, n: f"timeout {i} after {n}",
+                    on_result=lambda i, r, n: done.append(i))
+    assert res == ["timeout 0 after 1", "quick"]
+    assert sorted(done) == [0, 1]
+    # both workers are back: two tasks run at the same time again
+    assert map_tasks(cl, _sleep_or_return, ["a", "b"]) == ["a", "b"]
+    assert len(cl.scheduler_info()["workers"]) == 2
 
 
 # ------------------------------------------------------------- scene, camera and ground truth
@@ -362,7 +361,7 @@ def test_batch_files_apply_to_videos_without_their_own_and_gt_from_matches_name_
 
 @pytest.mark.slow
 def test_batch_scene_and_gt_from_give_each_video_the_events_and_metrics_of_track_alone(
-        tmp_path, client):
+        tmp_path, shared_dask):
     from motiontrack.io.events import read_events
     from motiontrack.io.mot import read_mot as read_gt
     video, gt = _synth_video(tmp_path)

@@ -12,7 +12,7 @@ import pytest
 
 pytest.importorskip("distributed")
 
-from conftest import communicate_or_dump, free_port  # noqa: E402
+from helpers import communicate_or_dump, free_port  # noqa: E402
 from motiontrack.cli import main  # noqa: E402
 from motiontrack.config import PipelineConfig, apply_overrides  # noqa: E402
 from motiontrack.run.jobs import track_job  # noqa: E402

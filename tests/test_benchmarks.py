@@ -10,7 +10,7 @@ import sys
 
 import pytest
 
-from conftest import REPO, data_root
+from helpers import REPO, data_root
 
 
 @pytest.mark.slow

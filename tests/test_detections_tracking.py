@@ -12,7 +12,7 @@ from motiontrack.io.mot import read_mot
 from motiontrack.pipeline import Pipeline, run
 from motiontrack.types import Annotations
 
-from conftest import require, tracks_of
+from helpers import require, tracks_of
 
 FRAMES = 300
 

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from conftest import ann, require
+from helpers import ann, require
 from motiontrack.cli import main
 from motiontrack.errors import InputError
 from motiontrack.evaluate import mot

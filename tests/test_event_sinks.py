@@ -20,11 +20,11 @@ from pathlib import Path
 
 import pytest
 
-from conftest import free_port
+from helpers import free_port
 from motiontrack.cli import main
 from motiontrack.errors import ConfigError
 from motiontrack.io.mot import write_mot
-from motiontrack.io.sinks import (FLUSH_S, MqttDelivery, MqttTarget, WebhookDelivery,
+from motiontrack.io.sinks import (BACKOFF_S, FLUSH_S, MqttDelivery, MqttTarget, WebhookDelivery,
                                   WebhookTarget, encode, parse_mqtt, parse_webhook)
 from motiontrack.synth import make_scene
 
@@ -269,6 +269,7 @@ def test_the_sink_options_default_to_the_sinks_own_settings():
     for command in (["track", "x.mp4"], ["analyze", "t.txt", "--scene", "s.toml", "-o", "o"]):
         args = build_parser().parse_args([*command, "--webhook", "http://h/"])
         assert sink_settings(args) == SinkSettings()
+    assert SinkSettings().flush_s == FLUSH_S   # a run waits FLUSH_S for its sinks by default
 
 
 def test_sink_settings_reach_every_delivery():
@@ -333,16 +334,19 @@ def test_analyze_default_camera_name_is_the_tracks_folder(tmp_path, walker):
     assert {b["camera"] for b in srv.bodies} == {"lobby"}
 
 
-def test_webhook_retries_a_server_error_then_delivers_in_order(tmp_path, walker):
-    out = tmp_path / "out"
+def test_webhook_retries_a_server_error_then_delivers_in_order():
+    waits: list[float] = []   # the back-off, driven without waiting it out
     with http_receiver(statuses=[500, 503]) as (srv, url):
-        assert _analyze(walker, out, "--webhook", url) == 0
-    events = _events_of(out)
-    # the first event was answered 500, then 503, then 200: two retries, nothing lost
+        d = WebhookDelivery(parse_webhook(url), sleep=waits.append)
+        d.start()
+        for k in range(3):
+            assert d.offer(encode({"n": k}))
+        stats = d.close(time.monotonic() + 30)
+    # the first event was answered 500, then 503, then 200: two retries, nothing lost, in order
     assert [s for _, _, s in srv.requests] == [500, 503, 200, 200, 200]
-    assert _without_camera(srv.bodies, "lobby") == events
-    sink = json.loads((out / "summary.json").read_text())["sinks"][0]
-    assert (sink["delivered"], sink["retries"], sink["dropped"], sink["failed"]) == (3, 2, 0, 0)
+    assert srv.bodies == [{"n": 0}, {"n": 1}, {"n": 2}]
+    assert waits == [BACKOFF_S, 2 * BACKOFF_S]   # exponential back-off before each retry
+    assert (stats["delivered"], stats["retries"], stats["dropped"], stats["failed"]) == (3, 2, 0, 0)
 
 
 def test_webhook_client_error_fails_the_event_without_retrying(tmp_path, walker):
@@ -356,13 +360,14 @@ def test_webhook_client_error_fails_the_event_without_retrying(tmp_path, walker)
 
 def test_webhook_that_never_answers_does_not_stall_the_run(tmp_path, walker):
     out = tmp_path / "out"
+    wait = 1.5   # FLUSH_S without --sink-wait (test_the_sink_options_default_to_...)
     with silent_receiver() as url:
         t0 = time.monotonic()
-        assert _analyze(walker, out, "--webhook", url) == 0
+        assert _analyze(walker, out, "--webhook", url, "--sink-wait", str(wait)) == 0
         elapsed = time.monotonic() - t0
-    # the run waits FLUSH_S for the sink at its end, then counts what it holds as dropped
+    # the run waits --sink-wait for the sink at its end, then counts what it holds as dropped
     # (unbounded, it would wait for 6 attempts of 5 s and their back-off per event)
-    assert FLUSH_S - 0.5 < elapsed < FLUSH_S + 6.0
+    assert wait - 0.5 < elapsed < wait + 6.0
     sink = json.loads((out / "summary.json").read_text())["sinks"][0]
     assert (sink["events"], sink["delivered"], sink["dropped"]) == (3, 0, 3)
     assert len(_events_of(out)) == 3

@@ -13,7 +13,7 @@ from motiontrack.evaluate.framewise import METRIC_KEYS, evaluate_framewise, fram
 from motiontrack.io.viper import read_viper
 from motiontrack.types import Annotations
 
-from conftest import ann
+from helpers import ann
 
 
 # ---------------------------------------------------------------------------------------------

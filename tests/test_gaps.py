@@ -18,7 +18,7 @@ from motiontrack.tracking.association import iou_matrix
 from motiontrack.tracking.gaps import fill_gaps
 from motiontrack.types import Annotations
 
-from conftest import ann
+from helpers import ann
 
 
 def test_a_gap_is_filled_linearly_frame_by_frame():
@@ -91,7 +91,7 @@ def test_filling_applies_to_external_detections_by_default():
 def pets_run(tmp_path_factory, request):
     """``track --detections`` on PETS frames 1-40 from the people's ground-truth boxes, with one
     person's boxes removed at frames 20-22; with the default filling and with it off."""
-    from conftest import require
+    from helpers import require
 
     video = require("pets09-s2l1", "video.avi")
     gt = read_mot(video.parent / "gt_mot15.txt", kind="gt")

@@ -240,7 +240,7 @@ def test_pets_recommendation_keeps_the_people_the_thesis_model_drops(data, tmp_p
     from motiontrack.evaluate.mot import evaluate_tracking
     from motiontrack.io.mot import read_mot
 
-    from conftest import tracks_of
+    from helpers import tracks_of
 
     video = data("pets09-s2l1", "video.avi")
     gt_path = data("pets09-s2l1", "gt_mot15.txt")

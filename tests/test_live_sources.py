@@ -19,7 +19,7 @@ import cv2
 import numpy as np
 import pytest
 
-from mjpeg_server import MjpegServer, moving_box, serve_folder
+from helpers.mjpeg_server import MjpegServer, moving_box, serve_folder
 from motiontrack.cli import main
 from motiontrack.config import load_config
 from motiontrack.errors import ConfigError, SourceError
@@ -169,13 +169,13 @@ def _stopped_job(url: str, out: Path, after: threading.Event, delay: float):
 def test_a_stop_request_ends_a_job_on_a_live_stream_within_two_seconds(mjpeg, tmp_path, phase):
     # backing off: 20 frames, then the server stops, so reconnections are refused and the source
     # waits 0.5, 1, 2, 4, 8 s between them; stalled: 20 frames, then the connection stays open
-    # and silent, so the read waits for its 5 s timeout. The stop comes 1 s into either.
+    # and silent, so the read waits for its 5 s timeout. The stop comes 0.5 s into either.
     server = mjpeg(20, then="close" if phase == "backing off" else "stall")
     if phase == "backing off":
         threading.Thread(target=lambda: server.served.wait(30) and server.stop(),
                          daemon=True).start()
     out = tmp_path / "o"
-    latency = _stopped_job(server.url, out, server.served, 1.0)
+    latency = _stopped_job(server.url, out, server.served, 0.5)
     assert latency < STOP_WITHIN
     summary = json.loads((out / "summary.json").read_text())
     assert summary["interrupted"] is True and summary["status"] == "interrupted"
@@ -217,7 +217,7 @@ def test_a_signal_ends_a_live_run_within_two_seconds(mjpeg, tmp_path, sig, phase
             assert backing_off.wait(30), "".join(err)   # in the 1 s wait before attempt 2
             time.sleep(0.3)
         else:
-            time.sleep(1.0)                             # 1 s into the 5 s read timeout
+            time.sleep(0.5)                             # 0.5 s into the 5 s read timeout
         t0 = time.monotonic()
         proc.send_signal(sig)
         summary_path = out / "summary.json"

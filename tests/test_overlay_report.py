@@ -14,7 +14,7 @@ from motiontrack.io.sources import ArraySource
 from motiontrack.render.overlay import GT_COLOR, PALETTE, draw_overlay
 from motiontrack.run import overlay_job
 
-from conftest import ann
+from helpers import ann
 
 
 def test_draw_overlay_colours_and_legend():

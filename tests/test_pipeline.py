@@ -16,7 +16,7 @@ from motiontrack.synth import parse_synth_spec
 from motiontrack.tracking.association import iou_matrix
 from motiontrack.types import FrameResult
 
-from conftest import tracks_of
+from helpers import tracks_of
 
 
 def run_scene(spec, overrides=()):

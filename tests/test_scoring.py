@@ -8,7 +8,7 @@ import json
 
 import pytest
 
-from conftest import ann
+from helpers import ann
 from motiontrack.cli import main
 from motiontrack.cli.evaluate import evaluate_one, format_table
 from motiontrack.errors import ConfigError

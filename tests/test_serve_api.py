@@ -28,7 +28,7 @@ from motiontrack.io.events import read_events  # noqa: E402
 from motiontrack.io.mot import read_mot  # noqa: E402
 from motiontrack.io.tomlfile import read_toml  # noqa: E402
 from motiontrack.serve.cameras import parse_cameras  # noqa: E402
-from serve_process import ServeProcess, synth_cameras  # noqa: E402
+from helpers.serve_process import ServeProcess, synth_cameras  # noqa: E402
 
 CAMERAS = ("walker", "crossing")
 
@@ -397,7 +397,7 @@ def test_live_killed_camera_process_restarts_and_pictures_resume(server):
 
 @pytest.mark.slow
 def test_sigterm_stops_cameras_and_commits_their_outputs(tmp_path):
-    with _serve(tmp_path, "--rotate-s", "4") as srv:
+    with _serve(tmp_path, "--rotate-s", "2") as srv:
         srv.wait_running(frames=5, timeout=60)
         srv.wait("a rotated segment", lambda: len(list((srv.out / "walker").iterdir())) >= 2, 20)
         t0 = time.monotonic()

@@ -20,8 +20,8 @@ pytest.importorskip("starlette")
 pytest.importorskip("uvicorn")
 httpx = pytest.importorskip("httpx")
 
-from mjpeg_server import MjpegServer, moving_box  # noqa: E402
-from serve_process import ServeProcess  # noqa: E402
+from helpers.mjpeg_server import MjpegServer, moving_box  # noqa: E402
+from helpers.serve_process import ServeProcess  # noqa: E402
 
 pytestmark = pytest.mark.slow
 

@@ -19,7 +19,7 @@ pytest.importorskip("starlette")
 pytest.importorskip("uvicorn")
 httpx = pytest.importorskip("httpx")
 
-from conftest import free_port  # noqa: E402
+from helpers import free_port  # noqa: E402
 from motiontrack.io.mot import read_mot  # noqa: E402
 
 

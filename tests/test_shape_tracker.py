@@ -18,7 +18,7 @@ from motiontrack.people.shape_tracker import (
 from motiontrack.tracking.association import iou_matrix
 from motiontrack.types import Box, Track, TrackState
 
-from conftest import tracks_of
+from helpers import tracks_of
 
 
 def _track(tid: int, box, tsu: int = 0) -> Track:

@@ -181,12 +181,9 @@ def test_replay_reproduces_the_study(threshold_sweep):
 
 
 @pytest.mark.slow
-def test_dask_local_cluster_gives_the_same_table(small_sweep, tmp_path):
-    distributed = pytest.importorskip("distributed", reason="dask[distributed] not installed")
+def test_dask_local_cluster_gives_the_same_table(small_sweep, tmp_path, dask_session_client):
     st, out = small_sweep
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                  dashboard_address=None) as cluster:
-        run_sweep(st, tmp_path, cluster=cluster.scheduler_address, figures=False)
+    run_sweep(st, tmp_path, cluster=dask_session_client.scheduler.address, figures=False)
     assert (tmp_path / "results.csv").read_bytes() == (out / "results.csv").read_bytes()
 
 

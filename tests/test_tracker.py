@@ -12,7 +12,7 @@ from motiontrack.tracking.association import (INF_COST, assign, assign_in_stages
 from motiontrack.tracking.tracker import MultiObjectTracker
 from motiontrack.types import TrackState
 
-from conftest import tracks_of
+from helpers import tracks_of
 
 
 @pytest.mark.parametrize("a, b, iou", [

@@ -12,7 +12,7 @@ from motiontrack.errors import InputError
 from motiontrack.io import video
 from motiontrack.io.sources import open_source
 from motiontrack.io.video import VideoSink
-from video_files import read_frames
+from helpers.video_files import read_frames
 
 # PyAV is a dev dependency (the ``video`` extra), so its tests run, never skip, under ``make test``
 

@@ -20,7 +20,7 @@ from motiontrack.pipeline import open_configured_source
 from motiontrack.run import Job
 from motiontrack.run.processors import TrackProcessor
 from motiontrack.run.writers import TracksWriter, VideoWriter
-from video_files import read_frames
+from helpers.video_files import read_frames
 
 
 def _numbered(n: int, w: int = 96, h: int = 64) -> list[np.ndarray]:

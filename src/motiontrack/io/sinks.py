@@ -34,7 +34,7 @@ import urllib.error
 import urllib.request
 import uuid
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Callable
 from urllib.parse import unquote, urlsplit, urlunsplit
 
 from ..errors import ConfigError, printable
@@ -198,14 +198,19 @@ class Delivery:
 
     Subclasses implement :meth:`_send` (deliver one encoded event: True when delivered, False
     when it failed for good, None when the delivery is counted elsewhere or was abandoned) and
-    may extend :meth:`start` and :meth:`_shutdown`.
+    may extend :meth:`start` and :meth:`_shutdown`. ``sleep``, when given, is called with each
+    back-off delay instead of waiting it (a test's clock); a deadline still ends the back-off.
     """
 
     kind = "sink"
 
-    def __init__(self, queue_size: int = QUEUE_SIZE) -> None:
+    def __init__(self, queue_size: int = QUEUE_SIZE, *,
+                 sleep: Callable[[float], None] | None = None) -> None:
         if queue_size < 1:
             raise ValueError(f"queue_size must be >= 1, got {queue_size}")
+        # called with each back-off delay instead of waiting it out: tests drive the back-off
+        # without spending its seconds
+        self._sleep = sleep
         self._queue: queue.Queue[bytes] = queue.Queue(maxsize=queue_size)
         self._lock = threading.Lock()
         self._stop = threading.Event()    # no more events: send what is queued, then end
@@ -308,6 +313,9 @@ class Delivery:
 
     def _wait(self, seconds: float) -> bool:
         """Sleep up to ``seconds``; True when the deadline passed meanwhile."""
+        if self._sleep is not None:
+            self._sleep(seconds)
+            return self._abort.is_set()
         return self._abort.wait(seconds)
 
     def _send(self, body: bytes) -> bool | None:  # pragma: no cover - abstract
@@ -332,8 +340,9 @@ class WebhookDelivery(Delivery):
 
     def __init__(self, target: WebhookTarget, *, queue_size: int = QUEUE_SIZE,
                  timeout_s: float = TIMEOUT_S, retries: int = RETRIES,
-                 backoff_s: float = BACKOFF_S, backoff_max_s: float = BACKOFF_MAX_S) -> None:
-        super().__init__(queue_size)
+                 backoff_s: float = BACKOFF_S, backoff_max_s: float = BACKOFF_MAX_S,
+                 sleep: Callable[[float], None] | None = None) -> None:
+        super().__init__(queue_size, sleep=sleep)
         self.target = target
         self.timeout_s, self.max_retries = float(timeout_s), int(retries)
         self.backoff_s, self.backoff_max_s = float(backoff_s), float(backoff_max_s)

@@ -3,6 +3,9 @@
 A task is one call ``fn(item)`` (one video: trackers carry state from frame to frame, so a video is
 never split). ``dask_client`` opens the client: a local cluster of ``jobs`` worker processes, one
 thread each (the runs are the parallelism), or an existing scheduler at ``cluster``.
+``reusing_client`` lends one open client to every ``dask_client`` of a local cluster meanwhile,
+so that many drivers in one process (a test session) share a cluster instead of each starting
+its own.
 """
 
 from __future__ import annotations
@@ -16,7 +19,10 @@ from ..errors import ConfigError, InputError, printable
 
 log = logging.getLogger(__name__)
 
-__all__ = ["dask_client", "map_tasks"]
+__all__ = ["dask_client", "map_tasks", "reusing_client"]
+
+# the clients lent by reusing_client, innermost last
+_lent: list[Any] = []
 
 
 def _worker_init() -> None:
@@ -27,11 +33,26 @@ def _worker_init() -> None:
 
 
 @contextlib.contextmanager
+def reusing_client(client: Any) -> Iterator[Any]:
+    """While active, :func:`dask_client` without a ``cluster`` address yields ``client`` (left
+    open on exit) instead of starting and stopping a local cluster of its own."""
+    _lent.append(client)
+    try:
+        yield client
+    finally:
+        _lent.remove(client)
+
+
+@contextlib.contextmanager
 def dask_client(jobs: int = 1, cluster: str | None = None) -> Iterator[Any]:
     """A ``distributed.Client``: connected to the scheduler at ``cluster`` (``tcp://host:8786``),
-    or to a local cluster of ``jobs`` worker processes started here and stopped on exit."""
+    or to a local cluster of ``jobs`` worker processes started here and stopped on exit (or the
+    client lent by :func:`reusing_client`)."""
     if jobs < 1:
         raise ConfigError(f"-j must be >= 1, got {jobs}")
+    if not cluster and _lent:
+        yield _lent[-1]
+        return
     try:
         import dask
         from distributed import Client, LocalCluster

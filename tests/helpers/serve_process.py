@@ -18,7 +18,7 @@ import time
 import urllib.request
 from pathlib import Path
 
-from conftest import free_port
+from helpers import free_port
 
 
 def synth_cameras(root: Path, sources: dict[str, str]) -> dict[str, dict]:
