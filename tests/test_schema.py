@@ -1,4 +1,5 @@
-"""The file-schema mechanism: typed fields, nested tables, arrays of tables, messages, JSON Schema."""
+"""The file-schema mechanism: typed fields, nested tables, arrays of tables, messages, JSON
+Schema."""
 
 from __future__ import annotations
 
