@@ -105,3 +105,11 @@ def test_the_cameras_file_schema_requires_a_camera_with_name_and_source():
     cam = s["properties"]["camera"]["items"]
     assert cam["required"] == ["name", "source"] and cam["additionalProperties"] is False
     assert cam["properties"]["fps"]["exclusiveMinimum"] == 0
+
+
+def test_none_stands_for_an_absent_key_only_where_none_may_stand():
+    assert from_dict(Scene, {"title": None}).title is None
+    with pytest.raises(ConfigError, match=re.escape("zone[1].name is required")):
+        from_dict(Scene, {"zone": [{"name": None}]})
+    with pytest.raises(ConfigError, match=re.escape("limits.speed must be a number, got a NoneType")):
+        from_dict(Scene, {"limits": {"speed": None}})

@@ -8,7 +8,7 @@ is expected and what arrived::
 
     unknown key(s) camera[1].sorce; valid keys in camera[1]: camera, config, fps, ...
     camera[1].loop must be true or false, got 'yes'
-    camera[1].fps must be in (0.0, 1000.0], got 0
+    camera[1].fps must be in (0, 1000], got 0.0
 
 :func:`json_schema` exports any schema as JSON Schema (draft 2020-12), for editors and other
 tools; :func:`leaf_fields` lists its keys for reference tables. A field's ``when`` names the
@@ -247,15 +247,18 @@ def from_dict(cls: type, data: Any, where: str = "") -> Any:
             f"unknown {noun}key(s) {keys_shown(unknown, prefix)}; "
             f"valid keys{' in ' + where if where else ''}: {', '.join(sorted(known))}"
         )
+    required = {f.name for f in fields(cls)
+                if f.default is MISSING and f.default_factory is MISSING}
     kwargs: dict[str, Any] = {}
     for name, value in data.items():
+        if value is None and (name in required or _optional(hints[name]) is not None):
+            continue   # none (JSON null) where none may stand: as if the key were absent
         kwargs[name] = _coerce(value, hints[name], f"{where}.{name}" if where else name)
     for f in fields(cls):
         key = f"{where}.{f.name}" if where else f.name
-        if kwargs.get(f.name) is None:   # absent (or none, from JSON): the default holds
-            if f.default is MISSING and f.default_factory is MISSING:
+        if f.name not in kwargs:
+            if f.name in required:
                 raise ConfigError(f"{key} is required")
-            kwargs.pop(f.name, None)
             continue
         check_value(f.metadata, kwargs[f.name], key)
     return cls(**kwargs)  # a section's own cross-field checks name its keys by path
