@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import signal
 import time
 from pathlib import Path
@@ -41,12 +42,14 @@ CAMERAS = ("walker", "crossing")
     ({"camera": [{"name": "a"}]}, "camera[1].source is required"),
     ({"camera": [{"name": "a", "source": "x"}, {"name": "a", "source": "y"}]},
      "camera[2].name 'a' is used by an earlier camera"),
-    ({"camera": [{"name": "a", "source": "x", "loop": "yes"}]}, "camera[1].loop must be"),
-    ({"camera": [{"name": "a", "source": "x", "fps": 0}]}, "camera[1].fps must be"),
-    ({"camera": [{"name": "a", "source": "x", "sorce": "y"}]}, "unknown key 'sorce'"),
+    ({"camera": [{"name": "a", "source": "x", "loop": "yes"}]}, "camera[1].loop must be true or false, got 'yes'"),
+    ({"camera": [{"name": "a", "source": "x", "fps": 0}]}, "camera[1].fps must be in (0, 1000], got 0.0"),
+    ({"camera": [{"name": "a", "source": "x", "sorce": "y"}]},
+     "unknown key(s) camera[1].sorce; valid keys in camera[1]: camera, config, fps, loop, name"),
+    ({"camera": [{"name": "a", "source": " "}]}, "camera[1].source must be a non-empty string"),
 ])
 def test_cameras_file_problems_name_the_key(data, message):
-    with pytest.raises(ConfigError, match=message.replace("[", r"\[").replace("]", r"\]")):
+    with pytest.raises(ConfigError, match=re.escape(message)):
         parse_cameras(data, "/base")
 
 

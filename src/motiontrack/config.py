@@ -1,9 +1,11 @@
 """Configuration: one frozen dataclass per stage, defaults defined once, TOML in and out.
 
-Every field carries its allowed range in its metadata (see :func:`param`); values are checked when a
-section is built, so an out-of-range value is rejected with the range in the message. Unknown keys
-are errors. ``--set stage.param=value`` on the command line maps onto the same fields through
-:func:`apply_overrides`.
+Every field carries its allowed range in its metadata (:func:`~motiontrack.schema.param`, the
+mechanism every file schema uses); values are checked when a section is built, so an
+out-of-range value is rejected with the range in the message. Unknown keys are errors.
+``--set stage.param=value`` on the command line maps onto the same fields through
+:func:`apply_overrides`; the options that stand for keys (``--fps``, ``--no-video``, ...) are
+listed once in :mod:`motiontrack.config_flags`.
 """
 
 from __future__ import annotations
@@ -11,18 +13,19 @@ from __future__ import annotations
 import dataclasses
 import functools
 import logging
-import math
 import sys
 import typing
-from dataclasses import dataclass, field, fields, is_dataclass
+from dataclasses import dataclass, field, is_dataclass
 from pathlib import Path
-from typing import Any, Iterable
+from typing import Any, ClassVar, Iterable
 
 import tomli_w
 
-from .errors import EXCERPT_CHARS, ConfigError, excerpt, printable
+from . import schema
+from .errors import ConfigError, printable
 from .io.atomic import atomic_write_text
 from .io.tomlfile import parse_toml, read_toml
+from .schema import INT_MAX, INT_MIN, Not, Section, param  # noqa: F401 - the config's names too
 
 log = logging.getLogger(__name__)
 
@@ -60,70 +63,15 @@ __all__ = [
 ]
 
 
-#: bounds of an integer field that gives none: what OpenCV's ``int`` parameters hold
-INT_MIN, INT_MAX = -(2**31), 2**31 - 1
+class _Section(Section):
+    """A section of the pipeline config: unknown keys are "config" keys, and a message names the
+    section by the key path users write (:func:`section_path`)."""
 
+    schema_noun: ClassVar[str] = "config "
 
-@dataclass(frozen=True)
-class Not:
-    """A ``when`` condition of :func:`param`: the switch differs from ``value``; ``example`` is
-    a value that meets it (named in the hint that says how to make the key take effect)."""
-
-    value: Any
-    example: Any
-
-
-def param(default: Any, *, lo: float | None = None, hi: float | None = None,
-          choices: Iterable[Any] | None = None, odd: bool = False, doc: str = "",
-          when: Any = None) -> Any:
-    """A config field with its allowed range: ``lo <= value <= hi``, one of ``choices``,
-    and for kernel sizes ``odd`` (0 means "off" and is always allowed for odd fields).
-
-    Every number must be finite. An integer field without ``lo``/``hi`` is bounded by
-    :data:`INT_MIN`/:data:`INT_MAX`, so that no value reaches OpenCV (or a loop or an allocation)
-    that a C ``int`` cannot hold.
-
-    ``when`` names the switches of the same section that the field needs to take effect:
-    ``{"name": value}`` (all must hold; ``Not(value, example)`` for "anything but value"), or a
-    tuple of such tables (any one must hold). :mod:`motiontrack.config_activity` follows them,
-    together with the per-method sections (``motion.<method>.*`` take effect only while
-    ``motion.method`` names them).
-    """
-    if isinstance(default, int) and not isinstance(default, bool) and choices is None:
-        lo = INT_MIN if lo is None else lo
-        hi = INT_MAX if hi is None else hi
-    if isinstance(when, dict):
-        when = (when,)
-    meta = {"lo": lo, "hi": hi, "choices": tuple(choices) if choices is not None else None,
-            "odd": odd, "doc": doc, "when": tuple(when or ())}
-    return field(default=default, metadata=meta)
-
-
-class _Section:
-    """Mixin: validate every field against its :func:`param` metadata after construction."""
-
-    def __post_init__(self) -> None:
-        name = section_path(type(self))
-        for f in fields(self):  # type: ignore[arg-type]
-            v = getattr(self, f.name)
-            m = f.metadata
-            if not m:
-                continue
-            if m.get("choices") is not None and v not in m["choices"]:
-                raise ConfigError(f"{name}.{f.name} must be one of {list(m['choices'])}, "
-                                  f"got {_shown(v)}")
-            if isinstance(v, (int, float)) and not isinstance(v, bool):
-                lo, hi = m.get("lo"), m.get("hi")
-                rng = f"[{'-inf' if lo is None else lo}, {'inf' if hi is None else hi}]"
-                if isinstance(v, float) and not math.isfinite(v):
-                    raise ConfigError(f"{name}.{f.name} must be a finite number in {rng}, "
-                                      f"got {v!r}")
-                # written as "not inside" so that a value no comparison holds for is refused too
-                if not ((lo is None or lo <= v) and (hi is None or v <= hi)):
-                    raise ConfigError(f"{name}.{f.name} must be in {rng}, got {_shown(v)}")
-                if m.get("odd") and v != 0 and int(v) % 2 == 0:
-                    raise ConfigError(f"{name}.{f.name} must be 0 (off) or an odd kernel size, "
-                                      f"got {_shown(v)}")
+    @classmethod
+    def schema_where(cls) -> str:
+        return section_path(cls)
 
 
 def section_path(cls: type) -> str:
@@ -145,18 +93,6 @@ def _section_paths() -> dict[type, str]:
 
     walk(PipelineConfig, "")
     return paths
-
-
-def _shown(v: Any) -> str:
-    """A value for a message: numbers as written, an integer too long to read by its size, text
-    as a short excerpt (it may come from any file given as a config), tables and arrays by kind."""
-    if isinstance(v, bool) or isinstance(v, float):
-        return repr(v)
-    if isinstance(v, int):
-        return f"an integer of {len(str(abs(v)))} digits" if abs(v) >= 10**30 else repr(v)
-    if isinstance(v, str):
-        return excerpt(v)
-    return {dict: "a table", list: "an array"}.get(type(v), f"a {type(v).__name__}")
 
 
 # --------------------------------------------------------------------------------------- stages
@@ -607,60 +543,10 @@ def to_dict(cfg: Any) -> dict[str, Any]:
     return dataclasses.asdict(cfg)
 
 
-def _coerce(value: Any, typ: Any, where: str) -> Any:
-    """Check a scalar against its field type; ints are accepted where floats are expected."""
-    if typ is bool:
-        if isinstance(value, bool):
-            return value
-        raise ConfigError(f"{where} must be true or false, got {_shown(value)}")
-    if typ is int:
-        if isinstance(value, bool) or not isinstance(value, int):
-            if isinstance(value, float) and value.is_integer():
-                return int(value)
-            raise ConfigError(f"{where} must be an integer, got {_shown(value)}")
-        return value
-    if typ is float:
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise ConfigError(f"{where} must be a number, got {_shown(value)}")
-        return float(value)
-    if typ is str:
-        if not isinstance(value, str):
-            raise ConfigError(f"{where} must be a string, got {_shown(value)}")
-        return value
-    return value
-
-
-def _keys_shown(keys: list[str], prefix: str = "", most: int = 5) -> str:
-    """Key names from a file for a message: the first ``most``, each after ``prefix`` as written
-    when short and printable, else as a short excerpt."""
-    shown = ", ".join(prefix + (k if len(k) <= EXCERPT_CHARS and k.isprintable() else excerpt(k))
-                      for k in keys[:most])
-    return shown + (f" and {len(keys) - most} more" if len(keys) > most else "")
-
-
 def from_dict(cls: type, data: dict[str, Any], where: str = "") -> Any:
-    """Build a config dataclass from a nested dict; unknown keys and bad types are errors."""
-    where = where or _section_paths().get(cls, "")
-    if not isinstance(data, dict):
-        raise ConfigError(f"{where or 'the config'} must be a table, got {_shown(data)}")
-    hints = typing.get_type_hints(cls)
-    known = {f.name for f in fields(cls)}
-    unknown = sorted(set(data) - known)
-    if unknown:
-        prefix = f"{where}." if where else ""
-        raise ConfigError(
-            f"unknown config key(s) {_keys_shown(unknown, prefix)}; "
-            f"valid keys{' in ' + where if where else ''}: {', '.join(sorted(known))}"
-        )
-    kwargs: dict[str, Any] = {}
-    for name, value in data.items():
-        typ = hints[name]
-        sub = f"{where}.{name}" if where else name
-        if is_dataclass(typ):
-            kwargs[name] = from_dict(typ, value, sub)
-        else:
-            kwargs[name] = _coerce(value, typ, sub)
-    return cls(**kwargs)  # a section's own checks name its keys by path (section_path)
+    """Build a config dataclass from a nested dict; unknown keys and bad types are errors
+    (:func:`motiontrack.schema.from_dict`, the section named by its key path)."""
+    return schema.from_dict(cls, data, where or _section_paths().get(cls, ""))
 
 
 def presets() -> dict[str, str]:

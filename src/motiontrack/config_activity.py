@@ -23,9 +23,9 @@ import logging
 from dataclasses import dataclass
 from typing import Any, Iterable, Mapping, Sequence
 
-from .config import Not
 from .config_keys import config_fields, flatten
 from .errors import ConfigError, printable
+from .schema import Not
 
 log = logging.getLogger(__name__)
 

@@ -9,10 +9,11 @@ from __future__ import annotations
 
 import functools
 import typing
-from dataclasses import Field, dataclass, fields, is_dataclass
+from dataclasses import Field, dataclass, is_dataclass
 from typing import Any, Iterable
 
 from .config import PipelineConfig, to_dict
+from .schema import allowed_text, leaf_fields
 
 __all__ = ["KeyDoc", "config_fields", "key_docs", "markdown_table", "flatten"]
 
@@ -33,26 +34,8 @@ class KeyDoc:
 def config_fields(cls: type = PipelineConfig, prefix: str = ""
                   ) -> Iterable[tuple[str, Field, type]]:
     """``(dotted key, dataclass field, its type)`` of every leaf key of ``cls``, in declaration
-    order."""
-    hints = typing.get_type_hints(cls)
-    for f in fields(cls):
-        if is_dataclass(hints[f.name]):
-            yield from config_fields(hints[f.name], f"{prefix}{f.name}.")
-        else:
-            yield prefix + f.name, f, hints[f.name]
-
-
-def _allowed(meta: typing.Mapping[str, Any]) -> str:
-    allowed = ""
-    if meta.get("choices"):
-        allowed = " / ".join(map(str, meta["choices"]))
-    elif meta.get("lo") is not None or meta.get("hi") is not None:
-        lo = meta.get("lo") if meta.get("lo") is not None else "-inf"
-        hi = meta.get("hi") if meta.get("hi") is not None else "inf"
-        allowed = f"[{lo}, {hi}]"
-    if meta.get("odd"):
-        allowed += " odd or 0"
-    return allowed
+    order (:func:`motiontrack.schema.leaf_fields`)."""
+    return leaf_fields(cls, prefix)
 
 
 @functools.cache
@@ -61,7 +44,7 @@ def key_docs(cls: type = PipelineConfig) -> tuple[KeyDoc, ...]:
     out = []
     for key, f, typ in config_fields(cls):
         out.append(KeyDoc(key, getattr(typ, "__name__", str(typ)), f.default,
-                          _allowed(f.metadata), f.metadata.get("doc", "")))
+                          allowed_text(f.metadata), f.metadata.get("doc", "")))
     return tuple(out)
 
 

@@ -12,6 +12,7 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any, Callable, Iterator, Mapping
 
+from ..config_flags import flag, flag_overrides
 from ..errors import ConfigError
 
 
@@ -165,9 +166,7 @@ def given(args, dest: str) -> bool:
 
 
 #: help of ``--fps``, the option of every command that reads video
-FPS_HELP = ("frame rate to use instead of the source's own (source.fps), for footage stored at "
-            "another rate than it was recorded at: durations in seconds, speeds and the output "
-            "video follow it")
+FPS_HELP = flag("--fps").meaning
 
 
 def out_help(command: str) -> str:
@@ -186,22 +185,16 @@ def output_folder(args, command: str):
     return new_run_folder(command, args.source)
 
 
-def run_overrides(args) -> list[str]:
-    """``--set`` overrides plus those implied by ``--start``, ``--max-frames``, ``--fps`` and
-    ``--codec`` (the options ``track`` and ``flow`` share), in that order."""
-    overrides = list(args.overrides)
-    if args.start is not None:
-        overrides.append(f"source.start={args.start}")
-    if args.max_frames is not None:
-        overrides.append(f"source.max_frames={args.max_frames}")
-    if getattr(args, "fps", None) is not None:
-        overrides.append(f"source.fps={float(args.fps)!r}")
-    if args.codec:
+def run_overrides(args, dests: tuple[str, ...] = ("start", "max_frames", "fps", "codec")
+                  ) -> list[str]:
+    """``--set`` overrides, then those of the options ``dests`` that stand for config keys
+    (:data:`motiontrack.config_flags.FLAGS`: ``--start``, ``--max-frames``, ``--fps`` and
+    ``--codec`` by default, the options ``track`` and ``flow`` share), in the table's order."""
+    if getattr(args, "codec", None) and "codec" in dests:
         from ..io.video import check_codec
 
         check_codec(args.codec)   # one message naming the codecs this installation encodes
-        overrides.append(f'output.codec="{args.codec}"')
-    return overrides
+    return list(args.overrides) + flag_overrides(args, dests)
 
 
 class CodecOption(argparse.Action):

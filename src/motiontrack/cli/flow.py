@@ -17,7 +17,8 @@ log = logging.getLogger("motiontrack")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    from ._common import FPS_HELP, CodecOption, out_help
+    from ..config_flags import add_flag
+    from ._common import CodecOption, out_help
     from ._common import add_scoring_option
 
     p = sub.add_parser(
@@ -39,12 +40,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--max-magnitude", type=float, default=None,
                    help="dense: flow magnitude (px/frame) shown at full brightness (default: each "
                         "frame's maximum)")
-    p.add_argument("--start", type=int, help="first frame index (0-based)")
-    p.add_argument("--max-frames", type=int, help="process at most this many frames")
-    p.add_argument("--fps", type=float, help=FPS_HELP)
-    p.add_argument("--no-video", action="store_true", help="sparse: no annotated video")
-    p.add_argument("--mask-video", action="store_true", help="also write the motion mask video")
-    p.add_argument("--codec", action=CodecOption)
+    add_flag(p, "--start")
+    add_flag(p, "--max-frames")
+    add_flag(p, "--fps")
+    add_flag(p, "--no-video", help="sparse: no annotated video")
+    add_flag(p, "--mask-video")
+    add_flag(p, "--codec", action=CodecOption)
     p.add_argument("--gt", help="sparse: ground truth to score against (synth: sources bring "
                                 "their own)")
     add_scoring_option(p)
@@ -79,11 +80,8 @@ def _config(args):
     from ..config_activity import warn_inactive_overrides
     from ._common import run_overrides
 
-    overrides = run_overrides(args)
-    if args.no_video:
-        overrides.append("output.video=false")
-    if args.mask_video:
-        overrides.append("output.mask_video=true")
+    overrides = run_overrides(args, ("start", "max_frames", "fps", "codec", "no_video",
+                                     "mask_video"))
     cfg = load_config(args.config, overrides)
     if args.mode == "dense":  # the Farneback detector, whatever motion.method says
         warn_inactive_overrides(cfg, args.overrides, points=[{"motion.method": "farneback"}],

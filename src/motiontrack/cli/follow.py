@@ -84,7 +84,8 @@ def _opencv_reason(exc: Exception) -> str:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    from ._common import FPS_HELP, CodecOption, out_help
+    from ..config_flags import add_flag
+    from ._common import CodecOption, out_help
 
     p = sub.add_parser(
         "follow", help="follow one object from a given box with a single-object tracker",
@@ -103,11 +104,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--param", dest="params", action="append", default=[], metavar="KEY=VALUE",
                    help="tracker parameter, e.g. --param backbone=nano_backbone.onnx (repeatable)")
     p.add_argument("-o", "--out", help=out_help("follow"))
-    p.add_argument("--start", type=int, default=0, help="first frame index (0-based)")
-    p.add_argument("--max-frames", type=int, default=0, help="process at most this many frames")
-    p.add_argument("--fps", type=float, help=FPS_HELP)
+    add_flag(p, "--start", default=0)
+    add_flag(p, "--max-frames", default=0)
+    add_flag(p, "--fps")
     p.add_argument("--no-video", action="store_true", help="no annotated video")
-    p.add_argument("--codec", default="vp80", action=CodecOption)
+    add_flag(p, "--codec", default="vp80", action=CodecOption)
     p.add_argument("--gt", help="ground truth to score against (synth: sources bring their own)")
     p.add_argument("--gt-id", type=int, help="ground-truth id of the object (default: the one the "
                                              "box overlaps most)")
@@ -119,6 +120,7 @@ def cmd_follow(args) -> int:
     import cv2
 
     from ..config import load_config
+    from ..config_flags import flag_overrides
     from ..errors import ConfigError, SourceError, check_output_path
     from ..io.video import check_codec
     from ..run import follow_job
@@ -134,11 +136,8 @@ def cmd_follow(args) -> int:
     check_codec(args.codec)
     if args.start < 0 or args.max_frames < 0:
         raise ConfigError("--start and --max-frames must be >= 0")
-    overrides = [f"source.start={args.start}", f"source.max_frames={args.max_frames}",
-                 f'output.codec="{args.codec}"']
-    if args.fps is not None:
-        overrides.append(f"source.fps={args.fps!r}")
-    cfg = load_config(None, overrides)
+    # --no-video of follow leaves out its own video, not a config key
+    cfg = load_config(None, flag_overrides(args, ("start", "max_frames", "fps", "codec")))
     gt = read_gt(args.gt) if args.gt else None
     job = follow_job(args.source, cfg, out, tracker, box, args.tracker, params=params,
                      video=not args.no_video, force=args.force, gt=gt, gt_id=args.gt_id)

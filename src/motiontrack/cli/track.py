@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import json
 import logging
 import sys
 
@@ -11,7 +10,8 @@ log = logging.getLogger("motiontrack")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    from ._common import FPS_HELP, CodecOption, out_help
+    from ..config_flags import add_flag
+    from ._common import CodecOption, out_help
     from ._sinks import add_sink_options
     from ._common import add_scoring_option
 
@@ -26,27 +26,25 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--config", help="TOML config file (applied after --preset)")
     p.add_argument("--set", dest="overrides", action="append", default=[], metavar="STAGE.PARAM=VALUE",
                    help="override one config field, e.g. --set motion.method=knn (repeatable)")
-    p.add_argument("--start", type=int, help="first frame index (0-based)")
-    p.add_argument("--max-frames", type=int, help="process at most this many frames")
-    p.add_argument("--fps", type=float, help=FPS_HELP)
-    p.add_argument("--no-video", action="store_true", help="analysis only: no annotated video")
-    p.add_argument("--mask-video", action="store_true", help="also write the motion mask video")
+    add_flag(p, "--start")
+    add_flag(p, "--max-frames")
+    add_flag(p, "--fps")
+    add_flag(p, "--no-video")
+    add_flag(p, "--mask-video")
     p.add_argument("--mask-images", metavar="DIR",
                    help="also write the motion mask of every frame as DIR/bin%%06d.png (0/255, "
                         "source size, numbered from --start + 1 as CDnet numbers its input) for "
                         "`motiontrack evaluate-masks --pred DIR`")
     p.add_argument("--save", default="", metavar="STREAMS",
                    help="also write intermediate movies: background,difference,motion,annotated")
-    p.add_argument("--codec", action=CodecOption)
+    add_flag(p, "--codec", action=CodecOption)
     p.add_argument("--gt", help="ground truth to score the run against (any supported format)")
     add_scoring_option(p)
     p.add_argument("--detections", help="MOTChallenge det.txt: track these detections instead of "
                                         "detecting motion")
     p.add_argument("--min-score", type=float, default=None,
                    help="with --detections: drop detections below this confidence")
-    p.add_argument("--camera", help="calibrated camera (PETS/Tsai XML, OpenCV YAML, TOML): world "
-                                    "positions in tracks.txt columns 8-9 (metres), per-track speed and "
-                                    "height in summary.json")
+    add_flag(p, "--camera")
     p.add_argument("--scene", help="scene file (TOML): line crossings, zone dwell, stationary and "
                                    "speeding events in events.jsonl and counts.csv, lines and zones "
                                    "on the annotated video (docs/analytics.md)")
@@ -68,13 +66,8 @@ def _build_config(args):
     from ..config_activity import warn_inactive_overrides
     from ._common import run_overrides
 
-    overrides = run_overrides(args)
-    if args.no_video:
-        overrides.append("output.video=false")
-    if args.mask_video:
-        overrides.append("output.mask_video=true")
-    if args.camera:
-        overrides.append(f"measure.camera={json.dumps(args.camera)}")
+    overrides = run_overrides(args, ("start", "max_frames", "fps", "codec", "no_video",
+                                     "mask_video", "camera"))
     cfg = load_config(args.config, overrides, preset=args.preset)
     warn_inactive_overrides(cfg, args.overrides)
     return cfg

@@ -12,26 +12,52 @@ A TOML file with one ``[[camera]]`` table per camera::
     loop = true                   # optional: a video file starts again at its end
     fps = 10                      # optional: the frame rate to play and analyse at
 
-Relative paths are relative to the cameras file. Every problem is one :class:`ConfigError`
-naming the key as written (``camera[2].source``).
+Relative paths are relative to the cameras file. The file's schema is :class:`CameraTable`
+(:mod:`motiontrack.schema`); every problem is one :class:`ConfigError` naming the key as written
+(``camera[2].source``), what is expected and what arrived.
 """
 
 from __future__ import annotations
 
-import math
 import re
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from ..errors import ConfigError, printable
+from ..errors import ConfigError
 from ..io.tomlfile import read_toml
+from ..schema import REQUIRED, Section, from_dict, json_schema, param
 
-__all__ = ["CameraSpec", "load_cameras", "parse_cameras"]
+__all__ = ["CameraSpec", "CameraTable", "load_cameras", "parse_cameras", "cameras_json_schema"]
 
-_NAME = re.compile(r"[A-Za-z0-9_-]{1,40}\Z")
-_KEYS = ("name", "source", "config", "preset", "scene", "camera", "loop", "fps")
 _URL = re.compile(r"[A-Za-z][A-Za-z0-9+.-]*://")
+
+
+@dataclass(frozen=True, kw_only=True)
+class CameraTable(Section):
+    """One ``[[camera]]`` table as written (paths not yet resolved)."""
+
+    name: str = param(REQUIRED, pattern=r"[A-Za-z0-9_-]{1,40}",
+                      pattern_doc="1 to 40 letters, digits, '_' or '-'",
+                      doc="the camera's name in URLs and folder names")
+    source: str = param(REQUIRED, nonblank=True,
+                        doc="anything `track` accepts: file, camera index, URL, synth:NAME")
+    scene: str | None = param(None, nonblank=True, doc="scene file: lines and zones")
+    config: str | None = param(None, nonblank=True,
+                               doc="pipeline config file (applied after preset)")
+    preset: str | None = param(None, nonblank=True, doc="shipped settings to start from")
+    camera: str | None = param(None, nonblank=True,
+                               doc="calibration file (world positions, rules in metres)")
+    loop: bool = param(False, doc="a video file starts again at its end")
+    fps: float | None = param(None, lo=0, lo_open=True, hi=1000,
+                              doc="the frame rate to play and analyse at")
+
+
+@dataclass(frozen=True, kw_only=True)
+class CamerasFile(Section):
+    """The cameras file of ``motiontrack serve``."""
+
+    camera: tuple[CameraTable, ...] = param((), doc="one table per camera")
 
 
 @dataclass(frozen=True)
@@ -48,19 +74,7 @@ class CameraSpec:
     fps: float | None = None
 
 
-def _string(t: dict, key: str, where: str, required: bool = False) -> str | None:
-    v = t.get(key)
-    if v is None:
-        if required:
-            raise ConfigError(f"{where}.{key} is required")
-        return None
-    if not isinstance(v, str) or not v.strip():
-        raise ConfigError(f"{where}.{key} must be a non-empty string, got {printable(repr(v))[:60]}")
-    return v
-
-
-def _path(base: Path, t: dict, key: str, where: str) -> Path | None:
-    v = _string(t, key, where)
+def _path(base: Path, v: str | None) -> Path | None:
     if v is None:
         return None
     p = Path(v).expanduser()
@@ -77,50 +91,33 @@ def _source(base: Path, v: str) -> str:
     return str(p if p.is_absolute() else base / p)
 
 
-def _camera(t: Any, where: str, base: Path) -> CameraSpec:
-    if not isinstance(t, dict):
-        raise ConfigError(f"{where} must be a table, got {type(t).__name__}")
-    unknown = sorted(set(t) - set(_KEYS))
-    if unknown:
-        raise ConfigError(f"{where}: unknown key {printable(unknown[0])!r}; valid keys: "
-                          f"{', '.join(_KEYS)}")
-    name = _string(t, "name", where, required=True)
-    if not _NAME.match(name):
-        raise ConfigError(f"{where}.name must be 1 to 40 letters, digits, '_' or '-', got "
-                          f"{printable(name)[:60]!r}")
-    loop = t.get("loop", False)
-    if not isinstance(loop, bool):
-        raise ConfigError(f"{where}.loop must be true or false, got {printable(repr(loop))[:40]}")
-    fps = t.get("fps")
-    if fps is not None and (isinstance(fps, bool) or not isinstance(fps, (int, float))
-                            or not math.isfinite(fps) or not 0 < fps <= 1000):
-        raise ConfigError(f"{where}.fps must be a number in (0, 1000], got "
-                          f"{printable(repr(fps))[:40]}")
-    return CameraSpec(name=name, source=_source(base, _string(t, "source", where, required=True)),
-                      config=_path(base, t, "config", where), preset=_string(t, "preset", where),
-                      scene=_path(base, t, "scene", where), camera=_path(base, t, "camera", where),
-                      loop=loop, fps=None if fps is None else float(fps))
-
-
 def parse_cameras(data: Any, base: str | Path = ".") -> tuple[CameraSpec, ...]:
     """The cameras a parsed cameras file lists (paths relative to ``base``)."""
     if not isinstance(data, dict):
         raise ConfigError("the cameras file must be a TOML table")
-    unknown = sorted(set(data) - {"camera"})
-    if unknown:
-        raise ConfigError(f"unknown key {printable(unknown[0])!r} in the cameras file; cameras "
-                          "are [[camera]] tables")
-    tables = data.get("camera")
-    if not isinstance(tables, list) or not tables:
+    if isinstance(data.get("camera"), list) and not data["camera"] or "camera" not in data:
         raise ConfigError("the cameras file lists no cameras: add [[camera]] tables with name "
                           "and source")
-    cams = tuple(_camera(t, f"camera[{i}]", Path(base)) for i, t in enumerate(tables, 1))
+    tables = from_dict(CamerasFile, data).camera
+    base = Path(base)
+    cams = tuple(CameraSpec(name=t.name, source=_source(base, t.source),
+                            config=_path(base, t.config), preset=t.preset,
+                            scene=_path(base, t.scene), camera=_path(base, t.camera),
+                            loop=t.loop, fps=t.fps) for t in tables)
     seen: set[str] = set()
     for i, c in enumerate(cams, 1):
         if c.name in seen:
             raise ConfigError(f"camera[{i}].name {c.name!r} is used by an earlier camera")
         seen.add(c.name)
     return cams
+
+
+def cameras_json_schema() -> dict[str, Any]:
+    """JSON Schema (draft 2020-12) of the cameras file, for editors."""
+    out = json_schema(CamerasFile, title="motiontrack serve cameras file")
+    out["properties"]["camera"]["minItems"] = 1
+    out["required"] = ["camera"]
+    return out
 
 
 def load_cameras(path: str | Path) -> tuple[CameraSpec, ...]:

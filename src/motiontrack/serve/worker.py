@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import collections
 import itertools
-import json
 import logging
 import math
 import os
@@ -37,6 +36,7 @@ from typing import Any, Iterator
 import cv2
 
 from ..config import load_config
+from ..config_flags import flag_overrides
 from ..errors import MotionTrackError
 from ..io.sources import Source
 from ..pipeline import open_configured_source
@@ -321,11 +321,9 @@ def _segment_name(out: Path) -> str:
 
 
 def _config(spec: CameraSpec) -> Any:
-    overrides = ["output.video=false", "output.mask_video=false"]
-    if spec.fps:
-        overrides.append(f"source.fps={spec.fps}")
-    if spec.camera is not None:
-        overrides.append(f"measure.camera={json.dumps(str(spec.camera))}")
+    # the cameras file's fps and camera are the flags of the same names (config_flags)
+    overrides = ["output.video=false", "output.mask_video=false"] + flag_overrides(
+        {"fps": spec.fps or None, "camera": None if spec.camera is None else str(spec.camera)})
     return load_config(spec.config, overrides, preset=spec.preset)
 
 

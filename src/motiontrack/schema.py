@@ -1,0 +1,349 @@
+"""Typed schemas of the files users write: fields with type, range, default and meaning.
+
+A schema is a frozen dataclass whose fields are declared with :func:`param`; a nested table is a
+field whose type is another such dataclass, an array of tables a ``tuple[Table, ...]`` field.
+:func:`from_dict` builds one from parsed TOML or JSON, and every problem is one
+:class:`~motiontrack.errors.ConfigError` line naming the key as written (``camera[2].fps``), what
+is expected and what arrived::
+
+    unknown key(s) camera[1].sorce; valid keys in camera[1]: camera, config, fps, ...
+    camera[1].loop must be true or false, got 'yes'
+    camera[1].fps must be in (0, 1000], got 0.0
+
+:func:`json_schema` exports any schema as JSON Schema (draft 2020-12), for editors and other
+tools; :func:`leaf_fields` lists its keys for reference tables. A field's ``when`` names the
+switches it needs to take effect; :mod:`motiontrack.config_activity` follows them to warn about
+keys that have no effect.
+
+A rule section of a scene file or an entry of a batch manifest is declared the same way::
+
+    @dataclass(frozen=True, kw_only=True)
+    class SpeedingRule(Section):
+        zone: str = param(REQUIRED, nonblank=True, doc="zone whose tracks are watched")
+        max_speed: float = param(2.0, lo=0.0, lo_open=True, hi=100.0, doc="m/s above which ...")
+
+    @dataclass(frozen=True, kw_only=True)
+    class ManifestEntry(Section):
+        source: str = param(REQUIRED, nonblank=True, doc="video, image folder or synth:NAME")
+        gt: str | None = param(None, doc="ground truth to score against")
+        start: int = param(0, lo=0, doc="first frame index")
+
+    rule = from_dict(SpeedingRule, table, where="rule[2]")
+    entries = [from_dict(ManifestEntry, e, where=f"sequence {i}") for i, e in enumerate(seq, 1)]
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import re
+import types
+import typing
+from dataclasses import MISSING, Field, dataclass, field, fields, is_dataclass
+from typing import Any, Iterable, Iterator
+
+from .errors import EXCERPT_CHARS, ConfigError, excerpt
+
+__all__ = ["INT_MIN", "INT_MAX", "REQUIRED", "Not", "param", "Section", "from_dict",
+           "leaf_fields", "allowed_text", "json_schema", "shown"]
+
+#: bounds of an integer field that gives none: what OpenCV's ``int`` parameters hold
+INT_MIN, INT_MAX = -(2**31), 2**31 - 1
+
+#: the default of a field the file must give (:func:`param`)
+REQUIRED: Any = MISSING
+
+
+@dataclass(frozen=True)
+class Not:
+    """A ``when`` condition of :func:`param`: the switch differs from ``value``; ``example`` is
+    a value that meets it (named in the hint that says how to make the key take effect)."""
+
+    value: Any
+    example: Any
+
+
+def param(default: Any, *, lo: float | None = None, hi: float | None = None,
+          lo_open: bool = False, choices: Iterable[Any] | None = None, odd: bool = False,
+          pattern: str | None = None, pattern_doc: str = "", nonblank: bool = False,
+          doc: str = "", when: Any = None) -> Any:
+    """A schema field with its allowed values: ``lo <= value <= hi`` (``lo < value`` with
+    ``lo_open``), one of ``choices``, for kernel sizes ``odd`` (0 means "off" and is always
+    allowed for odd fields); a string matching ``pattern`` whole (``pattern_doc`` says what that
+    is in words, for the message) or, with ``nonblank``, not empty or blank.
+
+    ``default`` is :data:`REQUIRED` for a key the file must give (declare the dataclass
+    ``kw_only`` so that required and optional fields may come in any order), ``None`` for an
+    optional one typed ``X | None``. Every number must be finite. An integer field without
+    ``lo``/``hi`` is bounded by :data:`INT_MIN`/:data:`INT_MAX`, so that no value reaches OpenCV
+    (or a loop or an allocation) that a C ``int`` cannot hold.
+
+    ``when`` names the switches of the same section that the field needs to take effect:
+    ``{"name": value}`` (all must hold; ``Not(value, example)`` for "anything but value"), or a
+    tuple of such tables (any one must hold).
+    """
+    if isinstance(default, int) and not isinstance(default, bool) and choices is None:
+        lo = INT_MIN if lo is None else lo
+        hi = INT_MAX if hi is None else hi
+    if isinstance(when, dict):
+        when = (when,)
+    meta = {"lo": lo, "hi": hi, "lo_open": lo_open,
+            "choices": tuple(choices) if choices is not None else None,
+            "odd": odd, "pattern": pattern, "pattern_doc": pattern_doc, "nonblank": nonblank,
+            "doc": doc, "when": tuple(when or ())}
+    if default is REQUIRED:
+        return field(metadata=meta)
+    if isinstance(default, (list, dict, set)):
+        raise TypeError("a schema default must be immutable (a tuple, not a list)")
+    return field(default=default, metadata=meta)
+
+
+def shown(v: Any) -> str:
+    """A value for a message: numbers as written, an integer too long to read by its size, text
+    as a short excerpt (it may come from any file given by mistake), tables and arrays by kind."""
+    if isinstance(v, bool) or isinstance(v, float):
+        return repr(v)
+    if isinstance(v, int):
+        return f"an integer of {len(str(abs(v)))} digits" if abs(v) >= 10**30 else repr(v)
+    if isinstance(v, str):
+        return excerpt(v)
+    return {dict: "a table", list: "an array", tuple: "an array"}.get(
+        type(v), f"a {type(v).__name__}")
+
+
+def _range_text(m: typing.Mapping[str, Any]) -> str:
+    lo, hi = m.get("lo"), m.get("hi")
+    return (f"{'(' if m.get('lo_open') else '['}{'-inf' if lo is None else lo}, "
+            f"{'inf' if hi is None else hi}]")
+
+
+def check_value(m: typing.Mapping[str, Any], v: Any, where: str) -> None:
+    """Check one value against a field's :func:`param` metadata ``m``; ``where`` names the key."""
+    if not m or v is None:
+        return
+    if m.get("choices") is not None and v not in m["choices"]:
+        raise ConfigError(f"{where} must be one of {list(m['choices'])}, got {shown(v)}")
+    if isinstance(v, (int, float)) and not isinstance(v, bool):
+        lo, hi = m.get("lo"), m.get("hi")
+        rng = _range_text(m)
+        if isinstance(v, float) and not math.isfinite(v):
+            raise ConfigError(f"{where} must be a finite number in {rng}, got {v!r}")
+        # written as "not inside" so that a value no comparison holds for is refused too
+        above = lo is None or (lo < v if m.get("lo_open") else lo <= v)
+        if not (above and (hi is None or v <= hi)):
+            raise ConfigError(f"{where} must be in {rng}, got {shown(v)}")
+        if m.get("odd") and v != 0 and int(v) % 2 == 0:
+            raise ConfigError(f"{where} must be 0 (off) or an odd kernel size, got {shown(v)}")
+    if isinstance(v, str):
+        if m.get("nonblank") and not v.strip():
+            raise ConfigError(f"{where} must be a non-empty string, got {shown(v)}")
+        if m.get("pattern") and not re.fullmatch(m["pattern"], v):
+            raise ConfigError(f"{where} must be {m.get('pattern_doc') or 'like ' + m['pattern']}"
+                              f", got {shown(v)}")
+
+
+class Section:
+    """Mixin of a schema dataclass: every field is checked against its :func:`param` metadata
+    after construction, however the section was built.
+
+    ``schema_noun`` goes before "key" in an unknown-key message (``"config "``);
+    :meth:`schema_where` names the section in messages of a section built directly (a schema
+    inside a larger one overrides it with the key path users write).
+    """
+
+    schema_noun: typing.ClassVar[str] = ""
+
+    @classmethod
+    def schema_where(cls) -> str:
+        return cls.__name__
+
+    def __post_init__(self) -> None:
+        name = type(self).schema_where()
+        for f in fields(self):  # type: ignore[arg-type]
+            check_value(f.metadata, getattr(self, f.name), f"{name}.{f.name}")
+
+
+# ----------------------------------------------------------------------------------- types
+def _optional(typ: Any) -> Any:
+    """``X`` of ``X | None`` (``None`` when ``typ`` is not optional)."""
+    if typing.get_origin(typ) in (typing.Union, types.UnionType):
+        args = [a for a in typing.get_args(typ) if a is not type(None)]
+        if len(args) == 1 and len(typing.get_args(typ)) == 2:
+            return args[0]
+    return None
+
+
+def _items(typ: Any) -> Any:
+    """``X`` of ``tuple[X, ...]`` (an array), else ``None``."""
+    if typing.get_origin(typ) is tuple:
+        args = typing.get_args(typ)
+        if len(args) == 2 and args[1] is Ellipsis:
+            return args[0]
+    return None
+
+
+def _coerce(value: Any, typ: Any, where: str) -> Any:
+    """Check a value against its field type; ints are accepted where floats are expected, an
+    integral float where an int is; arrays of tables and nested tables are built in turn."""
+    inner = _optional(typ)
+    if inner is not None:
+        return None if value is None else _coerce(value, inner, where)
+    if is_dataclass(typ):
+        return from_dict(typ, value, where)
+    item = _items(typ)
+    if item is not None:
+        if not isinstance(value, (list, tuple)):
+            raise ConfigError(f"{where} must be an array, got {shown(value)}")
+        return tuple(_coerce(v, item, f"{where}[{i}]") for i, v in enumerate(value, 1))
+    if typ is bool:
+        if isinstance(value, bool):
+            return value
+        raise ConfigError(f"{where} must be true or false, got {shown(value)}")
+    if typ is int:
+        if isinstance(value, bool) or not isinstance(value, int):
+            if isinstance(value, float) and value.is_integer():
+                return int(value)
+            raise ConfigError(f"{where} must be an integer, got {shown(value)}")
+        return value
+    if typ is float:
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise ConfigError(f"{where} must be a number, got {shown(value)}")
+        return float(value)
+    if typ is str:
+        if not isinstance(value, str):
+            raise ConfigError(f"{where} must be a string, got {shown(value)}")
+        return value
+    return value
+
+
+def keys_shown(keys: list[str], prefix: str = "", most: int = 5) -> str:
+    """Key names from a file for a message: the first ``most``, each after ``prefix`` as written
+    when short and printable, else as a short excerpt."""
+    text = ", ".join(prefix + (k if len(k) <= EXCERPT_CHARS and k.isprintable() else excerpt(k))
+                     for k in keys[:most])
+    return text + (f" and {len(keys) - most} more" if len(keys) > most else "")
+
+
+@functools.cache
+def _hints(cls: type) -> dict[str, Any]:
+    return typing.get_type_hints(cls)
+
+
+def from_dict(cls: type, data: Any, where: str = "") -> Any:
+    """Build schema dataclass ``cls`` from a parsed table (``dict``); ``where`` is the table's
+    key path as users write it (empty for a whole file). Unknown keys, missing required keys,
+    wrong types and values out of range are :class:`~motiontrack.errors.ConfigError`\\ s naming
+    the key."""
+    noun = getattr(cls, "schema_noun", "")
+    if not isinstance(data, dict):
+        raise ConfigError(f"{where or 'the ' + noun.strip() or 'the file'} must be a table, "
+                          f"got {shown(data)}")
+    hints = _hints(cls)
+    known = {f.name for f in fields(cls)}
+    unknown = sorted(str(k) for k in set(data) - known)
+    if unknown:
+        prefix = f"{where}." if where else ""
+        raise ConfigError(
+            f"unknown {noun}key(s) {keys_shown(unknown, prefix)}; "
+            f"valid keys{' in ' + where if where else ''}: {', '.join(sorted(known))}"
+        )
+    required = {f.name for f in fields(cls)
+                if f.default is MISSING and f.default_factory is MISSING}
+    kwargs: dict[str, Any] = {}
+    for name, value in data.items():
+        if value is None and (name in required or _optional(hints[name]) is not None):
+            continue   # none (JSON null) where none may stand: as if the key were absent
+        kwargs[name] = _coerce(value, hints[name], f"{where}.{name}" if where else name)
+    for f in fields(cls):
+        key = f"{where}.{f.name}" if where else f.name
+        if f.name not in kwargs:
+            if f.name in required:
+                raise ConfigError(f"{key} is required")
+            continue
+        check_value(f.metadata, kwargs[f.name], key)
+    return cls(**kwargs)  # a section's own cross-field checks name its keys by path
+
+
+# ------------------------------------------------------------------------------- reference
+def leaf_fields(cls: type, prefix: str = "") -> Iterator[tuple[str, Field, Any]]:
+    """``(dotted key, dataclass field, its type)`` of every leaf key of ``cls``, in declaration
+    order (nested tables flattened; an array of tables is one key)."""
+    hints = _hints(cls)
+    for f in fields(cls):
+        if is_dataclass(hints[f.name]):
+            yield from leaf_fields(hints[f.name], f"{prefix}{f.name}.")
+        else:
+            yield prefix + f.name, f, hints[f.name]
+
+
+def allowed_text(meta: typing.Mapping[str, Any]) -> str:
+    """A field's allowed values in words: ``[lo, hi]``, ``a / b / c``, ``odd or 0`` or empty."""
+    allowed = ""
+    if meta.get("choices"):
+        allowed = " / ".join(map(str, meta["choices"]))
+    elif meta.get("lo") is not None or meta.get("hi") is not None:
+        allowed = _range_text(meta)
+    if meta.get("odd"):
+        allowed += " odd or 0"
+    if meta.get("pattern_doc"):
+        allowed = meta["pattern_doc"]
+    return allowed
+
+
+_JSON_TYPES = {bool: "boolean", int: "integer", float: "number", str: "string"}
+
+
+def _type_schema(typ: Any, m: typing.Mapping[str, Any]) -> dict[str, Any]:
+    inner = _optional(typ)
+    if inner is not None:
+        return _type_schema(inner, m)   # an absent key is the file's way of saying "none"
+    if is_dataclass(typ):
+        return _object_schema(typ)
+    item = _items(typ)
+    if item is not None:
+        return {"type": "array", "items": _type_schema(item, {})}
+    out: dict[str, Any] = {"type": _JSON_TYPES[typ]} if typ in _JSON_TYPES else {}
+    if m.get("choices") is not None:
+        out["enum"] = list(m["choices"])
+    if typ in (int, float):
+        if m.get("lo") is not None:
+            out["exclusiveMinimum" if m.get("lo_open") else "minimum"] = m["lo"]
+        if m.get("hi") is not None:
+            out["maximum"] = m["hi"]
+    if typ is str:
+        if m.get("pattern"):
+            out["pattern"] = f"^(?:{m['pattern']})$"
+        elif m.get("nonblank"):
+            out["pattern"] = r"\S"
+    return out
+
+
+def _object_schema(cls: type) -> dict[str, Any]:
+    hints = _hints(cls)
+    props: dict[str, Any] = {}
+    required = []
+    for f in fields(cls):
+        p = _type_schema(hints[f.name], f.metadata)
+        if f.metadata.get("doc"):
+            p["description"] = f.metadata["doc"]
+        if f.default is not MISSING and f.default is not None:
+            p["default"] = list(f.default) if isinstance(f.default, tuple) else f.default
+        elif f.default is MISSING and f.default_factory is MISSING:
+            required.append(f.name)
+        props[f.name] = p
+    out: dict[str, Any] = {"type": "object", "properties": props, "additionalProperties": False}
+    if required:
+        out["required"] = required
+    if cls.__doc__ and not cls.__doc__.startswith(cls.__name__ + "("):
+        out["description"] = cls.__doc__.strip().split("\n\n")[0].replace("\n", " ")
+    return out
+
+
+def json_schema(cls: type, title: str = "") -> dict[str, Any]:
+    """JSON Schema (draft 2020-12) of schema dataclass ``cls``: types, ranges, choices,
+    defaults, meanings, required keys, no other keys."""
+    out = {"$schema": "https://json-schema.org/draft/2020-12/schema"}
+    if title:
+        out["title"] = title
+    out.update(_object_schema(cls))
+    return out
