@@ -14,11 +14,11 @@ A new rule is one module::
     class Appeared(BaseRule):
         name = section = "appeared"
         events = (EventType("appeared", meaning="a track is seen for the first time"),)
-        keys = (SceneKey("appeared.enabled", "bool", "true", "report new tracks"),)
+        keys = (SceneKey("appeared", "empty table", "—", "report the first frame of each track"),)
 
         @classmethod
-        def parse(cls, data, camera, where):
-            return None if data is None else dict(table(data, where, ("enabled",)))
+        def parse(cls, data, camera, where):   # data None: the scene has no [appeared]
+            return None if data is None else table(data, where, ())
 
         def step(self, frame):
             return [frame.event("appeared", i) for i in np.flatnonzero(~frame.known)]
