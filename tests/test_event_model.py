@@ -11,7 +11,10 @@ from motiontrack.types import (
     EVENTS_SCHEMA,
     EVENTS_SCHEMA_VERSION,
     Event,
+    event_types,
     events_header,
+    register_event_type,
+    unregister_event_type,
 )
 
 BASE = {"frame": 11, "t": 1.0, "track": 3, "x": 100.5, "y": 200.25}
@@ -107,3 +110,52 @@ def test_events_header_names_schema_version_and_frame_rate():
         "scene": "scene.toml",
     }
     assert EVENTS_SCHEMA == "motiontrack.events" and EVENTS_SCHEMA_VERSION == 1
+
+
+# ------------------------------------------------------------------ plug-in event types
+@pytest.fixture
+def counted():
+    """A plug-in type ``counted`` that needs ``zone`` and may carry ``dwell_s``."""
+    register_event_type("counted", ("zone",), ("dwell_s",))
+    yield "counted"
+    unregister_event_type("counted")
+
+
+def test_a_registered_event_type_is_valid_with_its_fields_and_round_trips(counted):
+    e = Event.from_json({"type": "counted", **BASE, "zone": "plaza", "dwell_s": 2.0})
+    assert Event.from_json(e.to_json()) == e
+    assert event_types() == EVENT_TYPES + ("counted",)
+
+
+@pytest.mark.parametrize("extra, message", [
+    ({}, "counted event needs zone"),
+    ({"zone": "plaza", "line": "gate"}, "counted event cannot have line"),
+])
+def test_a_registered_event_type_checks_its_fields(counted, extra, message):
+    with pytest.raises(ValueError, match=message):
+        Event(type="counted", **BASE, **extra)
+
+
+def test_an_unregistered_event_type_is_refused_again(counted):
+    unregister_event_type("counted")
+    with pytest.raises(ValueError, match="event type must be one of line_cross, .*speeding, got"):
+        Event(type="counted", **BASE, zone="plaza")
+    register_event_type("counted", ("zone",), ("dwell_s",))   # the fixture unregisters it
+
+
+@pytest.mark.parametrize("name, required, optional, message", [
+    ("zone_exit", ("zone",), (), "'zone_exit' is already registered with other fields"),
+    ("counted2", ("colour",), (), "unknown field 'colour'"),
+    ("two words", (), (), "letters, digits and _"),
+])
+def test_registering_an_event_type_refuses_clashes_and_unknown_fields(name, required, optional,
+                                                                      message):
+    with pytest.raises(ValueError, match=message):
+        register_event_type(name, required, optional)
+
+
+def test_registering_a_builtin_type_with_its_own_fields_changes_nothing():
+    register_event_type("zone_exit", ("zone", "dwell_s"))
+    assert event_types() == EVENT_TYPES
+    with pytest.raises(ValueError, match="not a registered plug-in type"):
+        unregister_event_type("zone_exit")

@@ -30,6 +30,9 @@ __all__ = [
     "INT_LIMIT",
     "Event",
     "EVENT_TYPES",
+    "event_types",
+    "register_event_type",
+    "unregister_event_type",
     "EVENTS_SCHEMA",
     "EVENTS_SCHEMA_VERSION",
     "events_header",
@@ -418,6 +421,8 @@ _EVENT_REQUIRED = {
     "speeding": (),
 }
 _EVENT_OPTIONAL = {"abandoned": ("owner",), "speeding": ("speed_mps", "speed_px_s")}
+#: every type an :class:`Event` may have: the built-in ones, then those analytics rules register
+_EVENT_ORDER = list(EVENT_TYPES)
 #: the JSON key order of every event (absent keys are left out)
 _EVENT_KEYS = (
     "type", "frame", "t", "track", "x", "y", "X", "Y", "line", "direction", "zone", "dwell_s",
@@ -428,6 +433,48 @@ _EVENT_STR = ("line", "direction", "zone")
 _EVENT_INT = ("frame", "track", "owner")
 
 
+def event_types() -> tuple[str, ...]:
+    """Every event type known now: :data:`EVENT_TYPES`, then the types of plug-in analytics
+    rules (:func:`register_event_type`) in the order they were registered."""
+    return tuple(_EVENT_ORDER)
+
+
+def register_event_type(name: str, required: tuple[str, ...] = (),
+                        optional: tuple[str, ...] = ()) -> None:
+    """Make ``name`` a valid :class:`Event` type carrying the fields ``required`` and maybe
+    ``optional`` (beyond ``type, frame, t, track, x, y``; each one of the event's fields).
+
+    An analytics rule registers the types it emits (:mod:`motiontrack.analytics.rule`);
+    registering a type again with the same fields does nothing, with other fields it is an
+    error (a built-in type's fields are fixed here, where events files are read without the
+    rules).
+    """
+    required, optional = tuple(required), tuple(optional)
+    bad = [f for f in required + optional if f not in _EVENT_EXTRA]
+    if bad:
+        raise ValueError(f"event type {name!r}: unknown field {bad[0]!r}; an event's fields "
+                         f"are {', '.join(_EVENT_EXTRA)}")
+    if name in _EVENT_REQUIRED:
+        if (_EVENT_REQUIRED[name], _EVENT_OPTIONAL.get(name, ())) != (required, optional):
+            raise ValueError(f"event type {name!r} is already registered with other fields")
+        return
+    if not (isinstance(name, str) and name.isidentifier()):
+        raise ValueError(f"an event type must be a name of letters, digits and _, got {name!r}")
+    _EVENT_REQUIRED[name] = required
+    if optional:
+        _EVENT_OPTIONAL[name] = optional
+    _EVENT_ORDER.append(name)
+
+
+def unregister_event_type(name: str) -> None:
+    """Forget a type :func:`register_event_type` added (the built-in types stay)."""
+    if name in EVENT_TYPES or name not in _EVENT_REQUIRED:
+        raise ValueError(f"event type {name!r} is not a registered plug-in type")
+    del _EVENT_REQUIRED[name]
+    _EVENT_OPTIONAL.pop(name, None)
+    _EVENT_ORDER.remove(name)
+
+
 @dataclass(frozen=True)
 class Event:
     """One scene-analytics event: what happened, when, to which track and where.
@@ -435,7 +482,7 @@ class Event:
     Attributes
     ----------
     type : str
-        One of :data:`EVENT_TYPES`.
+        One of :func:`event_types`: :data:`EVENT_TYPES` and those of plug-in rules.
     frame : int
         1-based frame number (MOTChallenge numbering).
     t : float
@@ -479,7 +526,7 @@ class Event:
 
     def __post_init__(self) -> None:
         if self.type not in _EVENT_REQUIRED:
-            raise ValueError(f"event type must be one of {', '.join(EVENT_TYPES)}, got {self.type!r}")
+            raise ValueError(f"event type must be one of {', '.join(_EVENT_ORDER)}, got {self.type!r}")
         for name in _EVENT_KEYS[1:]:
             v = getattr(self, name)
             if v is None:
@@ -548,7 +595,7 @@ class Event:
         kind = obj.get("type")
         if kind not in _EVENT_REQUIRED:
             shown = repr(kind)[:40]
-            raise ValueError(f"event type must be one of {', '.join(EVENT_TYPES)}, got {shown}")
+            raise ValueError(f"event type must be one of {', '.join(_EVENT_ORDER)}, got {shown}")
         unknown = [str(k) for k in obj if k not in _EVENT_KEYS]
         if unknown:
             raise ValueError(f"{kind} event has unknown key {unknown[0][:40]!r}")

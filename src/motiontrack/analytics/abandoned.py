@@ -32,7 +32,7 @@ from typing import Callable
 import numpy as np
 
 from .objects import BAG_RATIO, OBJECT_IDS, OWNER_S, STILL_LEVELS, StaticObjects, TrackedObject
-from .scene import AbandonedSpec
+from .specs import AbandonedSpec
 
 __all__ = ["AbandonedRule", "OBJECT_IDS", "OWNER_S", "BAG_RATIO", "STILL_LEVELS"]
 

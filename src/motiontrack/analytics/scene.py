@@ -24,24 +24,28 @@ A scene is TOML (``docs/analytics.md``)::
 
 :func:`parse_scene` turns the parsed table into a frozen :class:`Scene` in source pixels,
 projecting ``world`` geometry through a camera; every problem is one :class:`ConfigError`
-naming the key as written (tables of an array counted from 1: ``line[2].points``).
+naming the key as written (tables of an array counted from 1: ``line[2].points``). The top-level
+keys are checked here; each table belongs to a rule (:data:`.rule.RULES`), which checks it
+(:meth:`.rule.Rule.parse`): the scene's keys are these three and the sections of the registered
+rules.
 """
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
-from ..errors import ConfigError, excerpt
+from ..errors import ConfigError
 from ..io.tomlfile import read_toml
-from .geometry import polygon_area, polygon_is_simple
+from .rule import SceneKey
+from .rules import RULES
+from .specs import AbandonedSpec, LineSpec, SpeedSpec, StationarySpec, ZoneSpec
+from .validate import kind, number, table
 
 __all__ = [
     "ANCHORS",
+    "TOP_KEYS",
     "LineSpec",
     "ZoneSpec",
     "StationarySpec",
@@ -53,67 +57,28 @@ __all__ = [
 ]
 
 ANCHORS = ("bottom_center", "center")
-_TOP_KEYS = ("anchor", "hysteresis_px", "forget_s", "line", "zone", "stationary", "abandoned", "speed")
-#: largest coordinate accepted (pixels or metres): far beyond any frame, small enough for float maths
-_COORD_LIMIT = 1e7
-
-
-@dataclass(frozen=True)
-class LineSpec:
-    """A counting line from ``a`` to ``b`` (source pixels); see :func:`.geometry.side`."""
-
-    name: str
-    a: tuple[float, float]
-    b: tuple[float, float]
-
-    @property
-    def length(self) -> float:
-        return math.hypot(self.b[0] - self.a[0], self.b[1] - self.a[1])
-
-
-@dataclass(frozen=True)
-class ZoneSpec:
-    """A zone: a simple polygon (source pixels), and the dwell after which ``loiter`` fires."""
-
-    name: str
-    polygon: tuple[tuple[float, float], ...]
-    loiter_s: float | None = None
-
-    def vertices(self) -> np.ndarray:
-        """(K, 2) float64 vertices."""
-        return np.asarray(self.polygon, dtype=np.float64)
-
-
-@dataclass(frozen=True)
-class StationarySpec:
-    """A track that stays within a radius (pixels or metres: exactly one) for ``after_s``."""
-
-    after_s: float
-    radius_px: float | None = None
-    radius_m: float | None = None
-
-
-@dataclass(frozen=True)
-class AbandonedSpec:
-    """An object left static while its owner is farther than a distance, for ``after_s``."""
-
-    after_s: float
-    distance_m: float | None = None
-    distance_heights: float | None = None
-
-
-@dataclass(frozen=True)
-class SpeedSpec:
-    """A speed limit (metres or pixels per second: exactly one) over a ``window_s`` window."""
-
-    limit_mps: float | None = None
-    limit_px_s: float | None = None
-    window_s: float = 1.0
+#: the keys of the scene's top level that all rules share, as the docs' table lists them
+TOP_KEYS = (
+    SceneKey("anchor", "`bottom_center` \\| `center`", "`bottom_center`",
+             "the point of a box the rules use"),
+    SceneKey("hysteresis_px", "float ≥ 0", "5",
+             "band around lines and zone edges in which a side does not change"),
+    SceneKey("forget_s", "float > 0", "2",
+             "a track unseen longer has left (zone exit, stationary end); its id seen again is "
+             "a new track"),
+)
+#: the scene's fields of the built-in rules' sections
+_FIELDS = {"line": "lines", "zone": "zones", "stationary": "stationary",
+           "abandoned": "abandoned", "speed": "speed"}
 
 
 @dataclass(frozen=True)
 class Scene:
-    """Everything analytics needs to know about one camera view, in source pixels."""
+    """Everything analytics needs to know about one camera view, in source pixels.
+
+    The built-in rules' sections are fields of their own; ``sections`` holds those of plug-in
+    rules (:data:`.rule.RULES`), section → parsed spec. :meth:`spec` reads either.
+    """
 
     anchor: str = "bottom_center"
     hysteresis_px: float = 5.0
@@ -124,145 +89,34 @@ class Scene:
     abandoned: AbandonedSpec | None = None
     speed: SpeedSpec | None = None
     source: str = ""
+    sections: tuple[tuple[str, Any], ...] = ()
+
+    def spec(self, section: str) -> Any:
+        """The parsed table of ``section`` (None when the scene has none)."""
+        if section in _FIELDS:
+            return getattr(self, _FIELDS[section])
+        return dict(self.sections).get(section)
+
+    @property
+    def camera_key(self) -> str | None:
+        """The first key in metres, in the order the rules check them; None if none is."""
+        for rule in _camera_order():
+            spec = self.spec(rule.section)
+            if spec is not None and rule.camera_key(spec) is not None:
+                return rule.camera_key(spec)
+        return None
 
     @property
     def needs_camera(self) -> bool:
         """Whether a rule measures in metres (positions of events then carry ``X, Y`` too)."""
-        return bool(
-            (self.stationary and self.stationary.radius_m is not None)
-            or (self.speed and self.speed.limit_mps is not None)
-            or (self.abandoned and self.abandoned.distance_m is not None)
-        )
+        return self.camera_key is not None
 
 
-# --------------------------------------------------------------------------------- validation
-def _kind(v: Any) -> str:
-    if isinstance(v, bool) or isinstance(v, (int, float)):
-        return repr(v)
-    if isinstance(v, str):
-        return excerpt(v)
-    return {dict: "a table", list: "an array"}.get(type(v), f"a {type(v).__name__}")
-
-
-def _table(data: Any, where: str, keys: tuple[str, ...]) -> dict:
-    if not isinstance(data, dict):
-        raise ConfigError(f"{where} must be a table, got {_kind(data)}")
-    unknown = sorted(str(k) for k in data if k not in keys)
-    if unknown:
-        prefix = f"{where}." if where != "the scene" else ""
-        k = unknown[0]
-        shown = k if len(k) <= 40 and k.isprintable() else excerpt(k)
-        raise ConfigError(f"unknown scene key {prefix}{shown}; valid keys"
-                          f"{'' if where == 'the scene' else ' in ' + where}: {', '.join(keys)}")
-    return data
-
-
-def _number(data: dict, key: str, where: str, default: Any = None, *, positive: bool = True,
-            required: bool = False) -> float | None:
-    if where:
-        key_path = f"{where}.{key}"
-    else:
-        key_path = key
-    if key not in data:
-        if required:
-            raise ConfigError(f"{key_path} is required")
-        return default
-    v = data[key]
-    if isinstance(v, bool) or not isinstance(v, (int, float)):
-        raise ConfigError(f"{key_path} must be a number, got {_kind(v)}")
-    v = float(v)
-    if not math.isfinite(v) or abs(v) > _COORD_LIMIT:
-        raise ConfigError(f"{key_path} must be a finite number, got {_kind(v)}")
-    if positive and not v > 0:
-        raise ConfigError(f"{key_path} must be > 0, got {_kind(v)}")
-    if not positive and v < 0:
-        raise ConfigError(f"{key_path} must be >= 0, got {_kind(v)}")
-    return v
-
-
-def _one_of(data: dict, keys: tuple[str, str], where: str) -> str:
-    present = [k for k in keys if k in data]
-    if len(present) != 1:
-        raise ConfigError(f"{where} needs exactly one of {keys[0]} and {keys[1]}")
-    return present[0]
-
-
-def _points(v: Any, where: str) -> np.ndarray:
-    """``[[x, y], ...]`` → (K, 2) float64; anything else is an error naming ``where``."""
-    if not isinstance(v, list):
-        raise ConfigError(f"{where} must be an array of [x, y] points, got {_kind(v)}")
-    for i, p in enumerate(v, 1):
-        ok = isinstance(p, list) and len(p) == 2 and all(
-            isinstance(c, (int, float)) and not isinstance(c, bool) and math.isfinite(c)
-            and abs(c) <= _COORD_LIMIT for c in p)
-        if not ok:
-            raise ConfigError(f"{where} point {i} must be [x, y] with two finite numbers, "
-                              f"got {_kind(p)}")
-    return np.asarray(v, dtype=np.float64).reshape(-1, 2)
-
-
-def _geometry(data: dict, key: str, where: str, camera: Any) -> np.ndarray:
-    """The table's pixel geometry: ``key`` as written, or ``world`` projected by ``camera``."""
-    used = _one_of(data, (key, "world"), where)
-    pts = _points(data[used], f"{where}.{used}")
-    if used == "world":
-        if camera is None:
-            raise ConfigError(f"{where}.world is in metres and needs a camera calibration "
-                              f"(--camera); or give {where}.{key} in pixels")
-        px = np.asarray(camera.world_to_image(pts), dtype=np.float64).reshape(-1, 2)
-        bad = np.flatnonzero(~np.all(np.isfinite(px), axis=1))
-        if len(bad):
-            raise ConfigError(f"{where}.world point {bad[0] + 1} is not in view of the camera")
-        pts = px
-    return pts
-
-
-def _name(data: dict, where: str, seen: set[str]) -> str:
-    name = data.get("name")
-    if not isinstance(name, str) or not name.strip():
-        raise ConfigError(f"{where}.name must be a non-empty string, got "
-                          f"{'nothing' if name is None else _kind(name)}")
-    if not name.isprintable() or len(name) > 100:
-        raise ConfigError(f"{where}.name must be printable text of at most 100 characters")
-    if name in seen:
-        raise ConfigError(f"{where}.name {excerpt(name)} is used twice")
-    seen.add(name)
-    return name
-
-
-def _line(data: Any, where: str, camera: Any, seen: set[str]) -> LineSpec:
-    data = _table(data, where, ("name", "points", "world"))
-    name = _name(data, where, seen)
-    pts = _geometry(data, "points", where, camera)
-    used = "points" if "points" in data else "world"
-    if len(pts) != 2:
-        raise ConfigError(f"{where}.{used} must be two [x, y] points, got {len(pts)}")
-    if math.hypot(*(pts[1] - pts[0])) < 1.0:
-        raise ConfigError(f"{where}.{used}: the two points are less than a pixel apart")
-    return LineSpec(name, (float(pts[0, 0]), float(pts[0, 1])), (float(pts[1, 0]), float(pts[1, 1])))
-
-
-def _zone(data: Any, where: str, camera: Any, seen: set[str]) -> ZoneSpec:
-    data = _table(data, where, ("name", "polygon", "world", "loiter_s"))
-    name = _name(data, where, seen)
-    pts = _geometry(data, "polygon", where, camera)
-    used = "polygon" if "polygon" in data else "world"
-    if len(pts) < 3:
-        raise ConfigError(f"{where}.{used} must have at least 3 [x, y] points, got {len(pts)}")
-    if not polygon_is_simple(pts):
-        raise ConfigError(f"{where}.{used} must be a simple polygon: two of its edges cross "
-                          "or a point repeats")
-    if abs(polygon_area(pts)) < 1.0:
-        raise ConfigError(f"{where}.{used} encloses no area (its points lie on a line)")
-    loiter = _number(data, "loiter_s", where)
-    return ZoneSpec(name, tuple((float(x), float(y)) for x, y in pts), loiter)
-
-
-def _array_of_tables(data: dict, key: str) -> list:
-    v = data.get(key, [])
-    if not isinstance(v, list):
-        raise ConfigError(f"{key} must be an array of tables ([[{key}]]), got {_kind(v)}")
-    return v
+def _camera_order() -> list:
+    # a scene with several keys in metres and no camera names stationary's, then speed's, then
+    # abandoned's (then the plug-in rules', in their order)
+    order = {"stationary": 0, "speed": 1, "abandoned": 2}
+    return sorted(RULES.ordered(), key=lambda r: order.get(r.section, len(order)))
 
 
 def parse_scene(data: Any, camera: Any = None, source: str = "") -> Scene:
@@ -283,39 +137,19 @@ def parse_scene(data: Any, camera: Any = None, source: str = "") -> Scene:
     ConfigError
         One line naming the key path as written.
     """
-    data = _table(data, "the scene", _TOP_KEYS)
+    rules = RULES.ordered()
+    data = table(data, "the scene", tuple(k.key for k in TOP_KEYS) + tuple(r.section for r in rules))
     anchor = data.get("anchor", "bottom_center")
     if anchor not in ANCHORS:
-        raise ConfigError(f"anchor must be one of {', '.join(ANCHORS)}, got {_kind(anchor)}")
-    hyst = _number(data, "hysteresis_px", "", 5.0, positive=False)
-    forget = _number(data, "forget_s", "", 2.0)
-    names: set[str] = set()
-    lines = tuple(_line(t, f"line[{i}]", camera, names)
-                  for i, t in enumerate(_array_of_tables(data, "line"), 1))
-    names = set()
-    zones = tuple(_zone(t, f"zone[{i}]", camera, names)
-                  for i, t in enumerate(_array_of_tables(data, "zone"), 1))
-    stationary = abandoned = speed = None
-    if "stationary" in data:
-        t = _table(data["stationary"], "stationary", ("after_s", "radius_px", "radius_m"))
-        r = _one_of(t, ("radius_px", "radius_m"), "stationary")
-        stationary = StationarySpec(_number(t, "after_s", "stationary", required=True),
-                                    **{r: _number(t, r, "stationary")})
-    if "abandoned" in data:
-        t = _table(data["abandoned"], "abandoned", ("after_s", "distance_m", "distance_heights"))
-        d = _one_of(t, ("distance_m", "distance_heights"), "abandoned")
-        abandoned = AbandonedSpec(_number(t, "after_s", "abandoned", required=True),
-                                  **{d: _number(t, d, "abandoned")})
-    if "speed" in data:
-        t = _table(data["speed"], "speed", ("limit_mps", "limit_px_s", "window_s"))
-        k = _one_of(t, ("limit_mps", "limit_px_s"), "speed")
-        speed = SpeedSpec(**{k: _number(t, k, "speed")},
-                          window_s=_number(t, "window_s", "speed", 1.0))
-    scene = Scene(anchor, hyst, forget, lines, zones, stationary, abandoned, speed, source)
-    if scene.needs_camera and camera is None:
-        key = ("stationary.radius_m" if stationary and stationary.radius_m is not None else
-               "speed.limit_mps" if speed and speed.limit_mps is not None else
-               "abandoned.distance_m")
+        raise ConfigError(f"anchor must be one of {', '.join(ANCHORS)}, got {kind(anchor)}")
+    hyst = number(data, "hysteresis_px", "", 5.0, positive=False)
+    forget = number(data, "forget_s", "", 2.0)
+    specs = {r.section: r.parse(data.get(r.section), camera, r.section) for r in rules}
+    builtin = {field: specs.pop(section) for section, field in _FIELDS.items() if section in specs}
+    scene = Scene(anchor, hyst, forget, **builtin, source=source,
+                  sections=tuple((k, v) for k, v in specs.items() if v is not None))
+    key = scene.camera_key
+    if key is not None and camera is None:
         raise ConfigError(f"{key} is in metres and needs a camera calibration (--camera); "
                           "give it in pixels (radius_px, limit_px_s, distance_heights) instead")
     return scene

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .scene import ZoneSpec
+from .specs import ZoneSpec
 
 __all__ = ["ZoneEdges"]
 

@@ -1,0 +1,94 @@
+"""``[[line]]``: counting lines crossed ``in`` or ``out`` (``line_cross``), with hysteresis.
+
+The crossing test over arrays of tracks is :class:`..lines.LineSet`.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from ...errors import ConfigError
+from ...types import Event
+from ..lines import LineSet
+from ..rule import RULES, BaseRule, Columns, EventType, FrameTable, RuleContext, SceneKey
+from ..specs import LineSpec
+from ..validate import array_of_tables, geometry, name, table
+
+__all__ = ["Lines"]
+
+
+def _line(data: Any, where: str, camera: Any, seen: set[str]) -> LineSpec:
+    data = table(data, where, ("name", "points", "world"))
+    line_name = name(data, where, seen)
+    pts = geometry(data, "points", where, camera)
+    used = "points" if "points" in data else "world"
+    if len(pts) != 2:
+        raise ConfigError(f"{where}.{used} must be two [x, y] points, got {len(pts)}")
+    if math.hypot(*(pts[1] - pts[0])) < 1.0:
+        raise ConfigError(f"{where}.{used}: the two points are less than a pixel apart")
+    return LineSpec(line_name, (float(pts[0, 0]), float(pts[0, 1])),
+                    (float(pts[1, 0]), float(pts[1, 1])))
+
+
+@RULES.register
+class Lines(BaseRule):
+    """Crossings of counting lines, ``in`` or ``out``."""
+
+    name = section = "line"
+    events = (EventType("line_cross", ("line", "direction"),
+                        meaning="the anchor crossed the line's segment: `direction` `in` "
+                                "(from s < 0 to s > 0) or `out`"),)
+    keys = (
+        SceneKey("line[i].name", "text", "—", "unique among lines"),
+        SceneKey("line[i].points` / `.world", "two `[x, y]`", "—",
+                 "pixels, or ground-plane metres projected through `--camera`; at least 1 px "
+                 "apart"),
+    )
+
+    @classmethod
+    def parse(cls, data: Any, camera: Any, where: str) -> tuple[LineSpec, ...]:
+        seen: set[str] = set()
+        return tuple(_line(t, f"line[{i}]", camera, seen)
+                     for i, t in enumerate(array_of_tables(data, "line"), 1))
+
+    @classmethod
+    def idle_summary(cls) -> dict[str, Any]:
+        return {"lines": {}}
+
+    def __init__(self, spec: tuple[LineSpec, ...], context: RuleContext) -> None:
+        super().__init__(spec, context)
+        self.set = LineSet([ln.a for ln in spec], [ln.b for ln in spec])
+        # side: the confirmed side; touched: a step met the segment since; s: s(p) last time
+        self.state = Columns(self.set.n, side=np.int8, touched=bool, s=np.float64)
+        self.crossings = np.zeros((len(spec), 2), dtype=np.int64)  # in, out
+
+    def step(self, frame: FrameTable) -> list[Event]:
+        if not self.set.n or not len(frame):
+            return []
+        t, rows = self.state, frame.rows
+        t.prepare(frame)
+        crossed, t.side[rows], t.touched[rows], t.s[rows] = self.set.step(
+            t.side[rows], t.touched[rows], t.s[rows], frame.previous, frame.known, frame.points,
+            self.context.hysteresis_px)
+        if not crossed.any():
+            return []
+        events = []
+        for i, j in zip(*np.nonzero(crossed)):
+            direction = "in" if crossed[i, j] > 0 else "out"
+            self.crossings[j, 0 if direction == "in" else 1] += 1
+            events.append(frame.event("line_cross", i, line=self.spec[j].name,
+                                      direction=direction))
+        return events
+
+    def line_counts(self) -> dict[str, tuple[int, int]]:
+        """Line name → (in, out) crossings so far."""
+        return {ln.name: (int(c[0]), int(c[1])) for ln, c in zip(self.spec, self.crossings)}
+
+    def counts(self) -> dict[str, Any]:
+        return {"line_counts": self.line_counts()}
+
+    def summary(self) -> dict[str, Any]:
+        return {"lines": {k: {"in": i, "out": o} for k, (i, o) in self.line_counts().items()}}

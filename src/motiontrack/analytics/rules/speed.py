@@ -1,0 +1,76 @@
+"""``[speed]``: tracks faster than a limit over a window (``speeding``), in metres per second
+with a camera or pixels per second without. The speed of one track is
+:class:`..movement.SpeedWindow`; a track speeds again only after falling to
+:data:`..movement.REARM` of the limit.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ...types import Event
+from ..movement import REARM, SpeedWindow
+from ..rule import RULES, BaseRule, EventType, FrameTable, RuleContext, SceneKey, TrackState, rounded
+from ..specs import SpeedSpec
+from ..validate import number, one_of, table
+
+__all__ = ["Speed"]
+
+
+@RULES.register
+class Speed(BaseRule):
+    """Tracks over a speed limit."""
+
+    name = section = "speed"
+    events = (EventType("speeding", (), ("speed_mps", "speed_px_s"),
+                        meaning="the track's speed over `window_s` exceeds the limit: "
+                                "exactly one of `speed_mps` (with a camera) and `speed_px_s`"),)
+    keys = (
+        SceneKey("speed.limit_px_s` / `.limit_mps", "float > 0", "—",
+                 "exactly one; metres per second need a camera"),
+        SceneKey("speed.window_s", "float > 0", "1", "window of the speed measurement"),
+    )
+
+    @classmethod
+    def parse(cls, data: Any, camera: Any, where: str) -> SpeedSpec | None:
+        if data is None:
+            return None
+        t = table(data, where, ("limit_mps", "limit_px_s", "window_s"))
+        k = one_of(t, ("limit_mps", "limit_px_s"), where)
+        return SpeedSpec(**{k: number(t, k, where)}, window_s=number(t, "window_s", where, 1.0))
+
+    @classmethod
+    def camera_key(cls, spec: SpeedSpec) -> str | None:
+        return "speed.limit_mps" if spec.limit_mps is not None else None
+
+    def __init__(self, spec: SpeedSpec, context: RuleContext) -> None:
+        super().__init__(spec, context)
+        self.windows: dict[int, SpeedWindow] = {}
+
+    def forget(self, frame: int, tid: int, state: TrackState) -> list[Event]:
+        self.windows.pop(tid, None)
+        return []
+
+    def step(self, frame: FrameTable) -> list[Event]:
+        spec, fps = self.spec, self.context.fps
+        metres = spec.limit_mps is not None
+        pos = frame.world if metres else frame.points
+        limit = spec.limit_mps if metres else spec.limit_px_s
+        key = "speed_mps" if metres else "speed_px_s"
+        finite = np.isfinite(pos).all(axis=1).tolist()
+        events = []
+        for i, tid in enumerate(frame.ids.tolist()):
+            w = self.windows.setdefault(tid, SpeedWindow())
+            if not finite[i]:
+                continue
+            v = w.speed(frame.frame, (pos[i, 0], pos[i, 1]), spec.window_s * fps, fps)
+            if v is None:
+                continue
+            if v > limit and not w.speeding:
+                w.speeding = True
+                events.append(frame.event("speeding", i, **{key: rounded(v, 2)}))
+            elif v <= REARM * limit:
+                w.speeding = False
+        return events
