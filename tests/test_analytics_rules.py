@@ -139,3 +139,16 @@ def test_toy_rule_emits_through_track_scene(appeared, tmp_path):
     first = {int(i): int(tracks[tracks[:, 1] == i, 0].min()) for i in np.unique(tracks[:, 1])}
     assert events and all(e["type"] == "appeared" for e in events)
     assert {e["track"]: e["frame"] for e in events} == first
+
+
+def test_toy_rule_events_are_scored_by_evaluate_events(appeared):
+    from motiontrack.evaluate.events import evaluate_events
+
+    def ev(frame, track):
+        return Event.from_json({"type": "appeared", "frame": frame, "t": frame / 10.0,
+                                "track": track, "x": 0.0, "y": 0.0})
+
+    # ground truth: appearances at 1.0 s and 3.0 s; predicted: 1.1 s (within 0.5 s) and 5.0 s
+    scored = evaluate_events([ev(10, 1), ev(30, 2)], [ev(11, 1), ev(50, 3)], tolerance_s=0.5)
+    s = scored.by_type["appeared"]
+    assert (s.tp, s.fp, s.fn) == (1, 1, 1)

@@ -24,7 +24,7 @@ import numpy as np
 
 from ..assignment import linear_sum_assignment
 from ..errors import ConfigError
-from ..types import EVENT_TYPES, Event
+from ..types import Event, event_types
 
 __all__ = ["DEFAULT_TOLERANCE_S", "EventScore", "EventsEvaluation", "group_key",
            "match_times", "evaluate_events"]
@@ -124,7 +124,7 @@ class EventsEvaluation:
 
     @property
     def by_type(self) -> dict[str, EventScore]:
-        """Type → the sum of its groups (types in :data:`EVENT_TYPES` order)."""
+        """Type → the sum of its groups (types in :func:`~motiontrack.types.event_types` order)."""
         out: dict[str, EventScore] = {}
         for (kind, _, _), s in self.groups.items():
             out[kind] = out.get(kind, EventScore()) + s
@@ -149,7 +149,8 @@ class EventsEvaluation:
 
 
 def _sort_key(key: tuple[str, str, str]) -> tuple[int, str, str]:
-    return (EVENT_TYPES.index(key[0]), key[1], key[2])
+    # the live list: a plug-in rule's types sort after the built-in ones
+    return (event_types().index(key[0]), key[1], key[2])
 
 
 def evaluate_events(gt: Iterable[Event], pred: Iterable[Event],
@@ -166,7 +167,7 @@ def evaluate_events(gt: Iterable[Event], pred: Iterable[Event],
     -------
     EventsEvaluation
         Every group that has a ground-truth or a predicted event, ordered by type
-        (:data:`EVENT_TYPES`), line or zone name and direction.
+        (:func:`~motiontrack.types.event_types`), line or zone name and direction.
 
     Raises
     ------
