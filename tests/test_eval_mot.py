@@ -13,12 +13,12 @@ import pytest
 from helpers import ann, require
 from motiontrack.cli import main
 from motiontrack.errors import InputError
-from motiontrack.evaluate import mot
+from motiontrack.evaluate import clear, hota, mot, pairs, sequence
 from motiontrack.io.mot import read_mot
 from motiontrack.types import Annotations
 
 GOLDEN = Path(__file__).parent / "golden"
-NA = len(mot.ALPHAS)
+NA = len(hota.ALPHAS)
 
 
 def flat(gt_rows, pred_rows, **kw):
@@ -157,8 +157,8 @@ def test_duplicate_id_in_frame_is_input_error():
 def test_iou_matches_trackeval_conventions():
     a = np.array([[0, 0, 10, 10], [0, 0, 10, 10], [0, 0, 10, 10]], float)
     b = np.array([[5, 0, 10, 10], [20, 20, 5, 5], [0, 0, 10, 10]], float)
-    assert mot.box_iou_xywh(a, b).tolist() == [50 / 150, 0.0, 1.0]
-    assert mot.box_iou_xywh(np.zeros((0, 4)), np.zeros((0, 4))).shape == (0,)
+    assert pairs.box_iou_xywh(a, b).tolist() == [50 / 150, 0.0, 1.0]
+    assert pairs.box_iou_xywh(np.zeros((0, 4)), np.zeros((0, 4))).shape == (0,)
 
 
 # --------------------------------------------------------------------------------------------------
@@ -334,7 +334,7 @@ def test_pair_table_chunking_does_not_change_results(monkeypatch):
                 rows_p.append((f, (i + (f > 20)) % 7 + 1, x + rng.uniform(-4, 4), rng.uniform(-3, 3),
                                10, 10))
     ref = flat(rows_g, rows_p)
-    monkeypatch.setattr(mot, "_CHUNK", 7)  # many tiny blocks, split mid-sequence
+    monkeypatch.setattr(pairs, "_CHUNK", 7)  # many tiny blocks, split mid-sequence
     assert flat(rows_g, rows_p) == ref
 
 
@@ -396,12 +396,15 @@ def test_direct_matches_equal_the_solver_in_every_frame(monkeypatch, seed, zero)
     # forcing the solver into every frame must give the very same numbers, bit for bit
     gt, pred = _crowd(seed)
     seen = []
-    shared = mot._shared_rows
-    monkeypatch.setattr(mot, "_shared_rows", lambda *a: seen.append(shared(*a)) or seen[-1])
+    shared = pairs.shared_rows
+    users = (sequence, clear, hota)  # distractor removal, CLEAR's and HOTA's matching
+    for m in users:
+        monkeypatch.setattr(m, "shared_rows", lambda *a: seen.append(shared(*a)) or seen[-1])
     fast = mot.evaluate_sequence(gt, pred, ignore_zero_marked=zero)
     hard = np.concatenate(seen)
     assert hard.any() and not hard.all()  # both kinds of frame occur
-    monkeypatch.setattr(mot, "_shared_rows", lambda t, *a: np.ones(len(t.frames), dtype=bool))
+    for m in users:
+        monkeypatch.setattr(m, "shared_rows", lambda t, *a: np.ones(len(t.frames), dtype=bool))
     solver = mot.evaluate_sequence(gt, pred, ignore_zero_marked=zero)
     for fam in solver:
         for k, v in solver[fam].items():
@@ -412,9 +415,9 @@ def test_restricted_pair_table_equals_one_computed_on_the_kept_rows():
     gt, pred = _crowd(3)
     rng = np.random.default_rng(3)
     keep_g, keep_p = rng.random(len(gt)) < 0.7, rng.random(len(pred)) < 0.6
-    full = mot.pair_table(gt.frames, gt.boxes, pred.frames, pred.boxes)
-    got = mot.restrict(full, gt.frames, pred.frames, keep_g, keep_p)
-    ref = mot.pair_table(gt.frames[keep_g], gt.boxes[keep_g], pred.frames[keep_p],
+    full = pairs.pair_table(gt.frames, gt.boxes, pred.frames, pred.boxes)
+    got = pairs.restrict(full, gt.frames, pred.frames, keep_g, keep_p)
+    ref = pairs.pair_table(gt.frames[keep_g], gt.boxes[keep_g], pred.frames[keep_p],
                          pred.boxes[keep_p])
     assert len(ref.sim) > 100
     for k in ("frames", "g0", "ng", "p0", "np_", "offsets", "gi", "pi", "sim"):
@@ -431,4 +434,4 @@ def test_frame_sums_add_left_to_right():
         for v in values[frames == f]:
             s += v
         expected.append(s)
-    assert mot._frame_sums(values, frames).tolist() == expected
+    assert clear._frame_sums(values, frames).tolist() == expected

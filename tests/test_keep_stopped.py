@@ -9,7 +9,8 @@ import pytest
 
 from motiontrack.config import load_config
 from motiontrack.pipeline import Pipeline
-from motiontrack.synth.scenes import Person, SyntheticScene
+from motiontrack.synth.render import Person
+from motiontrack.synth.sequence import SyntheticScene
 from motiontrack.types import Frame
 
 FPS = 25.0

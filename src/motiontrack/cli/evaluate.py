@@ -160,25 +160,29 @@ def evaluate_one(gt: Annotations, pred: Annotations, metrics: tuple[str, ...], x
 
     ``scoring`` names how zero-marked gt rows count (:data:`~motiontrack.evaluate.scoring.SCORING`);
     with tracking metrics the flat dict names it under ``"scoring"``."""
-    from ..evaluate import mot
+    from ..evaluate.clear import clear_metrics
+    from ..evaluate.hota import hota_metrics
+    from ..evaluate.identity import identity_metrics
+    from ..evaluate.mot import flatten
+    from ..evaluate.sequence import preprocess
 
     gt, pred = _clip_frames(gt, frames), _clip_frames(pred, frames)
     flat: dict = {}
     rows: dict[int, dict] = {}
     tracking = tuple(m for m in metrics if m in TRACKING)
     if tracking:
-        data = mot.preprocess(gt, pred, ignore_zero_marked=ignores_zero_marked(scoring))
+        data = preprocess(gt, pred, ignore_zero_marked=ignores_zero_marked(scoring))
         res = {}
         if "clear" in tracking:
             per: list[dict] = []
-            res["clear"] = mot.clear_metrics(data, per_frame=per)
+            res["clear"] = clear_metrics(data, per_frame=per)
             for r in per:
                 rows.setdefault(r["frame"], {"frame": r["frame"]}).update(r)
         if "identity" in tracking:
-            res["identity"] = mot.identity_metrics(data)
+            res["identity"] = identity_metrics(data)
         if "hota" in tracking:
-            res["hota"] = mot.hota_metrics(data)
-        flat.update(mot.flatten(res))
+            res["hota"] = hota_metrics(data)
+        flat.update(flatten(res))
         flat["scoring"] = scoring
     if "framewise" in metrics:
         from ..evaluate.framewise import evaluate_framewise

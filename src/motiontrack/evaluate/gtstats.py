@@ -228,6 +228,30 @@ def gt_statistics(annotations: Iterable[Annotations], image_size: tuple[int, int
     keep = [np.asarray(a.consider, dtype=bool) for a in tables]
     boxes = [a.boxes[k] for a, k in zip(tables, keep)]
     b = np.concatenate(boxes) if boxes else np.zeros((0, 4))
+    out = _thesis_model(b, (W, H), ddof)
+    # groups form within one file's frames, never across files
+    groups = [touching_groups(a.frames[k], a.boxes[k]) for a, k in zip(tables, keep)]
+    g = np.concatenate(groups) if groups else np.zeros((0, 5))
+    rec = recommend_regions(b, g, (W, H), percentile)
+    out["n_groups"] = int(len(g))
+    out["percentile_low"] = float(percentile)
+    out["percentile_high"] = 100.0 - float(percentile)
+    limits = {k: v for k, v in rec.items() if k.startswith("regions.")}
+    out.update((k, v) for k, v in rec.items() if not k.startswith("regions."))
+    out.update((f"recommended_{k}", v) for k, v in limits.items())
+    out["recommended_overrides"] = [] if not len(b) else [
+        f"{k}={v:.6g}" for k, v in limits.items()]
+    return out
+
+
+def _num(v: float) -> float | None:
+    return None if math.isnan(v) else float(v)
+
+
+def _thesis_model(b: np.ndarray, image_size: tuple[int, int], ddof: int) -> dict[str, object]:
+    """The size statistics of the boxes ``b`` (N, 4) and the thesis' limits from them (eqs.
+    4.27–4.30), keyed as :func:`gt_statistics` reports them."""
+    W, H = image_size
     w, h = b[:, 2], b[:, 3]
     with np.errstate(over="ignore"):
         area_px = w * h
@@ -242,48 +266,31 @@ def gt_statistics(annotations: Iterable[Annotations], image_size: tuple[int, int
     mu_r, sd_r = size_model(ratio, ddof)
     lo, hi = _clip01(mu - sd), _clip01(mu + sd)  # eqs. 4.29, 4.30
     lo_r, hi_r = _clip01(mu_r - sd_r, None), _clip01(mu_r + sd_r, None)
-
-    # groups form within one file's frames, never across files
-    groups = [touching_groups(a.frames[k], a.boxes[k]) for a, k in zip(tables, keep)]
-    g = np.concatenate(groups) if groups else np.zeros((0, 5))
-    rec = recommend_regions(b, g, (W, H), percentile)
-
-    def num(v: float) -> float | None:
-        return None if math.isnan(v) else float(v)
-
     out: dict[str, object] = {
         "n_boxes": int(len(b)),
         "image_width_px": int(W),
         "image_height_px": int(H),
         "image_area_px2": int(W * H),
         "std_ddof": ddof,
-        "area_mean_px2": num(mu_px),
-        "area_std_px2": num(sd_px),
-        "area_min_px2": num(float(area_px.min())) if len(b) else None,
-        "area_max_px2": num(float(area_px.max())) if len(b) else None,
-        "area_mean_fraction_of_image (mu, eq. 4.27)": num(mu),
-        "area_std_fraction_of_image (sigma, eq. 4.28)": num(sd),
-        "height_to_width_mean": num(mu_r),
-        "height_to_width_std": num(sd_r),
-        "height_to_width_observed_min": num(float(ratio.min())) if len(b) else None,
-        "height_to_width_observed_max": num(float(ratio.max())) if len(b) else None,
-        "thesis_model_MIN_REGION_SIZE_fraction_of_image (mu - sigma, eq. 4.29)": num(lo),
-        "thesis_model_MAX_REGION_SIZE_fraction_of_image (mu + sigma, eq. 4.30)": num(hi),
-        "thesis_model_MIN_REGION_SIZE_px2": num(lo * W * H),
-        "thesis_model_MAX_REGION_SIZE_px2": num(hi * W * H),
-        "thesis_model_MIN_HEIGHT_TO_WIDTH (mean - std)": num(lo_r),
-        "thesis_model_MAX_HEIGHT_TO_WIDTH (mean + std)": num(hi_r),
+        "area_mean_px2": _num(mu_px),
+        "area_std_px2": _num(sd_px),
+        "area_min_px2": _num(float(area_px.min())) if len(b) else None,
+        "area_max_px2": _num(float(area_px.max())) if len(b) else None,
+        "area_mean_fraction_of_image (mu, eq. 4.27)": _num(mu),
+        "area_std_fraction_of_image (sigma, eq. 4.28)": _num(sd),
+        "height_to_width_mean": _num(mu_r),
+        "height_to_width_std": _num(sd_r),
+        "height_to_width_observed_min": _num(float(ratio.min())) if len(b) else None,
+        "height_to_width_observed_max": _num(float(ratio.max())) if len(b) else None,
+        "thesis_model_MIN_REGION_SIZE_fraction_of_image (mu - sigma, eq. 4.29)": _num(lo),
+        "thesis_model_MAX_REGION_SIZE_fraction_of_image (mu + sigma, eq. 4.30)": _num(hi),
+        "thesis_model_MIN_REGION_SIZE_px2": _num(lo * W * H),
+        "thesis_model_MAX_REGION_SIZE_px2": _num(hi * W * H),
+        "thesis_model_MIN_HEIGHT_TO_WIDTH (mean - std)": _num(lo_r),
+        "thesis_model_MAX_HEIGHT_TO_WIDTH (mean + std)": _num(hi_r),
     }
     out["thesis_model_overrides"] = [] if not len(b) else [
         f"regions.min_size={lo:.6g}", f"regions.max_size={hi:.6g}",
         f"regions.min_hw_ratio={lo_r:.6g}", f"regions.max_hw_ratio={hi_r:.6g}",
     ]
-    out["n_groups"] = int(len(g))
-    out["percentile_low"] = float(percentile)
-    out["percentile_high"] = 100.0 - float(percentile)
-    limits = {k: v for k, v in rec.items() if k.startswith("regions.")}
-    out.update((k, v) for k, v in rec.items() if not k.startswith("regions."))
-    out.update((f"recommended_{k}", v) for k, v in limits.items())
-    out["recommended_overrides"] = [] if not len(b) else [
-        f"{k}={v:.6g}" for k, v in limits.items()]
     return out

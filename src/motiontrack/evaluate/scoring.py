@@ -12,7 +12,7 @@ __all__ = ["SCORING", "DEFAULT_SCORING", "SCORING_HELP", "SCORING_SUMMARY", "ign
 
 #: how gt rows marked zero (``consider`` = 0: people outside the annotated area, occluded,
 #: flagged as not to be scored) are scored, by name: ``ignore_zero_marked`` of
-#: :func:`~motiontrack.evaluate.mot.preprocess`.
+#: :func:`~motiontrack.evaluate.sequence.preprocess`.
 #:
 #: ``trackeval``: TrackEval's MOTChallenge convention, the one published results use. The rows
 #: are dropped; a tracker box on one is a false positive (with MOTChallenge classes, boxes on

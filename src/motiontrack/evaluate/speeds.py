@@ -22,7 +22,7 @@ import numpy as np
 
 from ..assignment import linear_sum_assignment
 from ..types import Annotations
-from .mot import box_iou_xywh
+from .pairs import box_iou_xywh
 
 __all__ = ["majority_matches", "speed_pairs"]
 

@@ -13,7 +13,7 @@ import hmac
 import json
 from importlib import resources
 from pathlib import Path
-from typing import Any, Callable, Mapping
+from typing import Any, AsyncIterator, Callable, Mapping
 from urllib.parse import parse_qs
 
 from starlette.applications import Starlette
@@ -88,10 +88,20 @@ def create_app(hub: Hub, token: str | None = None,
     none; the editor's PUT then answers 409). ``stopping`` tells the streams to end (the server
     is shutting down)."""
     files = scenes if isinstance(scenes, SceneFiles) else SceneFiles(scenes or {})
+    routes = [*_page_routes(), *_api_routes(hub), *_stream_routes(hub, stopping),
+              *_editor_routes(hub, files)]
+    app: Any = Starlette(routes=routes)
+    return _TokenCheck(app, token) if token else app
 
-    def camera(request: Request) -> CameraState | Response:
-        cam = hub.get(request.path_params["name"])
-        return cam if cam is not None else _error(404, "no such camera")
+
+def _camera(hub: Hub, request: Request) -> CameraState | Response:
+    """The camera the path names, or a 404 response."""
+    cam = hub.get(request.path_params["name"])
+    return cam if cam is not None else _error(404, "no such camera")
+
+
+def _page_routes() -> list[Route]:
+    """The page and its fixed list of assets."""
 
     async def page(request: Request) -> Response:
         return _asset("index.html")
@@ -100,11 +110,18 @@ def create_app(hub: Hub, token: str | None = None,
         name = request.path_params["file"]
         return _asset(name) if name in _ASSETS else _error(404, "not found")
 
+    return [Route("/", page), Route("/static/{file}", asset)]
+
+
+def _api_routes(hub: Hub) -> list[Route]:
+    """The JSON API: the cameras, each camera's events since a sequence number, its counts and
+    its latest picture."""
+
     async def cameras(request: Request) -> Response:
         return JSONResponse([c.describe() for c in hub.cameras.values()])
 
     async def events(request: Request) -> Response:
-        cam = camera(request)
+        cam = _camera(hub, request)
         if isinstance(cam, Response):
             return cam
         raw = request.query_params.get("since", "0")
@@ -115,14 +132,14 @@ def create_app(hub: Hub, token: str | None = None,
         return JSONResponse(cam.events_since(since))
 
     async def counts(request: Request) -> Response:
-        cam = camera(request)
+        cam = _camera(hub, request)
         if isinstance(cam, Response):
             return cam
         with cam.lock:
             return JSONResponse(cam.counts)
 
     async def snapshot(request: Request) -> Response:
-        cam = camera(request)
+        cam = _camera(hub, request)
         if isinstance(cam, Response):
             return cam
         with cam.lock:
@@ -134,67 +151,91 @@ def create_app(hub: Hub, token: str | None = None,
             headers[_WALL_HEADER] = f"{wall:.4f}"
         return Response(jpeg, media_type="image/jpeg", headers=headers)
 
+    return [
+        Route("/api/cameras", cameras),
+        Route("/api/cameras/{name}/events", events),
+        Route("/api/cameras/{name}/counts", counts),
+        Route("/api/cameras/{name}/snapshot.jpg", snapshot),
+    ]
+
+
+def _stream_routes(hub: Hub, stopping: Callable[[], bool]) -> list[Route]:
+    """The streams: each camera's MJPEG pictures and every camera's events (server-sent)."""
+
     async def stream(request: Request) -> Response:
-        cam = camera(request)
+        cam = _camera(hub, request)
         if isinstance(cam, Response):
             return cam
-
-        async def parts():
-            sub = hub.subscribe_frames(cam)
-            try:
-                with cam.lock:
-                    latest = (cam.jpeg, cam.wall)
-                if latest[0] is not None:
-                    yield _part(*latest)
-                while not stopping():
-                    try:
-                        jpeg, wall = await asyncio.wait_for(sub.queue.get(), 1.0)
-                    except asyncio.TimeoutError:
-                        continue
-                    yield _part(jpeg, wall)
-            finally:
-                hub.unsubscribe_frames(cam, sub)
-
-        return StreamingResponse(parts(), headers={"Cache-Control": "no-store"},
+        return StreamingResponse(_mjpeg_parts(hub, cam, stopping),
+                                 headers={"Cache-Control": "no-store"},
                                  media_type=f"multipart/x-mixed-replace; boundary={_BOUNDARY}")
 
     async def event_stream(request: Request) -> Response:
         # a reconnecting EventSource sends the id of the last message it received: the events
         # it missed meanwhile come first (Cursor)
         after = Cursor.parse(request.headers.get("last-event-id"))
-
-        async def lines():
-            sub, cursor, missed = hub.subscribe_events(after=after)
-            idle = 0.0
-
-            def message(item: dict) -> bytes:
-                cursor.seqs[item["camera"]] = item["seq"]
-                return f"id: {cursor}\ndata: {json.dumps(item)}\n\n".encode()
-
-            try:
-                # the id alone: where this stream starts, for a reconnection before any event
-                yield f": connected\nid: {cursor}\n\n".encode()
-                for item in missed:
-                    yield message(item)
-                while not stopping():
-                    try:
-                        item = await asyncio.wait_for(sub.queue.get(), 1.0)
-                    except asyncio.TimeoutError:
-                        idle += 1.0
-                        if idle >= _KEEPALIVE_S:
-                            idle = 0.0
-                            yield b": keep-alive\n\n"
-                        continue
-                    idle = 0.0
-                    yield message(item)
-            finally:
-                hub.unsubscribe_events(sub)
-
-        return StreamingResponse(lines(), media_type="text/event-stream",
+        return StreamingResponse(_event_lines(hub, after, stopping),
+                                 media_type="text/event-stream",
                                  headers={"Cache-Control": "no-store", "X-Accel-Buffering": "no"})
 
+    return [Route("/api/cameras/{name}/stream.mjpg", stream), Route("/api/events", event_stream)]
+
+
+async def _mjpeg_parts(hub: Hub, cam: CameraState,
+                       stopping: Callable[[], bool]) -> AsyncIterator[bytes]:
+    """The MJPEG parts of ``cam``: its latest picture, then every new one until ``stopping``."""
+    sub = hub.subscribe_frames(cam)
+    try:
+        with cam.lock:
+            latest = (cam.jpeg, cam.wall)
+        if latest[0] is not None:
+            yield _part(*latest)
+        while not stopping():
+            try:
+                jpeg, wall = await asyncio.wait_for(sub.queue.get(), 1.0)
+            except asyncio.TimeoutError:
+                continue
+            yield _part(jpeg, wall)
+    finally:
+        hub.unsubscribe_frames(cam, sub)
+
+
+async def _event_lines(hub: Hub, after: Cursor | None,
+                       stopping: Callable[[], bool]) -> AsyncIterator[bytes]:
+    """The server-sent messages of every camera's events after ``after``, each with the cursor
+    that resumes after it as its id, and a keep-alive comment when idle."""
+    sub, cursor, missed = hub.subscribe_events(after=after)
+    idle = 0.0
+
+    def message(item: dict) -> bytes:
+        cursor.seqs[item["camera"]] = item["seq"]
+        return f"id: {cursor}\ndata: {json.dumps(item)}\n\n".encode()
+
+    try:
+        # the id alone: where this stream starts, for a reconnection before any event
+        yield f": connected\nid: {cursor}\n\n".encode()
+        for item in missed:
+            yield message(item)
+        while not stopping():
+            try:
+                item = await asyncio.wait_for(sub.queue.get(), 1.0)
+            except asyncio.TimeoutError:
+                idle += 1.0
+                if idle >= _KEEPALIVE_S:
+                    idle = 0.0
+                    yield b": keep-alive\n\n"
+                continue
+            idle = 0.0
+            yield message(item)
+    finally:
+        hub.unsubscribe_events(sub)
+
+
+def _editor_routes(hub: Hub, files: SceneFiles) -> list[Route]:
+    """The scene editor: a camera's scene file read (with the picture size) and written."""
+
     async def get_scene(request: Request) -> Response:
-        cam = camera(request)
+        cam = _camera(hub, request)
         if isinstance(cam, Response):
             return cam
         try:
@@ -207,7 +248,7 @@ def create_app(hub: Hub, token: str | None = None,
         return JSONResponse(data)
 
     async def put_scene(request: Request) -> Response:
-        cam = camera(request)
+        cam = _camera(hub, request)
         if isinstance(cam, Response):
             return cam
         body = await _body(request)
@@ -227,22 +268,8 @@ def create_app(hub: Hub, token: str | None = None,
             return _error(400, str(exc))
         return JSONResponse(saved)
 
-    routes = [
-        Route("/", page),
-        Route("/static/{file}", asset),
-        Route("/api/cameras", cameras),
-        Route("/api/cameras/{name}/events", events),
-        Route("/api/cameras/{name}/counts", counts),
-        Route("/api/cameras/{name}/snapshot.jpg", snapshot),
-        Route("/api/cameras/{name}/stream.mjpg", stream),
-        Route("/api/cameras/{name}/scene", get_scene, methods=["GET"]),
-        Route("/api/cameras/{name}/scene", put_scene, methods=["PUT"]),
-        Route("/api/events", event_stream),
-    ]
-    app: Any = Starlette(routes=routes)
-    if token:
-        app = _TokenCheck(app, token)
-    return app
+    return [Route("/api/cameras/{name}/scene", get_scene, methods=["GET"]),
+            Route("/api/cameras/{name}/scene", put_scene, methods=["PUT"])]
 
 
 def _part(jpeg: bytes, wall: float | None = None) -> bytes:

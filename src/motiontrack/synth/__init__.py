@@ -10,6 +10,7 @@ See ``docs/synthetic.md`` for the scenes, their parameters and the ground-truth 
 
 from __future__ import annotations
 
+import importlib
 from typing import TYPE_CHECKING, Any
 
 # registers the synth: scheme; the scenes and their drawing load when first used (a name below,
@@ -18,13 +19,15 @@ from .source import SyntheticSource
 
 #: the names offered here, by the submodule that defines them
 _LAZY = {**dict.fromkeys(("Bag", "Column", "Person"), "render"),
-         **dict.fromkeys(("MASK_PERSON", "MASK_SHADOW", "SCENES", "Lighting", "SyntheticScene",
-                          "make_scene", "parse_synth_spec", "scene_summaries"), "scenes")}
+         **dict.fromkeys(("SCENES", "scene_summaries"), "catalogue"),
+         **dict.fromkeys(("MASK_PERSON", "MASK_SHADOW", "Lighting", "SyntheticScene"), "sequence"),
+         **dict.fromkeys(("make_scene", "parse_synth_spec"), "scenes")}
 
 if TYPE_CHECKING:  # pragma: no cover
+    from .catalogue import SCENES, scene_summaries
     from .render import Bag, Column, Person
-    from .scenes import (MASK_PERSON, MASK_SHADOW, SCENES, Lighting, SyntheticScene, make_scene,
-                         parse_synth_spec, scene_summaries)
+    from .scenes import make_scene, parse_synth_spec
+    from .sequence import MASK_PERSON, MASK_SHADOW, Lighting, SyntheticScene
 
 __all__ = [
     "SCENES",
@@ -44,9 +47,7 @@ __all__ = [
 
 def __getattr__(name: str) -> Any:
     if name in _LAZY:
-        from . import render, scenes   # scenes draws with render: the one loads the other
-
-        value = getattr(scenes if _LAZY[name] == "scenes" else render, name)
+        value = getattr(importlib.import_module(f".{_LAZY[name]}", __name__), name)
         globals()[name] = value
         return value
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
