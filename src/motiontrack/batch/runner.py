@@ -26,6 +26,7 @@ from ..config import PipelineConfig, apply_overrides, from_dict, to_dict
 from ..errors import ConfigError, printable
 from ..io.atomic import OutputLock, atomic_write_bytes, atomic_write_text
 from ..run.executor import dask_client, map_tasks
+from ..run.folder import RunFolder
 from .combined import write_combined
 from .sources import Video, expand_sources, with_files
 
@@ -144,7 +145,8 @@ def run_video(task: BatchTask, attempt: int = 1) -> dict[str, Any]:
 
     v = task.video
     out = Path(task.results)
-    partial, final = out / f".{v.name}.partial", out / v.name
+    final = RunFolder(out / v.name)
+    partial = final.partial().path
     t0 = time.perf_counter()
     row: dict[str, Any] = {"name": v.name, "source": v.source, "status": "failed", "error": "",
                            "worker": _worker_name(), "attempts": attempt,
@@ -166,19 +168,7 @@ def run_video(task: BatchTask, attempt: int = 1) -> dict[str, Any]:
             if frames.stopped:
                 raise BatchStopped("the batch stopped before this video finished") from None
             raise
-        meta = json.loads((partial / "summary.json").read_text(encoding="utf-8"))
-        # the paths the summary names are those of the finished folder
-        meta["outputs"] = {k: str(final / Path(p).name) for k, p in meta.get("outputs", {}).items()}
-        meta["batch"] = {"name": v.name, "config_hash": task.config_hash}
-        atomic_write_text(partial / "summary.json", json.dumps(meta, indent=2) + "\n")
-        if final.exists():   # a redone video: the old folder goes as the new one arrives
-            old = out / f".{v.name}.old"
-            shutil.rmtree(old, ignore_errors=True)
-            final.rename(old)
-            partial.rename(final)
-            shutil.rmtree(old, ignore_errors=True)
-        else:
-            partial.rename(final)
+        final.commit_partial({"batch": {"name": v.name, "config_hash": task.config_hash}})
         row.update(status="done", frames=summary.frames, fps=round(summary.fps, 3),
                    tracks=summary.tracks)
         row.update({k: summary.accuracy[k] for k in METRICS if k in (summary.accuracy or {})})
@@ -199,7 +189,7 @@ def _unfinished_row(task: BatchTask, status: str, error: str, **extra: Any) -> d
     import cv2
 
     v = task.video
-    shutil.rmtree(Path(task.results) / f".{v.name}.partial", ignore_errors=True)
+    RunFolder(Path(task.results) / v.name).partial().remove()
     return {"name": v.name, "source": v.source, "status": status, "error": error, **extra,
             "config_hash": task.config_hash, "motiontrack_version": __version__,
             "opencv_version": cv2.__version__}
@@ -261,10 +251,7 @@ class _Rate:
 
 def _complete(results: Path, name: str, chash: str) -> bool:
     """Whether ``RESULTS/<name>`` holds a complete run made with the config ``chash``."""
-    try:
-        meta = json.loads((results / name / "summary.json").read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return False
+    meta = RunFolder(results / name).summary()
     return (isinstance(meta, dict) and meta.get("status") == "complete"
             and isinstance(meta.get("batch"), dict) and meta["batch"].get("config_hash") == chash)
 
@@ -441,7 +428,7 @@ def run_batch(sources: Sequence[str], results: str | Path, config: PipelineConfi
             # a local cluster's workers are gone now, and a partial folder one of them wrote
             # into after the first removal goes too (a remote worker removes its own)
             for t in stopped:
-                shutil.rmtree(out / f".{t.video.name}.partial", ignore_errors=True)
+                RunFolder(out / t.video.name).partial().remove()
         return _finish(out, [rows[v.name] for v in videos])
 
 
