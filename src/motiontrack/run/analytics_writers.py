@@ -1,9 +1,9 @@
 """Output writers of scene analytics: ``events.jsonl`` and ``counts.csv``.
 
-Both read the :class:`~motiontrack.types.SceneFrame` of each frame: as writers of a
-:class:`~motiontrack.run.job.Job` (``track --scene``: :meth:`write` takes the frame's
-``FrameResult.scene``) or driven directly (``analyze``: :meth:`open`, :meth:`add`,
-:meth:`close`), so both commands write the same files the same way.
+Both are writers of a :class:`~motiontrack.run.job.Job` reading the
+:class:`~motiontrack.types.SceneFrame` of each frame (``FrameResult.scene``): the job of
+``track --scene`` and that of ``analyze`` (:mod:`motiontrack.run.analyze`), so both commands
+write the same files the same way.
 """
 
 from __future__ import annotations
@@ -36,18 +36,12 @@ class EventsWriter(Writer):
         self._file: AtomicFile | None = None
 
     def start(self, ctx: JobContext) -> None:
-        self.open(ctx.fps)
-
-    def open(self, fps: float) -> None:
         self._file = AtomicFile(self.paths["events"])
-        self._file.write(json.dumps(events_header(fps, self.source, self.scene)) + "\n")
+        self._file.write(json.dumps(events_header(ctx.fps, self.source, self.scene)) + "\n")
 
     def write(self, result: FrameResult) -> None:
-        if result.scene is not None:
-            self.add(result.scene)
-
-    def add(self, frame: SceneFrame) -> None:
-        if frame.events:
+        frame = result.scene
+        if frame is not None and frame.events:
             self._file.write("".join(json.dumps(e.to_json()) + "\n" for e in frame.events))
             self.count += len(frame.events)
 
@@ -79,10 +73,7 @@ class CountsWriter(Writer):
         self._bin: int | None = None
 
     def start(self, ctx: JobContext) -> None:
-        self.open(ctx.fps)
-
-    def open(self, fps: float) -> None:
-        self._fps = float(fps)
+        self._fps = float(ctx.fps)
         self._file = AtomicFile(self.paths["counts"])
         head = ["bin", "start_s", "end_s", "frames"]
         head += [f"line:{n}:{d}" for n in self.lines for d in ("in", "out")]
@@ -91,9 +82,9 @@ class CountsWriter(Writer):
 
     def write(self, result: FrameResult) -> None:
         if result.scene is not None:
-            self.add(result.scene)
+            self._add(result.scene)
 
-    def add(self, frame: SceneFrame) -> None:
+    def _add(self, frame: SceneFrame) -> None:
         # a little slack so that t = k * bin_s computed in floating point lands in bin k
         b = int(math.floor((frame.frame - 1) / self._fps / self.bin_s + 1e-9))
         if b != self._bin:
