@@ -20,6 +20,7 @@ import numpy as np
 from ..errors import ConfigError
 from ..io.atomic import AtomicFile
 from ..types import FrameResult, SceneFrame, events_header
+from .folder import RunFolder
 from .job import JobContext, Writer
 
 __all__ = ["EventsWriter", "CountsWriter"]
@@ -30,7 +31,7 @@ class EventsWriter(Writer):
     object per event in frame order (``docs/analytics.md``)."""
 
     def __init__(self, out: Path, source: str = "", scene: str = "") -> None:
-        self.paths = {"events": Path(out) / "events.jsonl"}
+        self.paths = {"events": RunFolder(out).events}
         self.source, self.scene = str(source), str(scene)
         self.count = 0
         self._file: AtomicFile | None = None
@@ -64,7 +65,7 @@ class CountsWriter(Writer):
                  bin_s: float = 60.0) -> None:
         if not (math.isfinite(bin_s) and bin_s > 0):
             raise ConfigError(f"--bin-s must be > 0 seconds, got {bin_s!r}")
-        self.paths = {"counts": Path(out) / "counts.csv"}
+        self.paths = {"counts": RunFolder(out).counts}
         self.lines = [ln.name for ln in lines]
         self.zones = [z.name for z in zones]
         self.bin_s = float(bin_s)

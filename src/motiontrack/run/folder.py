@@ -38,6 +38,8 @@ class RunFolder:
     EVENTS = "events.jsonl"
     COUNTS = "counts.csv"
     GT = "gt.txt"
+    HEATMAP = "heatmap.png"
+    HEATMAP_WORLD = "heatmap_world.png"
     LOCK = OutputLock.NAME
 
     @classmethod
@@ -68,6 +70,14 @@ class RunFolder:
     @property
     def gt(self) -> Path:
         return self.path / self.GT
+
+    @property
+    def heatmap(self) -> Path:
+        return self.path / self.HEATMAP
+
+    @property
+    def heatmap_world(self) -> Path:
+        return self.path / self.HEATMAP_WORLD
 
     # ----------------------------------------------------------------------- summary
     def has_summary(self) -> bool:

@@ -28,6 +28,7 @@ from ..io.atomic import atomic_write_bytes
 from ..io.sources import open_source
 from ..render.heatmap import heat_overlay, world_heat_map
 from ..types import FrameResult
+from .folder import RunFolder
 from .job import JobContext, JobSummary, Writer
 
 log = logging.getLogger(__name__)
@@ -88,10 +89,10 @@ class HeatmapWriter(Writer):
                  background: np.ndarray | Callable[[], np.ndarray | None] | None = None,
                  geometry: Sequence[np.ndarray] = (),
                  boxes_of: Callable[[FrameResult], Any] | None = None) -> None:
-        out = Path(out)
-        self.paths = {"heatmap": out / "heatmap.png"}
+        folder = RunFolder(out)
+        self.paths = {"heatmap": folder.heatmap}
         if camera is not None:
-            self.paths["heatmap_world"] = out / "heatmap_world.png"
+            self.paths["heatmap_world"] = folder.heatmap_world
         self.anchor, self.size, self.camera = anchor, size, camera
         self.background = background
         self.boxes_of = boxes_of or _track_boxes
