@@ -14,7 +14,7 @@ import logging
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Iterator
+from typing import Any, Callable, Iterator
 
 import numpy as np
 
@@ -31,7 +31,7 @@ from .job import Job, JobSummary
 log = logging.getLogger(__name__)
 
 __all__ = ["AnalyticsProcessor", "TrackRows", "TracksFrameResult", "TracksSource",
-           "analysed_events", "analyze_job", "analyze_tracks", "frame_rate_beside",
+           "analysed_events", "analysis", "analyze_job", "analyze_tracks", "frame_rate_beside",
            "frame_size_beside", "tracks_extent"]
 
 
@@ -150,7 +150,7 @@ def analysed_events(tracks: Annotations, scene: Scene, fps: float, *, camera: An
     return tuple(e for r in proc.results(src) for e in r.scene.events)
 
 
-def _layout(fps: float, tracks: int) -> Any:
+def _layout(fps: float, tracks: int) -> Callable[[JobSummary], dict[str, Any]]:
     """``summary.json`` of an analysis: what was analysed, the analytics' and the heat map's
     entries, the outputs; the status when the run did not complete."""
 
@@ -196,8 +196,10 @@ def analyze_tracks(tracks: Annotations, scene: Scene, fps: float, out: str | Pat
                    source: str = "", size: tuple[int, int] | None = None,
                    background: np.ndarray | None = None,
                    sinks: EventSinksWriter | None = None,
-                   should_stop: Any = None) -> dict[str, Any]:
-    """Run :func:`analyze_job` and return the contents of its ``summary.json``."""
+                   should_stop: Callable[[], bool] | None = None) -> dict[str, Any]:
+    """Run :func:`analyze_job` and return the contents of its ``summary.json``; ``should_stop``
+    as for :meth:`Job.run` (an interruption keeps the frames analysed and raises
+    ``KeyboardInterrupt``)."""
     job = analyze_job(tracks, scene, fps, out, camera=camera, bin_s=bin_s, force=force,
                       source=source, size=size, background=background, sinks=sinks)
     return job.layout(job.run(should_stop=should_stop))

@@ -3,8 +3,8 @@
 Like :class:`~motiontrack.run.analytics_writers.EventsWriter` it reads the
 :class:`~motiontrack.types.SceneFrame` of each frame, as a writer of the
 :class:`~motiontrack.run.job.Job` of ``track --scene`` or ``analyze``. The sending happens in
-the background threads of :mod:`motiontrack.io.sinks`; the pipeline only queues, so a slow or absent receiver never slows
-a run down, and at the end a run waits at most ``flush_s`` for them.
+the background threads of :mod:`motiontrack.io.sinks`; the pipeline only queues, so a slow or
+absent receiver never slows a run down, and at the end a run waits at most ``flush_s`` for them.
 """
 
 from __future__ import annotations

@@ -50,12 +50,13 @@ def default_out(cameras_file: str | Path) -> Path:
 def salvage_segments(folder: Path, source: str, status: dict[str, Any], code: int | None
                      ) -> list[Path]:
     """Commit the segments a killed camera process left unfinished in ``folder`` (its output
-    folder): each segment folder without ``summary.json`` salvaged
-    (:meth:`~motiontrack.run.folder.RunFolder.salvage`: the tracks and events written so far, up
-    to the last whole line, under their names, and a ``summary.json`` that says so (``"status": "killed (exit code N)"``,
-    ``"truncated": true``, the frame size and rate from the camera's last ``status``, so that
-    ``motiontrack analyze`` reads the tracks as it reads a finished segment's)). Call it while no
-    process of the camera runs. Returns the segment folders committed."""
+    folder): each segment folder without ``summary.json`` is salvaged
+    (:meth:`~motiontrack.run.folder.RunFolder.salvage`): the tracks and events written so far,
+    up to the last whole line, under their names, and a ``summary.json`` that says so
+    (``"status": "killed (exit code N)"``, ``"truncated": true``, the frame size and rate from
+    the camera's last ``status``, so that ``motiontrack analyze`` reads the tracks as it reads a
+    finished segment's). Call it while no process of the camera runs. Returns the segment
+    folders committed."""
     segments = sorted(d for d in folder.iterdir() if d.is_dir()) if folder.is_dir() else []
     return [seg for seg in segments if RunFolder(seg).salvage(source, status, code)]
 
