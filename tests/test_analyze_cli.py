@@ -16,7 +16,9 @@ except ImportError:  # Python < 3.11
 from motiontrack.analytics import parse_scene
 from motiontrack.cli import main
 from motiontrack.render.scene import LINE_COLOR, ZONE_COLOR, draw_scene
-from motiontrack.run.analyze import analyze_tracks, frame_rate_beside
+from motiontrack.io.events import read_events
+from motiontrack.io.mot import read_mot
+from motiontrack.run.analyze import analysed_events, analyze_tracks, frame_rate_beside
 from motiontrack.types import EVENTS_SCHEMA, Annotations, Event, SceneFrame
 
 SCENE_TOML = """
@@ -161,3 +163,29 @@ polygon = [[520, 200], [639, 200], [639, 479], [520, 479]]
     again = tmp_path / "again"
     assert main(["analyze", str(run / "tracks.txt"), "--scene", str(scene), "-o", str(again)]) == 0
     assert (again / "events.jsonl").read_text().splitlines()[1:] == live[1:]
+
+
+def test_an_interrupted_analyze_keeps_the_frames_analysed_and_says_so(tmp_path):
+    scene = parse_scene(tomllib.loads(SCENE_TOML))
+    tracks = read_mot(_rows(tmp_path / "tracks.txt", [(f, 1, 100, 20 * f) for f in range(1, 8)]),
+                      kind="results")
+    polls = iter(range(100))
+    out = tmp_path / "out"
+    with pytest.raises(KeyboardInterrupt):   # a stop asked after the third frame
+        analyze_tracks(tracks, scene, 2.0, out, should_stop=lambda: next(polls) >= 2)
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["frames"] == 3 and summary["status"] == "interrupted"
+    assert summary["interrupted"] is True
+    rows = list(csv.DictReader((out / "counts.csv").read_text().splitlines()))
+    assert [r["frames"] for r in rows] == ["3"]
+    assert not (out / ".motiontrack.lock").exists()
+
+
+def test_analysed_events_in_memory_are_those_analyze_writes(tmp_path):
+    scene = parse_scene(tomllib.loads(SCENE_TOML))
+    tracks = read_mot(_rows(tmp_path / "tracks.txt", [
+        (1, 1, 100, 40), (2, 1, 100, 80), (3, 1, 100, 120), (4, 2, 50, 130), (5, 2, 50, 70)]),
+        kind="results")
+    analyze_tracks(tracks, scene, 2.0, tmp_path / "out")
+    written = read_events(tmp_path / "out" / "events.jsonl").events
+    assert len(written) == 4 and analysed_events(tracks, scene, 2.0) == written

@@ -490,7 +490,7 @@ def test_second_interrupt_while_sinks_drain_stops_waiting_and_keeps_the_run(capl
 
     a, b = Draining(), Draining()
     w = EventSinksWriter([a, b], "cam")
-    w.open()
+    w.start(None)
     w.close(keep=True)   # does not raise: the outputs of the run are kept
     # the first sink was waiting when interrupted, the second is not waited for at all
     assert a.closes[1:] == [None] and a.closes[0] is not None and b.closes == [None]

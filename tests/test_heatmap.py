@@ -175,8 +175,7 @@ def test_world_grid_step_keeps_at_most_twenty_lines(span, step):
 
 def test_heatmap_writer_refuses_nothing_when_no_tracks(tmp_path):
     w = HeatmapWriter(tmp_path, size=(8, 6))
-    w.open()
-    w.add_boxes(np.zeros((0, 4)))
+    w.start(None)
     w.close(True)
     assert cv2.imread(str(tmp_path / "heatmap.png")).shape == (6, 8, 3)
     assert w.info["visits"] == 0

@@ -9,6 +9,8 @@ import pytest
 
 from motiontrack.cli import main
 from motiontrack.io.video import VideoSink
+from motiontrack.io.atomic import AtomicFile
+from motiontrack.run.folder import RunFolder
 from motiontrack.run.folders import new_run_folder, source_name
 
 WALKER = "synth:walker?n_frames=5"
@@ -83,3 +85,75 @@ def test_a_run_that_fails_leaves_no_folder_behind(tmp_path, monkeypatch, capsys)
     monkeypatch.setattr(VideoSink, "_open", refuse)                # during the run
     assert main(["track", WALKER]) != 0
     assert _tree(tmp_path) == []
+
+
+# ------------------------------------------------------------------------- RunFolder
+def test_run_folder_names_the_outputs_of_a_run(tmp_path):
+    run = RunFolder(tmp_path / "r")
+    assert [p.name for p in (run.tracks, run.summary_path, run.config, run.events, run.counts,
+                             run.gt, run.heatmap, run.heatmap_world)] == [
+        "tracks.txt", "summary.json", "config.toml", "events.jsonl", "counts.csv", "gt.txt",
+        "heatmap.png", "heatmap_world.png"]
+    assert RunFolder.beside(tmp_path / "r" / "tracks.txt").path == (tmp_path / "r").resolve()
+
+
+def test_run_folder_summary_round_trips_and_an_unreadable_one_is_none(tmp_path):
+    run = RunFolder(tmp_path)
+    assert run.summary() is None and not run.has_summary()
+    run.write_summary({"frames": 3, "status": "complete"})
+    assert run.summary() == {"frames": 3, "status": "complete"}
+    assert run.summary_path.read_text().endswith("}\n")
+    run.summary_path.write_text("{not json")
+    assert run.summary() is None
+    run.summary_path.write_text("[1, 2]")            # JSON, but not a summary
+    assert run.summary() is None
+
+
+@pytest.mark.parametrize("summary, seqinfo, fps, size", [
+    ({"source_fps": 12.5, "width": 64, "height": 48}, None, 12.5, (64, 48)),
+    (None, "[Sequence]\nframeRate=7\nimWidth=320\nimHeight=180\n", 7.0, (320, 180)),
+    # the summary states neither (a killed run's unknown rate): the seqinfo.ini still counts
+    ({"source_fps": None, "width": None}, "[Sequence]\nframeRate=5\n", 5.0, None),
+    ({"source_fps": 0, "width": 0, "height": 10}, None, None, None),
+    (None, None, None, None),
+])
+def test_run_folder_states_frame_rate_and_size_from_summary_then_seqinfo(
+        tmp_path, summary, seqinfo, fps, size):
+    run = RunFolder(tmp_path / "seq" / "gt")
+    run.path.mkdir(parents=True)
+    if summary is not None:
+        run.summary_path.write_text(json.dumps(summary))
+    if seqinfo is not None:   # MOTChallenge: seqinfo.ini is in the folder above gt/gt.txt
+        (tmp_path / "seq" / "seqinfo.ini").write_text(seqinfo)
+    assert run.frame_rate() == fps
+    assert run.frame_size() == size
+
+
+def test_salvage_commits_a_killed_runs_lines_and_says_so(tmp_path):
+    run = RunFolder(tmp_path)
+    tracks = AtomicFile(run.tracks)
+    tracks.write("1,1,10,20,30,40\n2,1,11,")         # killed mid-line
+    tracks._flush()
+    assert run.salvage("cam", {"width": 64, "height": 48, "source_fps": 10.0}, -9)
+    assert run.tracks.read_text() == "1,1,10,20,30,40\n"
+    s = run.summary()
+    assert s["status"] == "killed (exit code -9)" and s["truncated"] and s["interrupted"]
+    assert s["outputs"] == {"tracks": str(run.tracks)}
+    assert (run.frame_rate(), run.frame_size()) == (10.0, (64, 48))
+    assert not run.salvage("cam", {}, -9)            # a folder with a summary is left alone
+
+
+def test_a_partial_folder_is_renamed_into_place_replacing_the_old_one(tmp_path):
+    final = RunFolder(tmp_path / "video")
+    final.path.mkdir()
+    (final.path / "old.txt").write_text("old run\n")
+    part = final.partial()
+    assert part.path == tmp_path / ".video.partial"
+    part.path.mkdir()
+    part.tracks.write_text("")
+    part.write_summary({"frames": 2, "outputs": {"tracks": str(part.tracks)}})
+    final.commit_partial({"batch": {"name": "video"}})
+    assert not part.path.exists() and not (tmp_path / ".video.old").exists()
+    assert sorted(p.name for p in final.path.iterdir()) == ["summary.json", "tracks.txt"]
+    assert final.summary() == {"frames": 2, "outputs": {"tracks": str(final.tracks)},
+                               "batch": {"name": "video"}}

@@ -16,6 +16,7 @@ from ..evaluate import mot
 from ..evaluate.scoring import DEFAULT_SCORING, ignores_zero_marked
 from ..io.atomic import atomic_write_text
 from ..io.mot import read_mot
+from ..run.folder import RunFolder
 
 __all__ = ["COMBINED_FILE", "combined_metrics", "write_combined"]
 
@@ -23,8 +24,9 @@ COMBINED_FILE = "combined.json"
 
 
 def _sequence(folder: Path, frames: int) -> dict[str, dict]:
-    gt = read_mot(folder / "gt.txt", kind="gt")
-    pred = read_mot(folder / "tracks.txt", kind="results")   # empty: found nothing
+    run = RunFolder(folder)
+    gt = read_mot(run.gt, kind="gt")
+    pred = read_mot(run.tracks, kind="results")   # empty: found nothing
     gt = gt.select((gt.frames >= 1) & (gt.frames <= frames))
     return mot.evaluate_sequence(gt, pred,
                                  ignore_zero_marked=ignores_zero_marked(DEFAULT_SCORING))
@@ -36,11 +38,11 @@ def combined_metrics(results: Path, rows: Sequence[Mapping[str, Any]]) -> dict[s
     per: dict[str, dict[str, dict]] = {}
     for r in sorted(rows, key=lambda r: r["name"]):
         folder = Path(results) / r["name"]
-        if r.get("status") != "done" or not (folder / "gt.txt").is_file():
+        if r.get("status") != "done" or not RunFolder(folder).gt.is_file():
             continue
         try:
-            frames = int(json.loads((folder / "summary.json").read_text("utf-8"))["frames"])
-        except (OSError, ValueError, KeyError, TypeError):
+            frames = int((RunFolder(folder).summary() or {})["frames"])
+        except (ValueError, KeyError, TypeError):
             continue
         per[r["name"]] = _sequence(folder, frames)
     if not per:

@@ -13,7 +13,6 @@ import hashlib
 import io
 import json
 import logging
-import shutil
 import threading
 import time
 import uuid
@@ -25,6 +24,7 @@ from ..config import PipelineConfig, apply_overrides, from_dict, load_config, to
 from ..errors import ConfigError, printable
 from ..io.atomic import OutputLock, atomic_write_bytes, atomic_write_text
 from ..run.executor import dask_client, map_tasks
+from ..run.folder import RunFolder
 from ..version import __version__
 from .combined import write_combined
 from .sources import Video, expand_sources, with_files
@@ -134,33 +134,6 @@ def _one_line(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {text[0] if text else ''}".strip()
 
 
-def _partial_folder(results: Path, name: str) -> Path:
-    """The folder a video runs into until its run is complete: ``RESULTS/.<name>.partial``."""
-    return results / f".{name}.partial"
-
-
-def _rewrite_summary(partial: Path, final: Path, task: BatchTask) -> None:
-    """``summary.json`` of the run in ``partial`` made the final folder's: the paths it names
-    those of ``final``, and the batch's entry (the video's name, the config hash) added."""
-    meta = json.loads((partial / "summary.json").read_text(encoding="utf-8"))
-    meta["outputs"] = {k: str(final / Path(p).name) for k, p in meta.get("outputs", {}).items()}
-    meta["batch"] = {"name": task.video.name, "config_hash": task.config_hash}
-    atomic_write_text(partial / "summary.json", json.dumps(meta, indent=2) + "\n")
-
-
-def _move_into_place(partial: Path, final: Path) -> None:
-    """Rename the complete run ``partial`` to ``final``; the folder of a redone video goes as
-    the new one arrives."""
-    if final.exists():
-        old = final.with_name(f".{final.name}.old")
-        shutil.rmtree(old, ignore_errors=True)
-        final.rename(old)
-        partial.rename(final)
-        shutil.rmtree(old, ignore_errors=True)
-    else:
-        partial.rename(final)
-
-
 def _run_track_job(task: BatchTask, partial: Path, t0: float) -> Any:
     """Run the video's ``track`` job into ``partial``: its summary. :class:`VideoTimeout` when
     it ran over ``--timeout-s``, :class:`BatchStopped` when the batch asked it to stop."""
@@ -191,22 +164,22 @@ def run_video(task: BatchTask, attempt: int = 1) -> dict[str, Any]:
 
     v = task.video
     out = Path(task.results)
-    partial, final = _partial_folder(out, v.name), out / v.name
+    final = RunFolder(out / v.name)
+    partial = final.partial()
     t0 = time.perf_counter()
     row: dict[str, Any] = {"name": v.name, "source": v.source, "status": "failed", "error": "",
                            "worker": _worker_name(), "attempts": attempt,
                            "config_hash": task.config_hash, "motiontrack_version": __version__,
                            "opencv_version": cv2.__version__}
     try:
-        shutil.rmtree(partial, ignore_errors=True)   # of a killed attempt
-        summary = _run_track_job(task, partial, t0)
-        _rewrite_summary(partial, final, task)
-        _move_into_place(partial, final)
+        partial.remove()   # of a killed attempt
+        summary = _run_track_job(task, partial.path, t0)
+        final.commit_partial({"batch": {"name": v.name, "config_hash": task.config_hash}})
         row.update(status="done", frames=summary.frames, fps=round(summary.fps, 3),
                    tracks=summary.tracks)
         row.update({k: summary.accuracy[k] for k in METRICS if k in (summary.accuracy or {})})
     except Exception as exc:   # noqa: BLE001 - one bad video never stops the batch
-        shutil.rmtree(partial, ignore_errors=True)
+        partial.remove()
         if isinstance(exc, VideoTimeout):
             row["status"] = "timeout"
         elif isinstance(exc, BatchStopped):
@@ -222,7 +195,7 @@ def _unfinished_row(task: BatchTask, status: str, error: str, **extra: Any) -> d
     import cv2
 
     v = task.video
-    shutil.rmtree(_partial_folder(Path(task.results), v.name), ignore_errors=True)
+    RunFolder(Path(task.results) / v.name).partial().remove()
     return {"name": v.name, "source": v.source, "status": status, "error": error, **extra,
             "config_hash": task.config_hash, "motiontrack_version": __version__,
             "opencv_version": cv2.__version__}
@@ -284,10 +257,7 @@ class _Rate:
 
 def _complete(results: Path, name: str, chash: str) -> bool:
     """Whether ``RESULTS/<name>`` holds a complete run made with the config ``chash``."""
-    try:
-        meta = json.loads((results / name / "summary.json").read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return False
+    meta = RunFolder(results / name).summary()
     return (isinstance(meta, dict) and meta.get("status") == "complete"
             and isinstance(meta.get("batch"), dict) and meta["batch"].get("config_hash") == chash)
 
@@ -516,7 +486,7 @@ def _run_tasks(manager: Any, tasks: Sequence[BatchTask], index: _Index, *, retri
         # a local cluster's workers are gone now, and a partial folder one of them wrote
         # into after the first removal goes too (a remote worker removes its own)
         for t in stopped:
-            shutil.rmtree(_partial_folder(Path(t.results), t.video.name), ignore_errors=True)
+            RunFolder(Path(t.results) / t.video.name).partial().remove()
 
 
 def _finish(out: Path, rows: list[dict[str, Any]]) -> list[dict[str, Any]]:

@@ -46,14 +46,16 @@ def cmd_analyze(args: argparse.Namespace) -> int:
     from ..calibrate import load_camera
     from ..errors import ConfigError
     from ..io.annotations import read_annotations
-    from ..run.analyze import analyze_tracks, frame_rate_beside, frame_size_beside
+    from ..run.analyze import analyze_tracks
+    from ..run.folder import RunFolder
     from ..run.folders import source_name
     from ..run.heatmaps import median_background
     from ._sinks import sink_settings, sink_targets, sinks_writer
 
     targets = sink_targets(args)
     settings = sink_settings(args)
-    fps = args.fps if args.fps is not None else frame_rate_beside(args.tracks)
+    beside = RunFolder.beside(args.tracks)
+    fps = args.fps if args.fps is not None else beside.frame_rate()
     if fps is None:
         raise ConfigError(f"analyze needs the frame rate of {args.tracks.name}: give --fps")
     camera = load_camera(args.camera) if args.camera is not None else None
@@ -61,7 +63,7 @@ def cmd_analyze(args: argparse.Namespace) -> int:
     tracks = read_annotations(args.tracks)
     background = median_background(args.video) if args.video is not None else None
     size = ((background.shape[1], background.shape[0]) if background is not None
-            else frame_size_beside(args.tracks))
+            else beside.frame_size())
     summary = analyze_tracks(tracks, scene, fps, args.out, camera=camera, bin_s=args.bin_s,
                              force=args.force, source=str(args.tracks), size=size,
                              background=background,

@@ -1,9 +1,9 @@
 """Output writers of scene analytics: ``events.jsonl`` and ``counts.csv``.
 
-Both read the :class:`~motiontrack.types.SceneFrame` of each frame: as writers of a
-:class:`~motiontrack.run.job.Job` (``track --scene``: :meth:`write` takes the frame's
-``FrameResult.scene``) or driven directly (``analyze``: :meth:`open`, :meth:`add`,
-:meth:`close`), so both commands write the same files the same way.
+Both are writers of a :class:`~motiontrack.run.job.Job` reading the
+:class:`~motiontrack.types.SceneFrame` of each frame (``FrameResult.scene``): the job of
+``track --scene`` and that of ``analyze`` (:mod:`motiontrack.run.analyze`), so both commands
+write the same files the same way.
 """
 
 from __future__ import annotations
@@ -20,6 +20,7 @@ import numpy as np
 from ..errors import ConfigError
 from ..io.atomic import AtomicFile
 from ..types import FrameResult, SceneFrame, events_header
+from .folder import RunFolder
 from .job import JobContext, Writer
 
 __all__ = ["EventsWriter", "CountsWriter"]
@@ -30,24 +31,18 @@ class EventsWriter(Writer):
     object per event in frame order (``docs/analytics.md``)."""
 
     def __init__(self, out: Path, source: str = "", scene: str = "") -> None:
-        self.paths = {"events": Path(out) / "events.jsonl"}
+        self.paths = {"events": RunFolder(out).events}
         self.source, self.scene = str(source), str(scene)
         self.count = 0
         self._file: AtomicFile | None = None
 
     def start(self, ctx: JobContext) -> None:
-        self.open(ctx.fps)
-
-    def open(self, fps: float) -> None:
         self._file = AtomicFile(self.paths["events"])
-        self._file.write(json.dumps(events_header(fps, self.source, self.scene)) + "\n")
+        self._file.write(json.dumps(events_header(ctx.fps, self.source, self.scene)) + "\n")
 
     def write(self, result: FrameResult) -> None:
-        if result.scene is not None:
-            self.add(result.scene)
-
-    def add(self, frame: SceneFrame) -> None:
-        if frame.events:
+        frame = result.scene
+        if frame is not None and frame.events:
             self._file.write("".join(json.dumps(e.to_json()) + "\n" for e in frame.events))
             self.count += len(frame.events)
 
@@ -70,7 +65,7 @@ class CountsWriter(Writer):
                  bin_s: float = 60.0) -> None:
         if not (math.isfinite(bin_s) and bin_s > 0):
             raise ConfigError(f"--bin-s must be > 0 seconds, got {bin_s!r}")
-        self.paths = {"counts": Path(out) / "counts.csv"}
+        self.paths = {"counts": RunFolder(out).counts}
         self.lines = [ln.name for ln in lines]
         self.zones = [z.name for z in zones]
         self.bin_s = float(bin_s)
@@ -79,10 +74,7 @@ class CountsWriter(Writer):
         self._bin: int | None = None
 
     def start(self, ctx: JobContext) -> None:
-        self.open(ctx.fps)
-
-    def open(self, fps: float) -> None:
-        self._fps = float(fps)
+        self._fps = float(ctx.fps)
         self._file = AtomicFile(self.paths["counts"])
         head = ["bin", "start_s", "end_s", "frames"]
         head += [f"line:{n}:{d}" for n in self.lines for d in ("in", "out")]
@@ -91,9 +83,9 @@ class CountsWriter(Writer):
 
     def write(self, result: FrameResult) -> None:
         if result.scene is not None:
-            self.add(result.scene)
+            self._add(result.scene)
 
-    def add(self, frame: SceneFrame) -> None:
+    def _add(self, frame: SceneFrame) -> None:
         # a little slack so that t = k * bin_s computed in floating point lands in bin k
         b = int(math.floor((frame.frame - 1) / self._fps / self.bin_s + 1e-9))
         if b != self._bin:

@@ -1,80 +1,48 @@
-"""``motiontrack analyze``: scene analytics over an existing tracks file.
+"""``motiontrack analyze``: scene analytics over an existing tracks file, as a :class:`Job`.
 
-Every frame from 1 to the file's last frame is one step of
-:class:`~motiontrack.analytics.Analytics` (frames without rows too: that is how tracks are
-forgotten and zone occupancy averaged), written by the same writers as ``track --scene``.
+The source is the tracks file (:class:`TracksSource`: one :class:`TrackRows` per frame from 1 to
+the file's last frame, frames without rows too: that is how tracks are forgotten and zone
+occupancy averaged), the processor steps :class:`~motiontrack.analytics.Analytics` over each
+(:class:`AnalyticsProcessor`), and the writers are those of ``track --scene``, so both commands
+write the same files the same way. ``evaluate-events`` runs the same source and processor and
+keeps the events in memory (:func:`analysed_events`).
 """
 
 from __future__ import annotations
 
-import json
 import logging
 import math
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable, Iterator
 
 import numpy as np
 
 from ..analytics import Analytics, Scene
 from ..errors import InputError, location
-from ..io.atomic import atomic_write_text, check_writable
-from ..io.mot import read_seqinfo
-from ..types import Annotations
+from ..io.sources import Source, SourceInfo
+from ..types import Annotations, Event, FrameResult
 from .analytics_writers import CountsWriter, EventsWriter
 from .event_sinks import EventSinksWriter
+from .folder import RunFolder
 from .heatmaps import HeatmapWriter, scene_geometry
+from .job import Job, JobSummary
 
 log = logging.getLogger(__name__)
 
-__all__ = ["analyze_tracks", "frame_rate_beside", "frame_size_beside", "tracks_extent"]
+__all__ = ["AnalyticsProcessor", "TrackRows", "TracksFrameResult", "TracksSource",
+           "analysed_events", "analysis", "analyze_job", "analyze_tracks", "frame_rate_beside",
+           "frame_size_beside", "tracks_extent"]
 
 
 def frame_rate_beside(tracks_path: str | Path) -> float | None:
-    """The frame rate a tracks file's folder states: ``summary.json`` of the ``track`` run that
-    wrote it (``source_fps``), or a MOTChallenge ``seqinfo.ini`` in its folder or the one above
-    (``gt/gt.txt``); ``None`` when neither does."""
-    folder = Path(tracks_path).resolve().parent
-    summary = folder / "summary.json"
-    if summary.is_file():
-        try:
-            fps = json.loads(summary.read_text(encoding="utf-8")).get("source_fps")
-        except (OSError, ValueError, AttributeError):
-            fps = None
-        if isinstance(fps, (int, float)) and math.isfinite(fps) and fps > 0:
-            return float(fps)
-    for d in (folder, folder.parent):
-        if (d / "seqinfo.ini").is_file():
-            try:
-                fps = read_seqinfo(d).get("framerate")   # the reader lower-cases keys
-            except InputError:
-                return None
-            return float(fps) if isinstance(fps, (int, float)) and fps > 0 else None
-    return None
+    """The frame rate the run folder of a tracks file states (:meth:`RunFolder.frame_rate`)."""
+    return RunFolder.beside(tracks_path).frame_rate()
 
 
 def frame_size_beside(tracks_path: str | Path) -> tuple[int, int] | None:
-    """``(width, height)`` of the frames a tracks file's folder states: ``summary.json`` of the
-    ``track`` run that wrote it, or a MOTChallenge ``seqinfo.ini`` (``imWidth``, ``imHeight``)
-    in its folder or the one above; ``None`` when neither does."""
-    folder = Path(tracks_path).resolve().parent
-    summary = folder / "summary.json"
-    if summary.is_file():
-        try:
-            doc = json.loads(summary.read_text(encoding="utf-8"))
-            w, h = doc.get("width"), doc.get("height")
-        except (OSError, ValueError, AttributeError):
-            w = h = None
-        if isinstance(w, int) and isinstance(h, int) and w > 0 and h > 0:
-            return w, h
-    for d in (folder, folder.parent):
-        if (d / "seqinfo.ini").is_file():
-            try:
-                info = read_seqinfo(d)
-            except InputError:
-                return None
-            w, h = info.get("imwidth"), info.get("imheight")
-            return (w, h) if isinstance(w, int) and isinstance(h, int) and w > 0 and h > 0 else None
-    return None
+    """``(width, height)`` the run folder of a tracks file states (:meth:`RunFolder.frame_size`)."""
+    return RunFolder.beside(tracks_path).frame_size()
 
 
 def tracks_extent(tracks: Annotations) -> tuple[int, int]:
@@ -86,19 +54,83 @@ def tracks_extent(tracks: Annotations) -> tuple[int, int]:
             max(1, int(math.ceil(float(np.max(b[:, 1] + b[:, 3]))))))
 
 
-def analyze_tracks(tracks: Annotations, scene: Scene, fps: float, out: str | Path, *,
-                   camera: Any = None, bin_s: float = 60.0, force: bool = False,
-                   source: str = "", size: tuple[int, int] | None = None,
-                   background: np.ndarray | None = None,
-                   sinks: EventSinksWriter | None = None) -> dict[str, Any]:
-    """Write ``events.jsonl``, ``counts.csv``, ``heatmap.png`` (``heatmap_world.png`` with a
-    camera) and ``summary.json`` for ``tracks`` in ``out``.
+@dataclass(frozen=True)
+class TrackRows:
+    """The rows of one frame of a tracks file: ``ids`` (N,) int64, ``boxes`` (N, 4) float64
+    ``x, y, w, h`` in pixels (N may be 0)."""
 
-    Rows marked ``consider = 0`` (ground truth's ignored objects) are left out. The heat map is
-    ``size`` pixels (default: the extent of the tracks) over ``background`` (default: black).
-    Returns the summary.
+    frame: int
+    ids: np.ndarray = field(repr=False)
+    boxes: np.ndarray = field(repr=False)
+
+
+@dataclass(frozen=True)
+class TracksFrameResult(FrameResult):
+    """A frame of a tracks file analysed: no picture, no mask; the rows' boxes as they are in
+    the file (:attr:`boxes`; a tracks file may hold boxes a :class:`~motiontrack.types.Track`
+    refuses, such as zero-sized ones), the scene analytics of the frame in :attr:`scene`."""
+
+    boxes: np.ndarray = field(default_factory=lambda: np.zeros((0, 4)), repr=False)
+
+
+class TracksSource(Source):
+    """A tracks file as a job's source: one :class:`TrackRows` per frame from 1 to its last.
+
+    Parameters
+    ----------
+    tracks : the tracks (rows marked ``consider = 0`` are left out by :func:`analysis`).
+    fps : the frame rate of the tracked video.
+    size : ``(width, height)`` of its frames.
+    name : what the tracks are (their file), for the summary and the events header.
     """
-    out = Path(out)
+
+    def __init__(self, tracks: Annotations, fps: float, size: tuple[int, int],
+                 name: str = "") -> None:
+        super().__init__()
+        self.tracks = tracks
+        self.last = int(tracks.frames.max()) if len(tracks) else 0
+        self.info = SourceInfo(name=str(name), width=int(size[0]), height=int(size[1]),
+                               fps=fps, frame_count=self.last)
+
+    def __iter__(self) -> Iterator[TrackRows]:  # type: ignore[override]
+        t, rows = self.tracks, self.tracks.by_frame()
+        empty_ids, empty = np.zeros(0, dtype=np.int64), np.zeros((0, 4))
+        for f in range(1, self.last + 1):
+            idx = rows.get(f)
+            yield (TrackRows(f, t.ids[idx], t.boxes[idx]) if idx is not None
+                   else TrackRows(f, empty_ids, empty))
+
+
+class AnalyticsProcessor:
+    """Scene analytics stepped over every frame of a :class:`TracksSource`."""
+
+    def __init__(self, analytics: Analytics) -> None:
+        self.analytics = analytics
+
+    def results(self, source: TracksSource) -> Iterator[TracksFrameResult]:
+        fps = source.info.fps or 25.0
+        for rows in source:
+            scene = self.analytics.step(rows.frame, rows.ids, rows.boxes)
+            yield TracksFrameResult(index=rows.frame - 1, timestamp=(rows.frame - 1) / fps,
+                                    frame=None, mask=None, regions=(), tracks=(), scene=scene,
+                                    boxes=rows.boxes)
+
+    def annotate(self, result: FrameResult) -> np.ndarray:  # pragma: no cover - no video
+        raise NotImplementedError("a tracks file has no pictures to annotate")
+
+    def background(self) -> np.ndarray | None:
+        return None
+
+    def summary(self) -> dict[str, Any]:
+        return {"analytics": self.analytics.summary()}
+
+
+def analysis(tracks: Annotations, scene: Scene, fps: float, *, camera: Any = None,
+             source: str = "", size: tuple[int, int] | None = None
+             ) -> tuple[TracksSource, AnalyticsProcessor]:
+    """The source and processor of analysing ``tracks`` with ``scene`` at ``fps``: the checks
+    come first (a bad frame rate, rows without a track id), rows marked ``consider = 0``
+    (ground truth's ignored objects) are left out; ``size`` defaults to the tracks' extent."""
     analytics = Analytics(scene, fps, camera)   # a bad frame rate fails before any file
     if len(tracks) and np.any(tracks.ids < 0):
         raise InputError(f"{location(source or 'tracks')}: rows without a track id (-1): "
@@ -107,40 +139,67 @@ def analyze_tracks(tracks: Annotations, scene: Scene, fps: float, out: str | Pat
     if ignored:
         log.info("leaving out %d rows marked consider = 0", ignored)
         tracks = tracks.select(tracks.consider)
-    events = EventsWriter(out, source, scene.source)
-    counts = CountsWriter(out, scene.lines, scene.zones, bin_s)
-    heat = HeatmapWriter(out, scene.anchor, size or tracks_extent(tracks), camera, background,
-                         scene_geometry(scene.lines, scene.zones))
-    writers = (events, counts) + ((sinks,) if sinks is not None else ())
-    summary_path = out / "summary.json"
-    check_writable([*events.paths.values(), *counts.paths.values(), *heat.paths.values(),
-                    summary_path], force)
-    rows = tracks.by_frame()
-    last = int(tracks.frames.max()) if len(tracks) else 0
-    empty = np.zeros((0, 4))
-    keep = False
-    for w in writers:
-        w.open(fps)
-    heat.open()
-    try:
-        for f in range(1, last + 1):
-            idx = rows.get(f)
-            ids, boxes = ((tracks.ids[idx], tracks.boxes[idx]) if idx is not None
-                          else ((), empty))
-            frame = analytics.step(f, ids, boxes)
-            for w in writers:
-                w.add(frame)
-            heat.add_boxes(boxes)
-        keep = True
-    finally:
-        for w in (*writers, heat):
-            w.close(keep)
-    summary = {"source": str(source), "fps": float(fps), "frames": last,
-               "tracks": int(len(np.unique(tracks.ids))), "analytics": analytics.summary(),
-               "heatmap": heat.info,
-               "outputs": {k: str(p) for w in (*writers, heat) for k, p in w.paths.items()}}
-    summary["outputs"]["summary"] = str(summary_path)
-    if sinks is not None:   # webhooks and MQTT brokers: what each delivered, dropped, retried
-        summary["sinks"] = sinks.stats()
-    atomic_write_text(summary_path, json.dumps(summary, indent=2) + "\n")
-    return summary
+    src = TracksSource(tracks, fps, size or tracks_extent(tracks), source)
+    return src, AnalyticsProcessor(analytics)
+
+
+def analysed_events(tracks: Annotations, scene: Scene, fps: float, *, camera: Any = None,
+                    source: str = "") -> tuple[Event, ...]:
+    """The events ``analyze`` writes for ``tracks``, in file order, without writing them."""
+    src, proc = analysis(tracks, scene, fps, camera=camera, source=source)
+    return tuple(e for r in proc.results(src) for e in r.scene.events)
+
+
+def _layout(fps: float, tracks: int) -> Callable[[JobSummary], dict[str, Any]]:
+    """``summary.json`` of an analysis: what was analysed, the analytics' and the heat map's
+    entries, the outputs; the status when the run did not complete."""
+
+    def layout(s: JobSummary) -> dict[str, Any]:
+        d = {"source": s.source, "fps": float(fps), "frames": s.frames, "tracks": tracks,
+             "analytics": s.extra["analytics"], "heatmap": s.extra.get("heatmap", {}),
+             "outputs": s.outputs}
+        if "sinks" in s.extra:   # webhooks and MQTT brokers: what each delivered, dropped, retried
+            d["sinks"] = s.extra["sinks"]
+        if s.status != "complete":
+            d.update(status=s.status, interrupted=s.interrupted)
+        return d
+
+    return layout
+
+
+def analyze_job(tracks: Annotations, scene: Scene, fps: float, out: str | Path, *,
+                camera: Any = None, bin_s: float = 60.0, force: bool = False,
+                source: str = "", size: tuple[int, int] | None = None,
+                background: np.ndarray | None = None,
+                sinks: EventSinksWriter | None = None) -> Job:
+    """The job writing ``events.jsonl``, ``counts.csv``, ``heatmap.png`` (``heatmap_world.png``
+    with a camera) and ``summary.json`` for ``tracks`` in ``out``.
+
+    The heat map is ``size`` pixels (default: the extent of the tracks) over ``background``
+    (default: black).
+    """
+    out = Path(out)
+    src, proc = analysis(tracks, scene, fps, camera=camera, source=source, size=size)
+    writers = [EventsWriter(out, source, scene.source),
+               CountsWriter(out, scene.lines, scene.zones, bin_s)]
+    if sinks is not None:
+        writers.append(sinks)
+    writers.append(HeatmapWriter(out, scene.anchor, camera=camera, background=background,
+                                 geometry=scene_geometry(scene.lines, scene.zones),
+                                 boxes_of=lambda r: r.boxes))
+    n = int(len(np.unique(src.tracks.ids)))
+    return Job(src, proc, writers, out, force=force, layout=_layout(fps, n))
+
+
+def analyze_tracks(tracks: Annotations, scene: Scene, fps: float, out: str | Path, *,
+                   camera: Any = None, bin_s: float = 60.0, force: bool = False,
+                   source: str = "", size: tuple[int, int] | None = None,
+                   background: np.ndarray | None = None,
+                   sinks: EventSinksWriter | None = None,
+                   should_stop: Callable[[], bool] | None = None) -> dict[str, Any]:
+    """Run :func:`analyze_job` and return the contents of its ``summary.json``; ``should_stop``
+    as for :meth:`Job.run` (an interruption keeps the frames analysed and raises
+    ``KeyboardInterrupt``)."""
+    job = analyze_job(tracks, scene, fps, out, camera=camera, bin_s=bin_s, force=force,
+                      source=source, size=size, background=background, sinks=sinks)
+    return job.layout(job.run(should_stop=should_stop))

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import tempfile
 from pathlib import Path
 from typing import Any
 
@@ -10,7 +9,9 @@ from ..analytics import load_scene
 from ..errors import ConfigError
 from ..io.annotations import read_annotations
 from ..io.events import EventsFile, is_events_file, read_events
-from .analyze import analyze_tracks, frame_rate_beside
+from ..types import events_header
+from .analyze import analysed_events
+from .folder import RunFolder
 
 __all__ = ["load_events"]
 
@@ -35,12 +36,11 @@ def load_events(path: str | Path, scene: str | Path | None = None, fps: float | 
         raise ConfigError(f"{what} {path} is not an events file (its first line is not the "
                           "motiontrack.events header); give --scene to analyse it as a tracks "
                           "file")
-    rate = fps if fps is not None else frame_rate_beside(path)
+    rate = fps if fps is not None else RunFolder.beside(path).frame_rate()
     if rate is None:
         raise ConfigError(f"analysing {path.name} needs its frame rate: give --fps")
     spec = load_scene(scene, camera)
     tracks = read_annotations(path)
-    with tempfile.TemporaryDirectory(prefix="motiontrack-events-") as tmp:
-        # analyze's own writer, so the events are exactly those `analyze` writes
-        analyze_tracks(tracks, spec, rate, tmp, camera=camera, source=str(path))
-        return read_events(Path(tmp) / "events.jsonl")
+    # analyze's own source and processor, so the events are exactly those `analyze` writes
+    events = analysed_events(tracks, spec, rate, camera=camera, source=str(path))
+    return EventsFile(events_header(rate, str(path), spec.source), events)

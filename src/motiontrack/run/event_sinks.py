@@ -1,11 +1,10 @@
 """The writer that sends each frame's scene-analytics events to webhooks and MQTT brokers.
 
 Like :class:`~motiontrack.run.analytics_writers.EventsWriter` it reads the
-:class:`~motiontrack.types.SceneFrame` of each frame, as a writer of a
-:class:`~motiontrack.run.job.Job` (``track --scene``) or driven directly (``analyze``:
-:meth:`open`, :meth:`add`, :meth:`close`). The sending happens in the background threads of
-:mod:`motiontrack.io.sinks`; the pipeline only queues, so a slow or absent receiver never slows
-a run down, and at the end a run waits at most ``flush_s`` for them.
+:class:`~motiontrack.types.SceneFrame` of each frame, as a writer of the
+:class:`~motiontrack.run.job.Job` of ``track --scene`` or ``analyze``. The sending happens in
+the background threads of :mod:`motiontrack.io.sinks`; the pipeline only queues, so a slow or
+absent receiver never slows a run down, and at the end a run waits at most ``flush_s`` for them.
 """
 
 from __future__ import annotations
@@ -16,7 +15,7 @@ from typing import Any, Sequence
 
 from ..io.sinks import (FLUSH_S, Delivery, MqttDelivery, MqttTarget, SinkSettings,
                         WebhookDelivery, WebhookTarget, check_camera_name, encode)
-from ..types import FrameResult, SceneFrame
+from ..types import FrameResult
 from .job import JobContext, JobSummary, Writer
 
 log = logging.getLogger(__name__)
@@ -65,19 +64,12 @@ class EventSinksWriter(Writer):
         self._stats: list[dict[str, Any]] | None = None
 
     def start(self, ctx: JobContext) -> None:
-        self.open()
-
-    def open(self, fps: float | None = None) -> None:
         for s in self.sinks:
             s.start()
         self._open = True
 
     def write(self, result: FrameResult) -> None:
-        if result.scene is not None:
-            self.add(result.scene)
-
-    def add(self, frame: SceneFrame) -> None:
-        for e in frame.events:
+        for e in result.scene.events if result.scene is not None else ():
             body = encode({**e.to_json(), "camera": self.camera})
             for s in self.sinks:
                 s.offer(body)

@@ -1,9 +1,8 @@
 """``heatmap.png`` and ``heatmap_world.png``: where tracks spent time.
 
-One writer for ``track --scene`` (a :class:`~motiontrack.run.job.Job` writer: each frame's
-reported tracks, the motion detector's background when the run ends) and ``analyze`` (driven
-directly: :meth:`HeatmapWriter.open`, :meth:`HeatmapWriter.add_boxes`,
-:meth:`HeatmapWriter.close`, with a background it is given or none).
+One writer of a :class:`~motiontrack.run.job.Job` for ``track --scene`` (each frame's reported
+tracks, the motion detector's background when the run ends) and ``analyze`` (each frame's rows
+of the tracks file, with a background it is given or none).
 
 Every frame, each reported track counts one visit at its anchor (the scene's ``anchor``) in
 the pixel under it, and with a camera at its foot point on the ground in 5 cm cells. The
@@ -17,7 +16,7 @@ from __future__ import annotations
 
 import logging
 from pathlib import Path
-from typing import Any, Callable, Iterable, Sequence
+from typing import Any, Callable, Sequence
 
 import cv2
 import numpy as np
@@ -29,6 +28,7 @@ from ..io.atomic import atomic_write_bytes
 from ..io.sources import open_source
 from ..render.heatmap import heat_overlay, world_heat_map
 from ..types import FrameResult
+from .folder import RunFolder
 from .job import JobContext, JobSummary, Writer
 
 log = logging.getLogger(__name__)
@@ -81,18 +81,21 @@ class HeatmapWriter(Writer):
         returning it when the run ends; ``None`` in a job: the motion detector's background,
         else the last frame.
     geometry : pixel polylines drawn over the maps (the scene's lines and closed zones).
+    boxes_of : the boxes a frame's result counts, (N, 4) ``x, y, w, h``; default: its tracks'.
     """
 
     def __init__(self, out: Path, anchor: str = "bottom_center",
                  size: tuple[int, int] | None = None, camera: Any = None,
                  background: np.ndarray | Callable[[], np.ndarray | None] | None = None,
-                 geometry: Sequence[np.ndarray] = ()) -> None:
-        out = Path(out)
-        self.paths = {"heatmap": out / "heatmap.png"}
+                 geometry: Sequence[np.ndarray] = (),
+                 boxes_of: Callable[[FrameResult], Any] | None = None) -> None:
+        folder = RunFolder(out)
+        self.paths = {"heatmap": folder.heatmap}
         if camera is not None:
-            self.paths["heatmap_world"] = out / "heatmap_world.png"
+            self.paths["heatmap_world"] = folder.heatmap_world
         self.anchor, self.size, self.camera = anchor, size, camera
         self.background = background
+        self.boxes_of = boxes_of or _track_boxes
         self.geometry = [np.asarray(g, dtype=np.float64).reshape(-1, 2) for g in geometry]
         self.grid: HeatGrid | None = None
         self.world = WorldHeat(WORLD_CELL_M) if camera is not None else None
@@ -100,32 +103,22 @@ class HeatmapWriter(Writer):
         self._ctx: JobContext | None = None
         self._last: np.ndarray | None = None
 
-    # ----------------------------------------------------------------------- job hooks
     def start(self, ctx: JobContext) -> None:
         self._ctx = ctx
-        self.open(self.size or (ctx.info.width, ctx.info.height))
-
-    def write(self, result: FrameResult) -> None:
-        self.add_boxes([t.box.as_array() for t in result.tracks])
-        self._last = result.frame
-
-    def finish(self, summary: JobSummary) -> None:
-        summary.extra["heatmap"] = self.info
-
-    # ------------------------------------------------------------------ direct driving
-    def open(self, size: tuple[int, int] | None = None) -> None:
-        w, h = size if size is not None else (self.size or (0, 0))
+        w, h = self.size or (ctx.info.width, ctx.info.height)
         self.grid = HeatGrid(int(w), int(h))
 
-    def add_boxes(self, boxes: Iterable[Any]) -> None:
-        """One frame's tracks: (N, 4) ``x, y, w, h`` boxes."""
-        b = np.asarray(list(boxes) if not isinstance(boxes, np.ndarray) else boxes,
-                       dtype=np.float64).reshape(-1, 4)
+    def write(self, result: FrameResult) -> None:
+        b = np.asarray(self.boxes_of(result), dtype=np.float64).reshape(-1, 4)
+        self._last = result.frame
         if not len(b):
             return
         self.grid.add(anchor_points(b, self.anchor))
         if self.world is not None:
             self.world.add(world_positions(b, self.camera))
+
+    def finish(self, summary: JobSummary) -> None:
+        summary.extra["heatmap"] = self.info
 
     def close(self, keep: bool) -> None:
         if not keep or self.grid is None:
@@ -173,6 +166,11 @@ class HeatmapWriter(Writer):
         if not ok:  # pragma: no cover - PNG encoding of a uint8 image does not fail
             raise MotionTrackError(f"could not encode {path.name}")
         atomic_write_bytes(path, buf.tobytes())
+
+
+def _track_boxes(result: FrameResult) -> np.ndarray:
+    """The boxes of a frame's tracks, (N, 4) ``x, y, w, h``."""
+    return np.array([t.box.as_array() for t in result.tracks], dtype=np.float64).reshape(-1, 4)
 
 
 def scene_geometry(lines: Sequence[Any], zones: Sequence[Any]) -> list[np.ndarray]:

@@ -31,7 +31,6 @@ starts, so that the folder never holds a mixture of two runs.
 
 from __future__ import annotations
 
-import json
 import logging
 import time
 from dataclasses import dataclass, field
@@ -41,10 +40,11 @@ from typing import Any, Callable, Iterator, Protocol, Sequence
 import numpy as np
 
 from ..errors import SourceError
-from ..io.atomic import (DiskFullError, OutputLock, atomic_write_text, check_writable,
-                         remove_leftover_temps, remove_outputs)
+from ..io.atomic import (DiskFullError, OutputLock, check_writable, remove_leftover_temps,
+                         remove_outputs)
 from ..io.sources import Source, SourceInfo
 from ..types import FrameResult
+from .folder import RunFolder
 
 log = logging.getLogger(__name__)
 
@@ -223,24 +223,29 @@ class Job:
     summary : write ``summary.json`` (the summary is returned by :meth:`run` either way).
     own_folder : hold the folder's lock from now until the run ends (default: with ``summary``;
         a job without it, such as ``overlay``, writes files into a folder it shares).
+    layout : what ``summary.json`` holds, made of the run's :class:`JobSummary` (default
+        :meth:`JobSummary.as_dict`; ``analyze`` keeps the fields of a tracks file's analysis).
     """
 
     def __init__(self, source: Source, processor: Processor, writers: Sequence[Writer],
                  out_dir: str | Path, *, force: bool = False,
                  config: tuple[Callable[[Any, Path], None], Any] | None = None,
-                 summary: bool = True, own_folder: bool | None = None) -> None:
+                 summary: bool = True, own_folder: bool | None = None,
+                 layout: Callable[[JobSummary], dict[str, Any]] = JobSummary.as_dict) -> None:
         self.source = source
         self.processor = processor
         self.writers = list(writers)
         self.out = Path(out_dir)
         self.config = config
+        self.layout = layout
         self.paths: dict[str, Path] = {}
         for w in self.writers:
             self.paths.update(w.paths)
+        self.folder = RunFolder(self.out)
         if summary:
-            self.paths["summary"] = self.out / "summary.json"
+            self.paths["summary"] = self.folder.summary_path
         if config is not None:
-            self.paths["config"] = self.out / "config.toml"
+            self.paths["config"] = self.folder.config
         self.force = force
         own = summary if own_folder is None else own_folder
         self._lock = OutputLock(self.out) if own else None
@@ -322,8 +327,7 @@ class Job:
         summary.outputs = {k: str(v) for k, v in self.paths.items()
                            if v.exists() or k == "summary"}
         if "summary" in self.paths:
-            atomic_write_text(self.paths["summary"],
-                              json.dumps(summary.as_dict(), indent=2) + "\n")
+            self.folder.write_summary(self.layout(summary))
         self._release()
 
     def _loop(self, ctx: JobContext, summary: JobSummary,
@@ -402,10 +406,11 @@ class Job:
     def _old_outputs(self) -> list[Path]:
         """The outputs the ``summary.json`` in the folder lists, by name in this folder (a run
         with other settings may have written files this one does not)."""
-        path = self.paths.get("summary")
+        if "summary" not in self.paths:
+            return []
         try:
-            listed = json.loads(path.read_text(encoding="utf-8"))["outputs"].values()
-        except (AttributeError, OSError, ValueError, KeyError, TypeError):
+            listed = (self.folder.summary() or {})["outputs"].values()
+        except (AttributeError, KeyError, TypeError):
             return []
         names = {Path(str(v)).name for v in listed}
         paths = [self.out / n for n in sorted(names) if n and not n.startswith(".")]

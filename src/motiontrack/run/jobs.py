@@ -75,14 +75,7 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
     are more outputs, given every frame after the others (``serve``'s live view)."""
     out = Path(out_dir)
     ignores_zero_marked(scoring)   # an unknown name fails before the source opens
-    if sinks and scene is None:
-        raise ConfigError("--webhook and --mqtt send scene-analytics events: give --scene")
-    if sinks:
-        from ..io.sinks import check_camera_name
-
-        camera_name = check_camera_name(camera_name or source_name(source))
-    else:
-        camera_name = None
+    camera_name = _sink_camera_name(sinks, scene, camera_name, source)
     if mask_images is not None and detections is not None:
         raise ConfigError("--mask-images needs motion masks; with --detections there are none")
     streams = parse_streams(save)
@@ -90,7 +83,6 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
         # the movie would be written to the annotated video's own file name
         log.info("--save annotated: the annotated video is written anyway")
         streams = tuple(s for s in streams if s != "annotated")
-    codec = cfg.output.codec
     more = list(writers)
     camera = None
     if cfg.measure.camera:
@@ -120,26 +112,10 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
         fill = (fill_gap_frames(cfg, src.info.fps, external) if completes_tracks(cfg, external)
                 else None)
         tracks = TracksWriter(out, fitted, fill)
-        writers = [tracks]
+        writers: list[Writer] = [tracks]
         if analytics is not None:
-            from .analytics_writers import CountsWriter, EventsWriter
-            from .heatmaps import HeatmapWriter, scene_geometry
-
-            sc = analytics.scene
-            writers += [EventsWriter(out, str(source), sc.source),
-                        CountsWriter(out, sc.lines, sc.zones, bin_s),
-                        HeatmapWriter(out, sc.anchor, camera=fitted,
-                                      geometry=scene_geometry(sc.lines, sc.zones))]
-        if cfg.output.video:
-            writers.append(VideoWriter("video", out / f"annotated{extension_for(codec)}", codec))
-        if cfg.output.mask_video:
-            writers.append(MaskVideoWriter(out, codec))
-        if streams:
-            writers.append(IntermediateWriter(out, streams, codec))
-        if mask_images is not None:
-            writers.append(MaskImagesWriter(Path(mask_images), force))
-        if show is not None:
-            writers.append(ViewerWriter(show))
+            writers += _scene_writers(out, str(source), analytics.scene, fitted, bin_s)
+        writers += _picture_writers(out, cfg, streams, mask_images, force, show)
         if truth is not None:
             from ..evaluate.score import score_run
 
@@ -152,6 +128,48 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
         return Job(src, proc, [*writers, *more], out, force=force, config=(save_config, cfg))
 
     return _opened(source, cfg.source, build)
+
+
+def _sink_camera_name(sinks: Sequence[Any], scene: Any, camera_name: str | None,
+                      source: Any) -> str | None:
+    """The camera name events are sent under (checked), or None without sinks."""
+    if sinks and scene is None:
+        raise ConfigError("--webhook and --mqtt send scene-analytics events: give --scene")
+    if not sinks:
+        return None
+    from ..io.sinks import check_camera_name
+
+    return check_camera_name(camera_name or source_name(source))
+
+
+def _scene_writers(out: Path, source: str, sc: Any, camera: Any, bin_s: float) -> list[Writer]:
+    """``events.jsonl``, ``counts.csv`` and the heat maps of the scene ``sc``."""
+    from .analytics_writers import CountsWriter, EventsWriter
+    from .heatmaps import HeatmapWriter, scene_geometry
+
+    return [EventsWriter(out, source, sc.source), CountsWriter(out, sc.lines, sc.zones, bin_s),
+            HeatmapWriter(out, sc.anchor, camera=camera,
+                          geometry=scene_geometry(sc.lines, sc.zones))]
+
+
+def _picture_writers(out: Path, cfg: PipelineConfig, streams: Sequence[str],
+                     mask_images: str | Path | None, force: bool,
+                     show: Callable[[np.ndarray], bool] | None) -> list[Writer]:
+    """The annotated video, the mask video, the intermediate movies, the mask images and the
+    live view, as ``cfg.output`` and the options ask."""
+    codec = cfg.output.codec
+    writers: list[Writer] = []
+    if cfg.output.video:
+        writers.append(VideoWriter("video", out / f"annotated{extension_for(codec)}", codec))
+    if cfg.output.mask_video:
+        writers.append(MaskVideoWriter(out, codec))
+    if streams:
+        writers.append(IntermediateWriter(out, streams, codec))
+    if mask_images is not None:
+        writers.append(MaskImagesWriter(Path(mask_images), force))
+    if show is not None:
+        writers.append(ViewerWriter(show))
+    return writers
 
 
 def follow_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, tracker: SingleTracker,

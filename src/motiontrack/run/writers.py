@@ -23,6 +23,7 @@ from ..render.colors import TrackColors
 from ..render.streams import parse_streams, stream_image
 from ..tracking.gaps import fill_gaps
 from ..types import Annotations, FrameResult
+from .folder import RunFolder
 from .job import JobContext, JobSummary, Writer
 
 log = logging.getLogger(__name__)
@@ -50,7 +51,7 @@ class TracksWriter(Writer):
     """
 
     def __init__(self, out: Path, camera: Any = None, max_gap: int | None = None) -> None:
-        self.paths = {"tracks": Path(out) / "tracks.txt"}
+        self.paths = {"tracks": RunFolder(out).tracks}
         self.camera = camera
         self.max_gap = max_gap
         self.ids: set[int] = set()
@@ -157,7 +158,7 @@ class ScoreWriter(Writer):
     def __init__(self, out: Path, gt: Annotations, tracks: TracksWriter,
                  score: Callable[[Annotations, Annotations, int, int], dict[str, float]],
                  write_gt: bool = True) -> None:
-        self.paths = {"gt": Path(out) / "gt.txt"} if write_gt else {}
+        self.paths = {"gt": RunFolder(out).gt} if write_gt else {}
         self.gt = gt
         self.tracks = tracks
         self.score = score

@@ -12,7 +12,6 @@ committed before it starts again (:func:`salvage_segments`).
 
 from __future__ import annotations
 
-import json
 import logging
 import multiprocessing
 import signal
@@ -25,7 +24,7 @@ from typing import Any
 
 from ..config import load_config
 from ..errors import ConfigError
-from ..io.atomic import atomic_write_text, commit_leftovers
+from ..run.folder import RunFolder
 from .app import create_app
 from .cameras import CameraSpec, load_cameras
 from .channel import Channel
@@ -51,27 +50,15 @@ def default_out(cameras_file: str | Path) -> Path:
 def salvage_segments(folder: Path, source: str, status: dict[str, Any], code: int | None
                      ) -> list[Path]:
     """Commit the segments a killed camera process left unfinished in ``folder`` (its output
-    folder): in each segment folder without ``summary.json``, the tracks and events written so
-    far (up to the last whole line; :func:`~motiontrack.io.atomic.commit_leftovers`) under their
-    names, and a ``summary.json`` that says so (``"status": "killed (exit code N)"``,
-    ``"truncated": true``, the frame size and rate from the camera's last ``status``, so that
-    ``motiontrack analyze`` reads the tracks as it reads a finished segment's). Call it while no
-    process of the camera runs. Returns the segment folders committed."""
-    done = []
+    folder): each segment folder without ``summary.json`` is salvaged
+    (:meth:`~motiontrack.run.folder.RunFolder.salvage`): the tracks and events written so far,
+    up to the last whole line, under their names, and a ``summary.json`` that says so
+    (``"status": "killed (exit code N)"``, ``"truncated": true``, the frame size and rate from
+    the camera's last ``status``, so that ``motiontrack analyze`` reads the tracks as it reads a
+    finished segment's). Call it while no process of the camera runs. Returns the segment
+    folders committed."""
     segments = sorted(d for d in folder.iterdir() if d.is_dir()) if folder.is_dir() else []
-    for seg in segments:
-        if (seg / "summary.json").exists():
-            continue
-        kept = commit_leftovers(seg)
-        if not kept:
-            continue
-        summary = {"source": source, "width": status.get("width"), "height": status.get("height"),
-                   "source_fps": status.get("source_fps"), "status": f"killed (exit code {code})",
-                   "interrupted": True, "truncated": True,
-                   "outputs": {p.name.split(".")[0]: str(p) for p in kept}}
-        atomic_write_text(seg / "summary.json", json.dumps(summary, indent=2) + "\n")
-        done.append(seg)
-    return done
+    return [seg for seg in segments if RunFolder(seg).salvage(source, status, code)]
 
 
 @dataclass
