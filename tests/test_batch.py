@@ -13,7 +13,7 @@ import pytest
 
 pytest.importorskip("distributed")
 
-import motiontrack  # noqa: E402
+import motiontrack.batch  # noqa: E402
 from motiontrack.batch import config_hash, expand_sources, run_batch  # noqa: E402
 from motiontrack.cli import main  # noqa: E402
 from motiontrack.config import PipelineConfig, apply_overrides, save_config  # noqa: E402
@@ -204,13 +204,14 @@ def test_resume_with_another_config_redoes_everything(tmp_path, client):
     assert rows[0]["config_hash"] != first_hash
 
 
-def test_the_batch_subpackage_is_an_attribute_of_the_package_loaded_on_first_use():
+def test_the_package_loads_no_batch_until_the_batch_subpackage_is_imported():
     # a new process: this one has imported motiontrack.batch already
-    probe = ("import sys, motiontrack; loaded = 'motiontrack.batch' in sys.modules; "
-             "print(loaded, motiontrack.batch.run_batch.__module__)")
+    probe = ("import sys, motiontrack; print('motiontrack.batch' in sys.modules, "
+             "hasattr(motiontrack, 'batch')); import motiontrack.batch; "
+             "print(motiontrack.batch.run_batch.__module__)")
     out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
                          check=True, timeout=120).stdout.split()
-    assert out == ["False", "motiontrack.batch.runner"]
+    assert out == ["False", "False", "motiontrack.batch.runner"]
 
 
 @pytest.mark.slow

@@ -6,7 +6,11 @@ Python API::
     for result in motiontrack.track("video.mp4"):
         print(result.index, [(t.id, t.box) for t in result.tracks])
 
+    import motiontrack.batch
     rows = motiontrack.batch.run_batch(["videos/"], "results")   # one track run per video, on Dask
+
+The package imports nothing above the layers it offers here: ``motiontrack.batch`` (Dask) is
+a subpackage to import as any other.
 """
 
 from __future__ import annotations
@@ -30,11 +34,6 @@ if TYPE_CHECKING:  # pragma: no cover
     from .types import Annotations, Box, Frame, FrameResult, Region, Track, TrackState
 
 
-#: the subpackages offered here, imported on first use (``motiontrack.batch.run_batch`` after a
-#: plain ``import motiontrack``): the package alone loads neither Dask's client nor the pipeline
-_SUBPACKAGES = frozenset({"batch"})
-
-
 def __getattr__(name: str) -> Any:
     if name in _TYPES:
         from . import types
@@ -42,16 +41,11 @@ def __getattr__(name: str) -> Any:
         value = getattr(types, name)
         globals()[name] = value
         return value
-    if name in _SUBPACKAGES:
-        import importlib
-
-        # importing the subpackage sets it as this module's attribute: no later lookup here
-        return importlib.import_module(f"{__name__}.{name}")
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def __dir__() -> list[str]:
-    return sorted({*globals(), *_TYPES, *_SUBPACKAGES})
+    return sorted({*globals(), *_TYPES})
 
 
 def track(source: Any, config: "PipelineConfig | str | None" = None, **kwargs: Any) -> "TrackRun":

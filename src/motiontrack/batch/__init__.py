@@ -2,7 +2,7 @@
 
 From Python, :func:`run_batch` is the one entry point::
 
-    import motiontrack
+    import motiontrack.batch
     rows = motiontrack.batch.run_batch(["videos/"], "results", "cfg.toml", client=client)
 """
 
