@@ -18,7 +18,8 @@ from motiontrack.cli import main
 from motiontrack.render.scene import LINE_COLOR, ZONE_COLOR, draw_scene
 from motiontrack.io.events import read_events
 from motiontrack.io.mot import read_mot
-from motiontrack.run.analyze import analysed_events, analyze_tracks, frame_rate_beside
+from motiontrack.run.analyze import analysed_events, analyze_tracks
+from motiontrack.run.folder import RunFolder
 from motiontrack.types import EVENTS_SCHEMA, Annotations, Event, SceneFrame
 
 SCENE_TOML = """
@@ -122,9 +123,9 @@ def test_analyze_needs_force_to_replace_outputs(tmp_path, scene_file, capsys):
 
 def test_frame_rate_comes_from_the_run_summary_beside_the_tracks(tmp_path):
     tracks = _rows(tmp_path / "tracks.txt", [(1, 1, 10, 10)])
-    assert frame_rate_beside(tracks) is None
+    assert RunFolder.beside(tracks).frame_rate() is None
     (tmp_path / "summary.json").write_text(json.dumps({"source_fps": 12.5}))
-    assert frame_rate_beside(tracks) == 12.5
+    assert RunFolder.beside(tracks).frame_rate() == 12.5
 
 
 def test_scene_drawing_shows_lines_zones_and_counts():

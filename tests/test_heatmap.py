@@ -14,7 +14,8 @@ from motiontrack.analytics.heatmap import HeatGrid, WorldHeat, anchor_points, wo
 from motiontrack.calibrate.ground import GroundHomography
 from motiontrack.cli import main
 from motiontrack.render.heatmap import COLORMAP, grid_step, smooth
-from motiontrack.run.analyze import analyze_tracks, frame_rate_beside, frame_size_beside
+from motiontrack.run.analyze import analyze_tracks
+from motiontrack.run.folder import RunFolder
 from motiontrack.run.heatmaps import HeatmapWriter, image_sigma_px
 from motiontrack.types import Annotations
 
@@ -87,11 +88,11 @@ def test_heatmap_size_follows_the_frames_the_folder_states(tmp_path):
     tracks = tmp_path / "seq" / "gt" / "gt.txt"
     tracks.parent.mkdir(parents=True)
     tracks.write_text("1,1,10,10,20,40,1,-1,-1,-1\n2,1,12,10,20,40,1,-1,-1,-1\n")
-    assert frame_size_beside(tracks) is None
+    assert RunFolder.beside(tracks).frame_size() is None
     (tmp_path / "seq" / "seqinfo.ini").write_text(
         "[Sequence]\nname=seq\nframeRate=12\nseqLength=2\nimWidth=320\nimHeight=180\n")
-    assert frame_size_beside(tracks) == (320, 180)
-    assert frame_rate_beside(tracks) == 12.0
+    assert RunFolder.beside(tracks).frame_size() == (320, 180)
+    assert RunFolder.beside(tracks).frame_rate() == 12.0
     scene = tmp_path / "s.toml"
     scene.write_text("[[line]]\nname = 'g'\npoints = [[0, 100], [200, 100]]\n")
     assert main(["analyze", str(tracks), "--scene", str(scene), "-o", str(tmp_path / "a")]) == 0
@@ -101,7 +102,7 @@ def test_heatmap_size_follows_the_frames_the_folder_states(tmp_path):
     run.mkdir()
     (run / "tracks.txt").write_text(tracks.read_text())
     (run / "summary.json").write_text(json.dumps({"width": 64, "height": 48, "source_fps": 5}))
-    assert frame_size_beside(run / "tracks.txt") == (64, 48)
+    assert RunFolder.beside(run / "tracks.txt").frame_size() == (64, 48)
 
 
 def test_heatmap_without_a_stated_size_covers_the_tracks(tmp_path):

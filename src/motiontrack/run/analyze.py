@@ -31,18 +31,7 @@ from .job import Job, JobSummary
 log = logging.getLogger(__name__)
 
 __all__ = ["AnalyticsProcessor", "TrackRows", "TracksFrameResult", "TracksSource",
-           "analysed_events", "analysis", "analyze_job", "analyze_tracks", "frame_rate_beside",
-           "frame_size_beside", "tracks_extent"]
-
-
-def frame_rate_beside(tracks_path: str | Path) -> float | None:
-    """The frame rate the run folder of a tracks file states (:meth:`RunFolder.frame_rate`)."""
-    return RunFolder.beside(tracks_path).frame_rate()
-
-
-def frame_size_beside(tracks_path: str | Path) -> tuple[int, int] | None:
-    """``(width, height)`` the run folder of a tracks file states (:meth:`RunFolder.frame_size`)."""
-    return RunFolder.beside(tracks_path).frame_size()
+           "analysed_events", "analysis", "analyze_job", "analyze_tracks", "tracks_extent"]
 
 
 def tracks_extent(tracks: Annotations) -> tuple[int, int]:
