@@ -24,8 +24,10 @@ def test_stages_benchmark_reports_every_stage(data):
               "head splitting", "tracker"]
     assert all(s in times for s in stages), out
     assert all(float(times[s]) > 0 for s in ("decode", "preprocess", "motion detector")), out
-    # the total is the sum of the stages after decoding
-    assert abs(float(times["all stages"]) - sum(float(times[s]) for s in stages[1:])) < 0.02, out
+    # the total is the sum of the stages after decoding, each printed rounded to 0.01 ms
+    rounding = 0.005 * (len(stages[1:]) + 1)
+    assert abs(float(times["all stages"]) - sum(float(times[s]) for s in stages[1:])) \
+        <= rounding + 1e-9, out
 
 
 def test_people_stage_benchmark_replays_the_stage_identically_and_reports_its_parts(data):
