@@ -2,8 +2,8 @@
 docs/pipeline.md "Scenario seed sweeps" and the checks the test suite makes at one seed, here at
 every seed.
 
-The test suite tracks each synthetic scenario at one seed (tests/test_scene_events_tracked.py,
-tests/test_abandoned.py); this script runs the same scenarios over many seeds. Three sweeps:
+The test suite tracks each synthetic scenario at one seed (tests/analytics/test_scene_events_tracked.py,
+tests/analytics/test_abandoned.py); this script runs the same scenarios over many seeds. Three sweeps:
 
 ``identity``
     ``motiontrack track "synth:SCENE?seed=K" --no-video`` (default settings) for ``crossing``

@@ -2,7 +2,7 @@
 
 Every number here reproduces TrackEval (Luiten et al., the reference implementation of the
 MOTChallenge benchmark, ``trackeval==1.3.0``) to floating-point rounding; ``tests/golden/`` holds
-values produced by TrackEval itself and ``tests/test_eval_mot.py`` compares every field to 1e-6.
+values produced by TrackEval itself and ``tests/evaluate/test_eval_mot.py`` compares every field to 1e-6.
 
 Pipeline for one sequence (all pure functions, inputs never mutated)::
 

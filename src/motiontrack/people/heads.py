@@ -216,7 +216,7 @@ def detect_heads_many(mask: np.ndarray, boxes, scale: float = 1.0, min_width: fl
     region counts as infinitely low, exactly as at a region's edge), so the smoothing, the
     running maximum and the peak search run once per frame instead of once per region. The
     pipeline uses this; :func:`detect_heads` stays the step-by-step reference it is tested
-    against (``tests/test_heads.py``).
+    against (``tests/people/test_heads.py``).
     """
     m = np.asarray(mask)
     if m.ndim != 2:

@@ -17,7 +17,7 @@ from motiontrack.evaluate import clear, hota, mot, pairs, sequence
 from motiontrack.io.mot import read_mot
 from motiontrack.types import Annotations
 
-GOLDEN = Path(__file__).parent / "golden"
+GOLDEN = Path(__file__).resolve().parents[1] / "golden"
 NA = len(hota.ALPHAS)
 
 

@@ -302,7 +302,7 @@ def test_world_geometry_and_metre_rules_go_through_the_camera():
 
 
 def test_abandoned_without_static_foreground_yields_no_events_and_says_why(caplog):
-    # abandoned objects come from the video (tests/test_abandoned.py); tracks alone have none
+    # abandoned objects come from the video (tests/analytics/test_abandoned.py); tracks alone have none
     scene = parse_scene({"abandoned": {"after_s": 5, "distance_heights": 2}})
     an = Analytics(scene, FPS)
     with caplog.at_level("WARNING"):

@@ -7,7 +7,7 @@ from pathlib import Path
 from motiontrack.analytics.doc_tables import event_types_table, scene_keys_table
 from motiontrack.analytics.rule import RULES
 
-DOC = Path(__file__).resolve().parents[1] / "docs" / "analytics.md"
+DOC = Path(__file__).resolve().parents[2] / "docs" / "analytics.md"
 
 
 def test_analytics_doc_has_the_scene_keys_table_the_rules_render():

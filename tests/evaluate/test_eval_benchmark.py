@@ -15,7 +15,7 @@ from motiontrack.cli import main
 from motiontrack.evaluate import mot
 from motiontrack.io.mot import read_mot, read_seqinfo
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 GOLDEN = REPO / "tests" / "golden" / "benchmark" / "mot17-mini-trackers.json"
 sys.path.insert(0, str(REPO / "tools"))
 from mot_benchmark_golden import TRACKERS, make_trackers  # noqa: E402
