@@ -182,19 +182,49 @@ def _items(typ: Any) -> Any:
     return None
 
 
-def _coerce(value: Any, typ: Any, where: str) -> Any:
+def _fixed(typ: Any) -> tuple[Any, ...] | None:
+    """The item types of ``tuple[X, X]`` (a fixed-length array such as a point), else ``None``."""
+    if typing.get_origin(typ) is tuple:
+        args = typing.get_args(typ)
+        if args and Ellipsis not in args:
+            return args
+    return None
+
+
+def _numeric(typ: Any) -> bool:
+    """Whether ``typ`` holds numbers only: a number, or a fixed-length array of them."""
+    fixed = _fixed(typ)
+    return typ in (int, float) or (fixed is not None and all(map(_numeric, fixed)))
+
+
+def _coerce(value: Any, typ: Any, where: str, item_meta: typing.Mapping[str, Any] = {}) -> Any:
     """Check a value against its field type; ints are accepted where floats are expected, an
-    integral float where an int is; arrays of tables and nested tables are built in turn."""
+    integral float where an int is; arrays of tables and nested tables are built in turn. The
+    numbers inside an array of numbers (or of points) are each checked against the field's
+    range, passed down as ``item_meta``."""
     inner = _optional(typ)
     if inner is not None:
-        return None if value is None else _coerce(value, inner, where)
+        return None if value is None else _coerce(value, inner, where, item_meta)
     if is_dataclass(typ):
         return from_dict(typ, value, where)
     item = _items(typ)
     if item is not None:
         if not isinstance(value, (list, tuple)):
             raise ConfigError(f"{where} must be an array, got {shown(value)}")
-        return tuple(_coerce(v, item, f"{where}[{i}]") for i, v in enumerate(value, 1))
+        return tuple(_coerce(v, item, f"{where}[{i}]", item_meta) for i, v in enumerate(value, 1))
+    fixed = _fixed(typ)
+    if fixed is not None:
+        if not isinstance(value, (list, tuple)) or len(value) != len(fixed):
+            what = (f"[{', '.join('xyz'[:len(fixed)])}]: " if _numeric(typ) and len(fixed) <= 3
+                    else "")
+            raise ConfigError(f"{where} must be {what}an array of {len(fixed)} "
+                              f"{'numbers' if _numeric(typ) else 'values'}, got {shown(value)}")
+        return tuple(_coerce(v, t, f"{where}[{i}]", item_meta)
+                     for i, (v, t) in enumerate(zip(value, fixed), 1))
+    if typ in (int, float) and item_meta:
+        number = _coerce(value, typ, where)
+        check_value(item_meta, number, where)
+        return number
     if typ is bool:
         if isinstance(value, bool):
             return value
@@ -250,10 +280,16 @@ def from_dict(cls: type, data: Any, where: str = "") -> Any:
     required = {f.name for f in fields(cls)
                 if f.default is MISSING and f.default_factory is MISSING}
     kwargs: dict[str, Any] = {}
+    fields_meta = {f.name: f.metadata for f in fields(cls)}
     for name, value in data.items():
         if value is None and (name in required or _optional(hints[name]) is not None):
             continue   # none (JSON null) where none may stand: as if the key were absent
-        kwargs[name] = _coerce(value, hints[name], f"{where}.{name}" if where else name)
+        typ = hints[name]
+        inside = _optional(typ) or typ
+        # a field's range holds for each number of an array of numbers or points
+        item_meta = fields_meta[name] if (_items(inside) or _fixed(inside)) and _numeric(
+            _items(inside) or inside) else {}
+        kwargs[name] = _coerce(value, typ, f"{where}.{name}" if where else name, item_meta)
     for f in fields(cls):
         key = f"{where}.{f.name}" if where else f.name
         if f.name not in kwargs:
@@ -301,7 +337,11 @@ def _type_schema(typ: Any, m: typing.Mapping[str, Any]) -> dict[str, Any]:
         return _object_schema(typ)
     item = _items(typ)
     if item is not None:
-        return {"type": "array", "items": _type_schema(item, {})}
+        return {"type": "array", "items": _type_schema(item, m if _numeric(item) else {})}
+    fixed = _fixed(typ)
+    if fixed is not None:
+        return {"type": "array", "prefixItems": [_type_schema(t, m) for t in fixed],
+                "items": False, "minItems": len(fixed), "maxItems": len(fixed)}
     out: dict[str, Any] = {"type": _JSON_TYPES[typ]} if typ in _JSON_TYPES else {}
     if m.get("choices") is not None:
         out["enum"] = list(m["choices"])
