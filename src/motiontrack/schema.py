@@ -15,21 +15,26 @@ tools; :func:`leaf_fields` lists its keys for reference tables. A field's ``when
 switches it needs to take effect; :mod:`motiontrack.config_activity` follows them to warn about
 keys that have no effect.
 
-A rule section of a scene file or an entry of a batch manifest is declared the same way::
+The pipeline config (:mod:`motiontrack.config`), the scene file (its top level
+:class:`motiontrack.analytics.scene.SceneTop` and each analytics rule's table, such as
+:class:`motiontrack.analytics.specs.StationarySpec`), serve's cameras file and the entries of a
+sequences manifest (:class:`motiontrack.io.manifest.ManifestEntry`) are declared in it::
+
+    @dataclass(frozen=True)
+    class StationarySpec(SceneSection):
+        after_s: float = param(REQUIRED, lo=0.0, lo_open=True, hi=COORD_LIMIT, doc="...")
+        radius_px: float | None = param(None, lo=0.0, lo_open=True, hi=COORD_LIMIT, doc="...")
 
     @dataclass(frozen=True, kw_only=True)
-    class SpeedingRule(Section):
-        zone: str = param(REQUIRED, nonblank=True, doc="zone whose tracks are watched")
-        max_speed: float = param(2.0, lo=0.0, lo_open=True, hi=100.0, doc="m/s above which ...")
+    class LineTable(SceneSection):
+        name: str = param(REQUIRED, nonblank=True, doc="unique among lines")
+        points: tuple[tuple[float, float], ...] | None = param(None, lo=-1e7, hi=1e7, doc="...")
 
-    @dataclass(frozen=True, kw_only=True)
-    class ManifestEntry(Section):
-        source: str = param(REQUIRED, nonblank=True, doc="video, image folder or synth:NAME")
-        gt: str | None = param(None, doc="ground truth to score against")
-        start: int = param(0, lo=0, doc="first frame index")
+    rule = from_dict(StationarySpec, table, where="stationary")
+    entries = [from_dict(ManifestEntry, e, where=f"sequence[{i}]") for i, e in enumerate(seq, 1)]
 
-    rule = from_dict(SpeedingRule, table, where="rule[2]")
-    entries = [from_dict(ManifestEntry, e, where=f"sequence {i}") for i, e in enumerate(seq, 1)]
+A ``tuple[float, float]`` field is a fixed-length array (a point); the range of a field of
+numbers or points holds for each of its numbers, named by place (``line[1].points[2][1]``).
 """
 
 from __future__ import annotations
