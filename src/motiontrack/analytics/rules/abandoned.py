@@ -6,7 +6,6 @@ it needs the video's static foreground (``track --scene``).
 from __future__ import annotations
 
 import logging
-from typing import Any
 
 from ...types import Event
 from ..abandoned import AbandonedRule

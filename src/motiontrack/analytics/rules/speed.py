@@ -6,8 +6,6 @@ with a camera or pixels per second without. The speed of one track is
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 
 from ...types import Event
