@@ -123,6 +123,7 @@ class Path2(Section):
 @pytest.mark.parametrize("data, message", [
     ({"points": [[0, 0], [1]]}, r"points\[2\] must be \[x, y\]: an array of 2 numbers, got an array"),
     ({"points": [[0, 0], 3]}, r"points\[2\] must be \[x, y\]: an array of 2 numbers, got 3"),
+    ({"points": "x"}, r"points must be an array of \[x, y\] points, got 'x'"),
     ({"points": [[0, "a"]]}, r"points\[1\]\[2\] must be a number, got 'a'"),
     ({"points": [[0, 11]]}, r"points\[1\]\[2\] must be in \[-10.0, 10.0\], got 11.0"),
     ({"points": [[float("nan"), 0]]}, r"points\[1\]\[1\] must be a finite number"),

@@ -215,7 +215,10 @@ def _coerce(value: Any, typ: Any, where: str, item_meta: typing.Mapping[str, Any
     item = _items(typ)
     if item is not None:
         if not isinstance(value, (list, tuple)):
-            raise ConfigError(f"{where} must be an array, got {shown(value)}")
+            fixed = _fixed(item)
+            what = (f" of [{', '.join('xyz'[:len(fixed)])}] points"
+                    if fixed and _numeric(item) and len(fixed) <= 3 else "")
+            raise ConfigError(f"{where} must be an array{what}, got {shown(value)}")
         return tuple(_coerce(v, item, f"{where}[{i}]", item_meta) for i, v in enumerate(value, 1))
     fixed = _fixed(typ)
     if fixed is not None:
