@@ -113,3 +113,28 @@ def test_none_stands_for_an_absent_key_only_where_none_may_stand():
         from_dict(Scene, {"zone": [{"name": None}]})
     with pytest.raises(ConfigError, match=re.escape("limits.speed must be a number, got a NoneType")):
         from_dict(Scene, {"limits": {"speed": None}})
+
+
+@dataclass(frozen=True, kw_only=True)
+class Path2(Section):
+    points: tuple[tuple[float, float], ...] = param(REQUIRED, lo=-10.0, hi=10.0)
+
+
+@pytest.mark.parametrize("data, message", [
+    ({"points": [[0, 0], [1]]}, r"points\[2\] must be \[x, y\]: an array of 2 numbers, got an array"),
+    ({"points": [[0, 0], 3]}, r"points\[2\] must be \[x, y\]: an array of 2 numbers, got 3"),
+    ({"points": "x"}, r"points must be an array of \[x, y\] points, got 'x'"),
+    ({"points": [[0, "a"]]}, r"points\[1\]\[2\] must be a number, got 'a'"),
+    ({"points": [[0, 11]]}, r"points\[1\]\[2\] must be in \[-10.0, 10.0\], got 11.0"),
+    ({"points": [[float("nan"), 0]]}, r"points\[1\]\[1\] must be a finite number"),
+])
+def test_each_number_of_an_array_of_points_is_checked_and_named_by_its_place(data, message):
+    with pytest.raises(ConfigError, match=message):
+        from_dict(Path2, data)
+
+
+def test_an_array_of_points_is_built_as_tuples_of_floats_and_exports_its_range():
+    assert from_dict(Path2, {"points": [[1, 2], [3, 4.5]]}).points == ((1.0, 2.0), (3.0, 4.5))
+    point = json_schema(Path2)["properties"]["points"]["items"]
+    assert point["minItems"] == point["maxItems"] == 2 and point["items"] is False
+    assert point["prefixItems"][0] == {"type": "number", "minimum": -10.0, "maximum": 10.0}

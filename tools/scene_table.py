@@ -4,7 +4,9 @@ Run: .venv/bin/python tools/scene_table.py   (paste the tables under "The scene 
 "Outputs")
 
 The rows come from :mod:`motiontrack.analytics.doc_tables`: every key of the scene file (its top
-level and each rule's table) and every event type with its fields, as the rules declare them.
+level and each rule's table) with its type, range, default and meaning as the rules' schemas
+declare them, and every event type with its fields. ``motiontrack config --json-schema scene``
+prints the same keys as JSON Schema.
 """
 
 from __future__ import annotations

@@ -15,21 +15,26 @@ tools; :func:`leaf_fields` lists its keys for reference tables. A field's ``when
 switches it needs to take effect; :mod:`motiontrack.config_activity` follows them to warn about
 keys that have no effect.
 
-A rule section of a scene file or an entry of a batch manifest is declared the same way::
+The pipeline config (:mod:`motiontrack.config`), the scene file (its top level
+:class:`motiontrack.analytics.scene.SceneTop` and each analytics rule's table, such as
+:class:`motiontrack.analytics.specs.StationarySpec`), serve's cameras file and the entries of a
+sequences manifest (:class:`motiontrack.io.manifest.ManifestEntry`) are declared in it::
+
+    @dataclass(frozen=True)
+    class StationarySpec(SceneSection):
+        after_s: float = param(REQUIRED, lo=0.0, lo_open=True, hi=COORD_LIMIT, doc="...")
+        radius_px: float | None = param(None, lo=0.0, lo_open=True, hi=COORD_LIMIT, doc="...")
 
     @dataclass(frozen=True, kw_only=True)
-    class SpeedingRule(Section):
-        zone: str = param(REQUIRED, nonblank=True, doc="zone whose tracks are watched")
-        max_speed: float = param(2.0, lo=0.0, lo_open=True, hi=100.0, doc="m/s above which ...")
+    class LineTable(SceneSection):
+        name: str = param(REQUIRED, nonblank=True, doc="unique among lines")
+        points: tuple[tuple[float, float], ...] | None = param(None, lo=-1e7, hi=1e7, doc="...")
 
-    @dataclass(frozen=True, kw_only=True)
-    class ManifestEntry(Section):
-        source: str = param(REQUIRED, nonblank=True, doc="video, image folder or synth:NAME")
-        gt: str | None = param(None, doc="ground truth to score against")
-        start: int = param(0, lo=0, doc="first frame index")
+    rule = from_dict(StationarySpec, table, where="stationary")
+    entries = [from_dict(ManifestEntry, e, where=f"sequence[{i}]") for i, e in enumerate(seq, 1)]
 
-    rule = from_dict(SpeedingRule, table, where="rule[2]")
-    entries = [from_dict(ManifestEntry, e, where=f"sequence {i}") for i, e in enumerate(seq, 1)]
+A ``tuple[float, float]`` field is a fixed-length array (a point); the range of a field of
+numbers or points holds for each of its numbers, named by place (``line[1].points[2][1]``).
 """
 
 from __future__ import annotations
@@ -182,19 +187,52 @@ def _items(typ: Any) -> Any:
     return None
 
 
-def _coerce(value: Any, typ: Any, where: str) -> Any:
+def _fixed(typ: Any) -> tuple[Any, ...] | None:
+    """The item types of ``tuple[X, X]`` (a fixed-length array such as a point), else ``None``."""
+    if typing.get_origin(typ) is tuple:
+        args = typing.get_args(typ)
+        if args and Ellipsis not in args:
+            return args
+    return None
+
+
+def _numeric(typ: Any) -> bool:
+    """Whether ``typ`` holds numbers only: a number, or a fixed-length array of them."""
+    fixed = _fixed(typ)
+    return typ in (int, float) or (fixed is not None and all(map(_numeric, fixed)))
+
+
+def _coerce(value: Any, typ: Any, where: str, item_meta: typing.Mapping[str, Any] = {}) -> Any:
     """Check a value against its field type; ints are accepted where floats are expected, an
-    integral float where an int is; arrays of tables and nested tables are built in turn."""
+    integral float where an int is; arrays of tables and nested tables are built in turn. The
+    numbers inside an array of numbers (or of points) are each checked against the field's
+    range, passed down as ``item_meta``."""
     inner = _optional(typ)
     if inner is not None:
-        return None if value is None else _coerce(value, inner, where)
+        return None if value is None else _coerce(value, inner, where, item_meta)
     if is_dataclass(typ):
         return from_dict(typ, value, where)
     item = _items(typ)
     if item is not None:
         if not isinstance(value, (list, tuple)):
-            raise ConfigError(f"{where} must be an array, got {shown(value)}")
-        return tuple(_coerce(v, item, f"{where}[{i}]") for i, v in enumerate(value, 1))
+            fixed = _fixed(item)
+            what = (f" of [{', '.join('xyz'[:len(fixed)])}] points"
+                    if fixed and _numeric(item) and len(fixed) <= 3 else "")
+            raise ConfigError(f"{where} must be an array{what}, got {shown(value)}")
+        return tuple(_coerce(v, item, f"{where}[{i}]", item_meta) for i, v in enumerate(value, 1))
+    fixed = _fixed(typ)
+    if fixed is not None:
+        if not isinstance(value, (list, tuple)) or len(value) != len(fixed):
+            what = (f"[{', '.join('xyz'[:len(fixed)])}]: " if _numeric(typ) and len(fixed) <= 3
+                    else "")
+            raise ConfigError(f"{where} must be {what}an array of {len(fixed)} "
+                              f"{'numbers' if _numeric(typ) else 'values'}, got {shown(value)}")
+        return tuple(_coerce(v, t, f"{where}[{i}]", item_meta)
+                     for i, (v, t) in enumerate(zip(value, fixed), 1))
+    if typ in (int, float) and item_meta:
+        number = _coerce(value, typ, where)
+        check_value(item_meta, number, where)
+        return number
     if typ is bool:
         if isinstance(value, bool):
             return value
@@ -250,10 +288,16 @@ def from_dict(cls: type, data: Any, where: str = "") -> Any:
     required = {f.name for f in fields(cls)
                 if f.default is MISSING and f.default_factory is MISSING}
     kwargs: dict[str, Any] = {}
+    fields_meta = {f.name: f.metadata for f in fields(cls)}
     for name, value in data.items():
         if value is None and (name in required or _optional(hints[name]) is not None):
             continue   # none (JSON null) where none may stand: as if the key were absent
-        kwargs[name] = _coerce(value, hints[name], f"{where}.{name}" if where else name)
+        typ = hints[name]
+        inside = _optional(typ) or typ
+        # a field's range holds for each number of an array of numbers or points
+        item_meta = fields_meta[name] if (_items(inside) or _fixed(inside)) and _numeric(
+            _items(inside) or inside) else {}
+        kwargs[name] = _coerce(value, typ, f"{where}.{name}" if where else name, item_meta)
     for f in fields(cls):
         key = f"{where}.{f.name}" if where else f.name
         if f.name not in kwargs:
@@ -301,7 +345,11 @@ def _type_schema(typ: Any, m: typing.Mapping[str, Any]) -> dict[str, Any]:
         return _object_schema(typ)
     item = _items(typ)
     if item is not None:
-        return {"type": "array", "items": _type_schema(item, {})}
+        return {"type": "array", "items": _type_schema(item, m if _numeric(item) else {})}
+    fixed = _fixed(typ)
+    if fixed is not None:
+        return {"type": "array", "prefixItems": [_type_schema(t, m) for t in fixed],
+                "items": False, "minItems": len(fixed), "maxItems": len(fixed)}
     out: dict[str, Any] = {"type": _JSON_TYPES[typ]} if typ in _JSON_TYPES else {}
     if m.get("choices") is not None:
         out["enum"] = list(m["choices"])

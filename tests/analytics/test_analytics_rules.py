@@ -10,30 +10,39 @@ import numpy as np
 import pytest
 
 from motiontrack.analytics import Analytics, parse_scene
-from motiontrack.analytics.rule import RULES, BaseRule, EventType, Rule, SceneKey
-from motiontrack.analytics.validate import table
+from dataclasses import dataclass
+
+from motiontrack.analytics.doc_tables import scene_keys_table
+from motiontrack.analytics.rule import RULES, BaseRule, EventType, Rule
+from motiontrack.analytics.scene import scene_json_schema
+from motiontrack.analytics.specs import SceneSection
 from motiontrack.cli import main
 from motiontrack.errors import ConfigError
+from motiontrack.schema import param
 from motiontrack.types import EVENT_TYPES, Event, event_types
+
+
+@dataclass(frozen=True)
+class AppearedTable(SceneSection):
+    """The ``[appeared]`` table."""
+
+    min_height: float = param(0.0, lo=0.0, hi=10_000.0,
+                              doc="only tracks whose box is at least this tall (pixels)")
 
 
 class Appeared(BaseRule):
     """A track is seen for the first time: one ``appeared`` event in its first frame."""
 
     name = section = "appeared"
+    schema = AppearedTable
     events = (EventType("appeared", meaning="a track is seen for the first time"),)
-    keys = (SceneKey("appeared", "empty table", "—", "report the first frame of each track"),)
-
-    @classmethod
-    def parse(cls, data, camera, where):
-        return None if data is None else table(data, where, ())
 
     def __init__(self, spec, context):
         super().__init__(spec, context)
         self.seen = 0
 
     def step(self, frame):
-        new = np.flatnonzero(~frame.known)
+        new = np.flatnonzero(~frame.known & (frame.boxes[:, 3] >= self.spec.min_height))
         self.seen += len(new)
         return [frame.event("appeared", i) for i in new]
 
@@ -82,7 +91,7 @@ def test_a_rule_cannot_take_a_section_or_event_type_another_rule_has(appeared):
 def test_an_unregistered_rule_leaves_no_event_type_or_scene_key_behind(appeared):
     RULES.unregister("appeared")
     assert "appeared" not in event_types()
-    with pytest.raises(ConfigError, match="unknown scene key appeared"):
+    with pytest.raises(ConfigError, match=r"unknown scene key\(s\) appeared"):
         parse_scene({"appeared": {}})
     RULES.register(Appeared)   # the fixture unregisters it again
 
@@ -107,9 +116,29 @@ def test_toy_rule_without_its_table_does_not_run(appeared):
     assert "appeared" not in an.summary() and an.summary()["events"]["appeared"] == 0
 
 
-def test_toy_rule_table_is_checked_by_the_rule(appeared):
-    with pytest.raises(ConfigError, match="unknown scene key appeared.x; valid keys in appeared: $"):
+def test_toy_rule_table_is_checked_by_its_schema(appeared):
+    with pytest.raises(ConfigError, match=r"unknown scene key\(s\) appeared.x; valid keys in "
+                                          r"appeared: min_height$"):
         parse_scene({"appeared": {"x": 1}})
+    with pytest.raises(ConfigError, match=r"appeared.min_height must be in \[0.0, 10000.0\], "
+                                          r"got -1.0"):
+        parse_scene({"appeared": {"min_height": -1}})
+    assert parse_scene({"appeared": {"min_height": 30}}).spec("appeared") == AppearedTable(30.0)
+
+
+def test_toy_rule_schema_gives_its_docs_row_and_json_schema(appeared):
+    assert ("| `appeared.min_height` | float in [0, 10000] | 0 | only tracks whose box is at "
+            "least this tall (pixels) |") in scene_keys_table()
+    table = scene_json_schema()["properties"]["appeared"]
+    assert table["properties"]["min_height"] == {
+        "type": "number", "minimum": 0.0, "maximum": 10_000.0, "default": 0.0,
+        "description": "only tracks whose box is at least this tall (pixels)"}
+
+
+def test_toy_rule_events_follow_its_table(appeared):
+    an = Analytics(parse_scene({"appeared": {"min_height": 15}}), fps=10.0)
+    f1 = an.step(1, [1, 2], [(0, 0, 10, 20), (50, 50, 10, 10)])
+    assert [e.track for e in f1.events] == [1]
 
 
 def test_toy_rule_emits_through_analyze(appeared, tmp_path):

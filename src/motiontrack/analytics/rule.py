@@ -1,24 +1,28 @@
 """Analytics rules as plug-ins: the :class:`Rule` protocol and the :data:`RULES` registry.
 
-A rule owns one table of the scene file (:attr:`Rule.section`: how it is written, how it is
-checked, :meth:`Rule.parse`), the event types it emits with their fields
-(:attr:`Rule.events`, registered with :func:`motiontrack.types.register_event_type`), what it
-does with each frame (:meth:`Rule.step`, on the :class:`FrameTable` the engine builds) and its
-entries of ``summary.json`` (:meth:`Rule.summary`). :class:`~.engine.Analytics` keeps what all
-rules share (track anchors, forgetting old tracks, the frame table, the order of a frame's
-events) and runs every rule whose table the scene has, in the order they were registered.
+A rule owns one table of the scene file (:attr:`Rule.section`): how it is written and checked
+is its :attr:`Rule.schema` (a :class:`~.specs.SceneSection` of ``param`` fields with type, range,
+default and meaning; :func:`motiontrack.schema.from_dict` checks each key), what the schema
+cannot say is :meth:`Rule.build` (geometry, projection through the camera); the same schema
+gives the docs' table of scene keys and the scene file's JSON Schema. A rule also owns the event
+types it emits with their fields (:attr:`Rule.events`, registered with
+:func:`motiontrack.types.register_event_type`), what it does with each frame (:meth:`Rule.step`,
+on the :class:`FrameTable` the engine builds) and its entries of ``summary.json``
+(:meth:`Rule.summary`). :class:`~.engine.Analytics` keeps what all rules share (track anchors,
+forgetting old tracks, the frame table, the order of a frame's events) and runs every rule whose
+table the scene has, in the order they were registered.
 
 A new rule is one module::
+
+    @dataclass(frozen=True)
+    class AppearedTable(SceneSection):
+        min_frames: int = param(1, lo=1, hi=1000, doc="frames seen before `appeared`")
 
     @RULES.register
     class Appeared(BaseRule):
         name = section = "appeared"
+        schema = AppearedTable          # parse() then gives an AppearedTable, or None
         events = (EventType("appeared", meaning="a track is seen for the first time"),)
-        keys = (SceneKey("appeared", "empty table", "—", "report the first frame of each track"),)
-
-        @classmethod
-        def parse(cls, data, camera, where):   # data None: the scene has no [appeared]
-            return None if data is None else table(data, where, ())
 
         def step(self, frame):
             return [frame.event("appeared", i) for i in np.flatnonzero(~frame.known)]
@@ -32,7 +36,9 @@ from typing import Any, Callable, ClassVar, Mapping, Protocol, Sequence, runtime
 import numpy as np
 
 from ..registry import Registry
+from ..schema import from_dict
 from ..types import EVENT_TYPES, Event, StaticFrame, register_event_type, unregister_event_type
+from .validate import array_of_tables, one_of
 
 __all__ = ["EventType", "SceneKey", "TrackState", "RuleContext", "FrameTable", "Rule",
            "BaseRule", "Columns", "RuleRegistry", "RULES", "rounded", "row_of"]
@@ -51,7 +57,8 @@ class EventType:
 
 @dataclass(frozen=True)
 class SceneKey:
-    """One key of the scene file as the docs' table lists it."""
+    """One key of the scene file as the docs' table lists it (of a rule that parses its table
+    without a :attr:`Rule.schema`; a schema's keys are listed from its fields)."""
 
     key: str
     type: str
@@ -198,7 +205,13 @@ class Rule(Protocol):
     #: the event types it emits (the docs' order) and their order in a frame for one track
     events: ClassVar[tuple[EventType, ...]]
     frame_order: ClassVar[tuple[str, ...]]
-    #: the scene keys of its table, for the docs
+    #: the schema of its table (a ``SceneSection``), or None for a rule that parses by hand
+    schema: ClassVar[type | None]
+    #: whether the scene writes its table as an array of tables (``[[line]]``)
+    many: ClassVar[bool]
+    #: groups of keys of which a table gives exactly one (``("radius_px", "radius_m")``)
+    exactly_one: ClassVar[tuple[tuple[str, ...], ...]]
+    #: the scene keys of its table for the docs, of a rule without a schema
     keys: ClassVar[tuple[SceneKey, ...]]
     #: whether it needs each frame's static objects (``track --scene`` keeps a dual background)
     uses_static: ClassVar[bool]
@@ -207,6 +220,11 @@ class Rule(Protocol):
     def parse(cls, data: Any, camera: Any, where: str) -> Any:
         """The rule's spec from its table of the scene file (``data`` None: the table is
         absent); None when the rule does not run. Raises ``ConfigError`` naming the key."""
+
+    @classmethod
+    def build(cls, table: Any, camera: Any, where: str, earlier: tuple = ()) -> Any:
+        """The spec of one table checked by the schema (``earlier``: the specs of the tables
+        before it in an array), after the checks the schema cannot make."""
 
     @classmethod
     def camera_key(cls, spec: Any) -> str | None:
@@ -237,6 +255,9 @@ class BaseRule:
     section: ClassVar[str] = ""
     events: ClassVar[tuple[EventType, ...]] = ()
     frame_order: ClassVar[tuple[str, ...]] = ()
+    schema: ClassVar[type | None] = None
+    many: ClassVar[bool] = False
+    exactly_one: ClassVar[tuple[tuple[str, ...], ...]] = ()
     keys: ClassVar[tuple[SceneKey, ...]] = ()
     uses_static: ClassVar[bool] = False
 
@@ -245,7 +266,28 @@ class BaseRule:
 
     @classmethod
     def parse(cls, data: Any, camera: Any, where: str) -> Any:
-        return data
+        """Each table through :attr:`schema` (every key checked), :attr:`exactly_one` and
+        :meth:`build`: a tuple of specs for an array of tables, else one spec or None; without
+        a schema, the table as it is."""
+        if cls.schema is None:
+            return data
+        if not cls.many:
+            return None if data is None else cls._one(data, camera, where, ())
+        specs: list[Any] = []
+        for i, t in enumerate(array_of_tables(data, where), 1):
+            specs.append(cls._one(t, camera, f"{where}[{i}]", tuple(specs)))
+        return tuple(specs)
+
+    @classmethod
+    def _one(cls, data: Any, camera: Any, where: str, earlier: tuple) -> Any:
+        table = from_dict(cls.schema, data, where)
+        for keys in cls.exactly_one:
+            one_of(table, keys, where)
+        return cls.build(table, camera, where, earlier)
+
+    @classmethod
+    def build(cls, table: Any, camera: Any, where: str, earlier: tuple = ()) -> Any:
+        return table
 
     @classmethod
     def camera_key(cls, spec: Any) -> str | None:

@@ -25,27 +25,27 @@ A scene is TOML (``docs/analytics.md``)::
 :func:`parse_scene` turns the parsed table into a frozen :class:`Scene` in source pixels,
 projecting ``world`` geometry through a camera; every problem is one :class:`ConfigError`
 naming the key as written (tables of an array counted from 1: ``line[2].points``). The top-level
-keys are checked here; each table belongs to a rule (:data:`.rule.RULES`), which checks it
-(:meth:`.rule.Rule.parse`): the scene's keys are these three and the sections of the registered
-rules.
+keys are :class:`SceneTop`; each table belongs to a rule (:data:`.rule.RULES`), whose schema
+checks it (:meth:`.rule.Rule.parse`): the scene's keys are these three and the sections of the
+registered rules. :func:`scene_json_schema` exports the whole file as JSON Schema.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any
 
 from ..errors import ConfigError
 from ..io.tomlfile import read_toml
-from .rule import SceneKey
+from ..schema import from_dict, json_schema, keys_shown, param, shown
 from .rules import RULES
-from .specs import AbandonedSpec, LineSpec, SpeedSpec, StationarySpec, ZoneSpec
-from .validate import kind, number, table
+from .specs import (COORD_LIMIT, AbandonedSpec, LineSpec, SceneSection, SpeedSpec,
+                    StationarySpec, ZoneSpec)
 
 __all__ = [
     "ANCHORS",
-    "TOP_KEYS",
+    "SceneTop",
     "LineSpec",
     "ZoneSpec",
     "StationarySpec",
@@ -54,19 +54,25 @@ __all__ = [
     "Scene",
     "parse_scene",
     "load_scene",
+    "scene_json_schema",
 ]
 
 ANCHORS = ("bottom_center", "center")
-#: the keys of the scene's top level that all rules share, as the docs' table lists them
-TOP_KEYS = (
-    SceneKey("anchor", "`bottom_center` \\| `center`", "`bottom_center`",
-             "the point of a box the rules use"),
-    SceneKey("hysteresis_px", "float ≥ 0", "5",
-             "band around lines and zone edges in which a side does not change"),
-    SceneKey("forget_s", "float > 0", "2",
-             "a track unseen longer has left (zone exit, stationary end); its id seen again is "
-             "a new track"),
-)
+
+
+@dataclass(frozen=True, kw_only=True)
+class SceneTop(SceneSection):
+    """The keys of the scene's top level that all rules share."""
+
+    anchor: str = param("bottom_center", choices=ANCHORS, doc="the point of a box the rules use")
+    hysteresis_px: float = param(5.0, lo=0.0, hi=COORD_LIMIT,
+                                 doc="band around lines and zone edges in which a side does not "
+                                     "change")
+    forget_s: float = param(2.0, lo=0.0, lo_open=True, hi=COORD_LIMIT,
+                            doc="a track unseen longer has left (zone exit, stationary end); "
+                                "its id seen again is a new track")
+
+
 #: the scene's fields of the built-in rules' sections
 _FIELDS = {"line": "lines", "zone": "zones", "stationary": "stationary",
            "abandoned": "abandoned", "speed": "speed"}
@@ -138,15 +144,18 @@ def parse_scene(data: Any, camera: Any = None, source: str = "") -> Scene:
         One line naming the key path as written.
     """
     rules = RULES.ordered()
-    data = table(data, "the scene", tuple(k.key for k in TOP_KEYS) + tuple(r.section for r in rules))
-    anchor = data.get("anchor", "bottom_center")
-    if anchor not in ANCHORS:
-        raise ConfigError(f"anchor must be one of {', '.join(ANCHORS)}, got {kind(anchor)}")
-    hyst = number(data, "hysteresis_px", "", 5.0, positive=False)
-    forget = number(data, "forget_s", "", 2.0)
+    if not isinstance(data, dict):
+        raise ConfigError(f"the scene must be a table, got {shown(data)}")
+    top = [f.name for f in fields(SceneTop)]
+    valid = top + [r.section for r in rules]
+    unknown = sorted(str(k) for k in data if k not in valid)
+    if unknown:
+        raise ConfigError(f"unknown scene key(s) {keys_shown(unknown)}; valid keys: "
+                          f"{', '.join(valid)}")
+    head = from_dict(SceneTop, {k: v for k, v in data.items() if k in top})
     specs = {r.section: r.parse(data.get(r.section), camera, r.section) for r in rules}
     builtin = {field: specs.pop(section) for section, field in _FIELDS.items() if section in specs}
-    scene = Scene(anchor, hyst, forget, **builtin, source=source,
+    scene = Scene(head.anchor, head.hysteresis_px, head.forget_s, **builtin, source=source,
                   sections=tuple((k, v) for k, v in specs.items() if v is not None))
     key = scene.camera_key
     if key is not None and camera is None:
@@ -164,3 +173,23 @@ def load_scene(path: str | Path, camera: Any = None) -> Scene:
         return parse_scene(data, camera, source=str(path))
     except ConfigError as exc:
         raise ConfigError(f"scene file {Path(path).name}: {exc}") from None
+
+
+def scene_json_schema() -> dict[str, Any]:
+    """JSON Schema (draft 2020-12) of the scene file with the tables of every registered rule,
+    for editors: a rule's keys of which exactly one must be given are a ``oneOf``; a rule that
+    parses its table by hand takes any table."""
+    out = json_schema(SceneTop, title="motiontrack scene file")
+    for rule in RULES.ordered():
+        if rule.schema is None:
+            table: dict[str, Any] = {"type": "object"}
+        else:
+            table = json_schema(rule.schema)
+            del table["$schema"]
+            if rule.exactly_one:
+                table["allOf"] = [{"oneOf": [{"required": [k]} for k in keys]}
+                                  for keys in rule.exactly_one]
+        out["properties"][rule.section] = (
+            {"type": "array", "items": table, "description": f"[[{rule.section}]] tables"}
+            if rule.many else table)
+    return out

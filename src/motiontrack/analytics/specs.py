@@ -1,18 +1,40 @@
-"""The parsed sections of a scene file, in source pixels: one frozen dataclass per rule's table.
+"""The sections of a scene file: as written (:class:`SceneSection` schemas, checked by
+:func:`motiontrack.schema.from_dict`) and as parsed, in source pixels.
 
-Each rule module (:mod:`.rules`) parses its table of the scene file into one of these
-(:meth:`.rule.Rule.parse`); the array functions (:mod:`.lines`, :mod:`.zones`,
-:mod:`.abandoned`) take them as they are.
+Each rule module (:mod:`.rules`) declares the schema of its table (:attr:`.rule.Rule.schema`)
+and builds one of these from it (:meth:`.rule.Rule.parse`); where the table as written is
+already what the rule needs (``stationary``, ``abandoned``, ``speed``) the schema is the parsed
+section too. The array functions (:mod:`.lines`, :mod:`.zones`, :mod:`.abandoned`) take them as
+they are.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
-__all__ = ["LineSpec", "ZoneSpec", "StationarySpec", "AbandonedSpec", "SpeedSpec"]
+from ..schema import REQUIRED, Section, param
+
+__all__ = ["COORD_LIMIT", "SceneSection", "LineSpec", "ZoneSpec", "StationarySpec",
+           "AbandonedSpec", "SpeedSpec"]
+
+#: largest number accepted (pixels, metres, seconds): far beyond any frame, small enough for
+#: float maths
+COORD_LIMIT = 10_000_000
+
+
+class SceneSection(Section):
+    """A schema of one table of the scene file: unknown keys are "scene keys" in messages."""
+
+    schema_noun: ClassVar[str] = "scene "
+
+
+def positive(default: float | None, doc: str) -> float | None:
+    """A number > 0 (and at most :data:`COORD_LIMIT`), as most scene keys are."""
+    return param(default, lo=0.0, lo_open=True, hi=COORD_LIMIT, doc=doc)
 
 
 @dataclass(frozen=True)
@@ -42,27 +64,32 @@ class ZoneSpec:
 
 
 @dataclass(frozen=True)
-class StationarySpec:
+class StationarySpec(SceneSection):
     """A track that stays within a radius (pixels or metres: exactly one) for ``after_s``."""
 
-    after_s: float
-    radius_px: float | None = None
-    radius_m: float | None = None
+    after_s: float = positive(REQUIRED, "seconds within the radius before `stationary_start`")
+    radius_px: float | None = positive(None, "the radius in pixels (exactly one of radius_px "
+                                             "and radius_m)")
+    radius_m: float | None = positive(None, "the radius in metres on the ground; needs a camera")
 
 
 @dataclass(frozen=True)
-class AbandonedSpec:
+class AbandonedSpec(SceneSection):
     """An object left static while its owner is farther than a distance, for ``after_s``."""
 
-    after_s: float
-    distance_m: float | None = None
-    distance_heights: float | None = None
+    after_s: float = positive(REQUIRED, "seconds the owner must be away before `abandoned`")
+    distance_m: float | None = positive(None, "the owner is away farther than this on the "
+                                              "ground (metres; needs a camera; exactly one of "
+                                              "distance_m and distance_heights)")
+    distance_heights: float | None = positive(None, "the owner is away farther than this many "
+                                                    "of the owner's box heights")
 
 
 @dataclass(frozen=True)
-class SpeedSpec:
+class SpeedSpec(SceneSection):
     """A speed limit (metres or pixels per second: exactly one) over a ``window_s`` window."""
 
-    limit_mps: float | None = None
-    limit_px_s: float | None = None
-    window_s: float = 1.0
+    limit_mps: float | None = positive(None, "limit in metres per second; needs a camera "
+                                             "(exactly one of limit_mps and limit_px_s)")
+    limit_px_s: float | None = positive(None, "limit in pixels per second")
+    window_s: float = positive(1.0, "window of the speed measurement")

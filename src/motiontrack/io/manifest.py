@@ -10,6 +10,9 @@ ground truth, its group and, for ``motiontrack batch``, more files per entry (``
     gt = "pets09-s2l1/gt_mot15.txt"  # optional for synth: sources
     group = "outdoor, medium crowd"  # optional: the sequence type (thesis table 4.1)
 
+:class:`ManifestEntry` is the schema of one table (:mod:`motiontrack.schema`: each key's type
+and meaning, one-line messages naming ``sequence[2].gt``), :class:`BatchEntry` that of a batch's,
+which may name its ``scene`` and ``camera`` too; :func:`manifest_json_schema` exports it.
 :func:`read_manifest_entries` reads the tables as they are (whether an entry needs ground truth
 is the caller's rule); :func:`read_manifest` reads them as :class:`SequenceSpec` values, the
 sequences of a study, which need ground truth unless synthetic.
@@ -17,15 +20,45 @@ sequences of a study, which need ground truth unless synthetic.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any, Sequence
 
 from ..errors import ConfigError, InputError, printable
+from ..schema import REQUIRED, Section, from_dict, json_schema, param
 from .tomlfile import read_toml
 
-__all__ = ["SequenceSpec", "read_manifest", "read_manifest_entries", "default_sequence_name",
-           "absolute_path"]
+__all__ = ["SequenceSpec", "ManifestEntry", "BatchEntry", "read_manifest",
+           "read_manifest_entries", "default_sequence_name", "absolute_path",
+           "manifest_json_schema"]
+
+
+@dataclass(frozen=True, kw_only=True)
+class ManifestEntry(Section):
+    """One ``[[sequence]]`` table of a manifest, as written."""
+
+    name: str | None = param(None, doc="short unique name (default: from the source: a synth: "
+                                       "scene's name, else the file's stem or its folder's)")
+    source: str = param(REQUIRED, nonblank=True,
+                        doc="video, image folder or synth:NAME; relative paths are relative to "
+                            "the manifest")
+    gt: str | None = param(None, doc="ground-truth file (any supported format); a study needs "
+                                     "it unless the source is synth:")
+    group: str = param("", doc="the sequence type; plots average per group")
+
+
+@dataclass(frozen=True, kw_only=True)
+class BatchEntry(ManifestEntry):
+    """One ``[[sequence]]`` table of a ``motiontrack batch`` manifest: an entry may name its
+    own scene file and camera calibration."""
+
+    scene: str | None = param(None, doc="scene file for this sequence (motiontrack batch)")
+    camera: str | None = param(None, doc="camera calibration for this sequence "
+                                         "(motiontrack batch)")
+
+
+_BATCH_FILES = tuple(f.name for f in fields(BatchEntry)
+                     if f.name not in {g.name for g in fields(ManifestEntry)})
 
 
 @dataclass(frozen=True)
@@ -110,35 +143,45 @@ def read_manifest_entries(path: str | Path, files: Sequence[str] = ()) -> list[d
     ``group`` and, when given, the keys ``files`` (more file names per entry, such as ``scene``
     and ``camera`` for ``motiontrack batch``), paths made absolute (relative ones are relative to
     the manifest). Whether a sequence needs ground truth is the caller's rule."""
+    if files and set(files) != set(_BATCH_FILES):
+        raise ValueError(f"a manifest entry names the files {', '.join(_BATCH_FILES)} or none")
     p = Path(path)
     data = read_toml(p, "sequences manifest")
     shown = printable(p)
     items = data.get("sequence")
     if not isinstance(items, list) or not items:
         raise InputError(f"{shown}: expected one or more [[sequence]] tables")
+    schema = BatchEntry if files else ManifestEntry
     out = []
-    valid = ("name", "source", "gt", "group", *files)
     for i, it in enumerate(items, 1):
-        if not isinstance(it, dict):
-            raise InputError(f"{shown}: sequence {i} is not a table")
-        unknown = sorted(set(it) - set(valid))
-        if unknown:
-            raise InputError(f"{shown}: sequence {i}: unknown key(s) "
-                             f"{printable(', '.join(unknown))}; valid: {', '.join(valid)}")
-        if not isinstance(it.get("source"), str):
-            raise InputError(f"{shown}: sequence {i} needs source = \"...\"")
-        for key in ("name", "gt", "group", *files):
-            if key in it and not isinstance(it[key], str):
-                raise InputError(f"{shown}: sequence {i}: {key} must be a string, got {it[key]!r}")
+        where = f"sequence[{i}]"
         try:
-            entry = {"name": it.get("name") or default_sequence_name(it["source"]),
-                     "source": absolute_path(it["source"], p.parent),  # synth: as written
-                     "gt": absolute_path(it.get("gt"), p.parent), "group": it.get("group", "")}
-            entry.update({k: absolute_path(it[k], p.parent) for k in files if k in it})
+            t = from_dict(schema, it, where)
+            entry = {"name": t.name or default_sequence_name(t.source),
+                     "source": absolute_path(t.source, p.parent),  # synth: as written
+                     "gt": absolute_path(t.gt, p.parent), "group": t.group}
+            entry.update({k: absolute_path(getattr(t, k), p.parent) for k in files
+                          if getattr(t, k) is not None})
+        except ConfigError as exc:
+            raise InputError(f"{shown}: {printable(exc)}") from None
         except ValueError as exc:  # a NUL in a path
-            raise InputError(f"{shown}: sequence {i}: {printable(exc)}") from None
+            raise InputError(f"{shown}: {where}: {printable(exc)}") from None
         out.append(entry)
     names = [s["name"] for s in out]
     if len(set(names)) != len(names):
         raise InputError(f"{shown}: sequence names must be unique, got {names}")
     return out
+
+
+def manifest_json_schema() -> dict[str, Any]:
+    """JSON Schema (draft 2020-12) of a sequences manifest, for editors: one or more
+    ``[[sequence]]`` tables (``scene`` and ``camera`` are read by ``motiontrack batch`` only);
+    other top-level keys are left to the reader."""
+    entry = json_schema(BatchEntry)
+    del entry["$schema"]
+    return {"$schema": "https://json-schema.org/draft/2020-12/schema",
+            "title": "motiontrack sequences manifest", "type": "object",
+            "properties": {"sequence": {"type": "array", "items": entry, "minItems": 1,
+                                        "description": "[[sequence]] tables, one per "
+                                                       "sequence"}},
+            "required": ["sequence"]}

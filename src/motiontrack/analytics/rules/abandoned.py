@@ -6,13 +6,11 @@ it needs the video's static foreground (``track --scene``).
 from __future__ import annotations
 
 import logging
-from typing import Any
 
 from ...types import Event
 from ..abandoned import AbandonedRule
-from ..rule import RULES, BaseRule, EventType, FrameTable, RuleContext, SceneKey, rounded
+from ..rule import RULES, BaseRule, EventType, FrameTable, RuleContext, rounded
 from ..specs import AbandonedSpec
-from ..validate import number, one_of, table
 
 log = logging.getLogger(__name__)
 
@@ -28,23 +26,8 @@ class Abandoned(BaseRule):
                         meaning="an object left static while its owner was away for "
                                 "`after_s`; `duration_s` static so far, `owner` the track "
                                 "that left it"),)
-    keys = (
-        SceneKey("abandoned.after_s", "float > 0", "—",
-                 "seconds the owner must be away before `abandoned`"),
-        SceneKey("abandoned.distance_m` / `.distance_heights", "float > 0", "—",
-                 "exactly one: the owner is away farther than this on the ground (metres, "
-                 "needs a camera) or than this many of the owner's box heights"),
-    )
+    schema, exactly_one = AbandonedSpec, (("distance_m", "distance_heights"),)
     uses_static = True
-
-    @classmethod
-    def parse(cls, data: Any, camera: Any, where: str) -> AbandonedSpec | None:
-        if data is None:
-            return None
-        t = table(data, where, ("after_s", "distance_m", "distance_heights"))
-        d = one_of(t, ("distance_m", "distance_heights"), where)
-        return AbandonedSpec(number(t, "after_s", where, required=True),
-                             **{d: number(t, d, where)})
 
     @classmethod
     def camera_key(cls, spec: AbandonedSpec) -> str | None:

@@ -6,31 +6,34 @@ The crossing test over arrays of tracks is :class:`..lines.LineSet`.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from ...errors import ConfigError
+from ...schema import REQUIRED, param
 from ...types import Event
 from ..lines import LineSet
-from ..rule import RULES, BaseRule, Columns, EventType, FrameTable, RuleContext, SceneKey
-from ..specs import LineSpec
-from ..validate import array_of_tables, geometry, name, table
+from ..rule import RULES, BaseRule, Columns, EventType, FrameTable, RuleContext
+from ..specs import COORD_LIMIT, LineSpec, SceneSection
+from ..validate import pixels, unique_name
 
-__all__ = ["Lines"]
+__all__ = ["Lines", "LineTable"]
+
+_POINT = dict(lo=-COORD_LIMIT, hi=COORD_LIMIT)
 
 
-def _line(data: Any, where: str, camera: Any, seen: set[str]) -> LineSpec:
-    data = table(data, where, ("name", "points", "world"))
-    line_name = name(data, where, seen)
-    pts = geometry(data, "points", where, camera)
-    used = "points" if "points" in data else "world"
-    if len(pts) != 2:
-        raise ConfigError(f"{where}.{used} must be two [x, y] points, got {len(pts)}")
-    if math.hypot(*(pts[1] - pts[0])) < 1.0:
-        raise ConfigError(f"{where}.{used}: the two points are less than a pixel apart")
-    return LineSpec(line_name, (float(pts[0, 0]), float(pts[0, 1])),
-                    (float(pts[1, 0]), float(pts[1, 1])))
+@dataclass(frozen=True, kw_only=True)
+class LineTable(SceneSection):
+    """A ``[[line]]`` table as written."""
+
+    name: str = param(REQUIRED, nonblank=True, doc="unique among lines")
+    points: tuple[tuple[float, float], ...] | None = param(
+        None, **_POINT, doc="two points in pixels, at least 1 px apart (exactly one of points "
+                            "and world)")
+    world: tuple[tuple[float, float], ...] | None = param(
+        None, **_POINT, doc="two points in ground-plane metres, projected through `--camera`")
 
 
 @RULES.register
@@ -38,21 +41,22 @@ class Lines(BaseRule):
     """Crossings of counting lines, ``in`` or ``out``."""
 
     name = section = "line"
+    schema, many, exactly_one = LineTable, True, (("points", "world"),)
     events = (EventType("line_cross", ("line", "direction"),
                         meaning="the anchor crossed the line's segment: `direction` `in` "
                                 "(from s < 0 to s > 0) or `out`"),)
-    keys = (
-        SceneKey("line[i].name", "text", "—", "unique among lines"),
-        SceneKey("line[i].points` / `.world", "two `[x, y]`", "—",
-                 "pixels, or ground-plane metres projected through `--camera`; at least 1 px "
-                 "apart"),
-    )
 
     @classmethod
-    def parse(cls, data: Any, camera: Any, where: str) -> tuple[LineSpec, ...]:
-        seen: set[str] = set()
-        return tuple(_line(t, f"line[{i}]", camera, seen)
-                     for i, t in enumerate(array_of_tables(data, "line"), 1))
+    def build(cls, table: LineTable, camera: Any, where: str,
+              earlier: tuple = ()) -> LineSpec:
+        line_name = unique_name(table.name, where, [ln.name for ln in earlier])
+        used, pts = pixels(table, "points", where, camera)
+        if len(pts) != 2:
+            raise ConfigError(f"{where}.{used} must be two [x, y] points, got {len(pts)}")
+        if math.hypot(*(pts[1] - pts[0])) < 1.0:
+            raise ConfigError(f"{where}.{used}: the two points are less than a pixel apart")
+        return LineSpec(line_name, (float(pts[0, 0]), float(pts[0, 1])),
+                        (float(pts[1, 0]), float(pts[1, 1])))
 
     @classmethod
     def idle_summary(cls) -> dict[str, Any]:

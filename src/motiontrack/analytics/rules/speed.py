@@ -6,15 +6,12 @@ with a camera or pixels per second without. The speed of one track is
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 
 from ...types import Event
 from ..movement import REARM, SpeedWindow
-from ..rule import RULES, BaseRule, EventType, FrameTable, RuleContext, SceneKey, TrackState, rounded
+from ..rule import RULES, BaseRule, EventType, FrameTable, RuleContext, TrackState, rounded
 from ..specs import SpeedSpec
-from ..validate import number, one_of, table
 
 __all__ = ["Speed"]
 
@@ -27,19 +24,7 @@ class Speed(BaseRule):
     events = (EventType("speeding", (), ("speed_mps", "speed_px_s"),
                         meaning="the track's speed over `window_s` exceeds the limit: "
                                 "exactly one of `speed_mps` (with a camera) and `speed_px_s`"),)
-    keys = (
-        SceneKey("speed.limit_px_s` / `.limit_mps", "float > 0", "—",
-                 "exactly one; metres per second need a camera"),
-        SceneKey("speed.window_s", "float > 0", "1", "window of the speed measurement"),
-    )
-
-    @classmethod
-    def parse(cls, data: Any, camera: Any, where: str) -> SpeedSpec | None:
-        if data is None:
-            return None
-        t = table(data, where, ("limit_mps", "limit_px_s", "window_s"))
-        k = one_of(t, ("limit_mps", "limit_px_s"), where)
-        return SpeedSpec(**{k: number(t, k, where)}, window_s=number(t, "window_s", where, 1.0))
+    schema, exactly_one = SpeedSpec, (("limit_mps", "limit_px_s"),)
 
     @classmethod
     def camera_key(cls, spec: SpeedSpec) -> str | None:

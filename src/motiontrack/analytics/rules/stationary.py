@@ -16,9 +16,8 @@ import numpy as np
 from ...types import Event
 from ..movement import Stay
 from ..objects import BAG_RATIO, TrackedObject
-from ..rule import RULES, BaseRule, EventType, FrameTable, RuleContext, SceneKey, TrackState
+from ..rule import RULES, BaseRule, EventType, FrameTable, RuleContext, TrackState
 from ..specs import StationarySpec
-from ..validate import number, one_of, table
 
 __all__ = ["Stationary", "STATIONARY_STILL"]
 
@@ -47,22 +46,8 @@ class Stationary(BaseRule):
                           "first to its last frame"),
     )
     frame_order = ("stationary_end", "stationary_start")
-    keys = (
-        SceneKey("stationary.after_s", "float > 0", "—",
-                 "seconds within the radius before `stationary_start`"),
-        SceneKey("stationary.radius_px` / `.radius_m", "float > 0", "—",
-                 "exactly one; metres need a camera"),
-    )
+    schema, exactly_one = StationarySpec, (("radius_px", "radius_m"),)
     uses_static = True
-
-    @classmethod
-    def parse(cls, data: Any, camera: Any, where: str) -> StationarySpec | None:
-        if data is None:
-            return None
-        t = table(data, where, ("after_s", "radius_px", "radius_m"))
-        r = one_of(t, ("radius_px", "radius_m"), where)
-        return StationarySpec(number(t, "after_s", where, required=True),
-                              **{r: number(t, r, where)})
 
     @classmethod
     def camera_key(cls, spec: StationarySpec) -> str | None:

@@ -6,36 +6,37 @@ The membership test over arrays of tracks is :class:`..zones.ZoneEdges`.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from ...errors import ConfigError
+from ...schema import REQUIRED, param
 from ...types import Event
 from ..geometry import polygon_area, polygon_is_simple
-from ..rule import (RULES, BaseRule, Columns, EventType, FrameTable, RuleContext, SceneKey,
-                    TrackState, rounded)
-from ..specs import ZoneSpec
-from ..validate import array_of_tables, geometry, name, number, table
+from ..rule import RULES, BaseRule, Columns, EventType, FrameTable, RuleContext, TrackState, rounded
+from ..specs import COORD_LIMIT, SceneSection, ZoneSpec, positive
+from ..validate import pixels, unique_name
 from ..zones import ZoneEdges
 
-__all__ = ["Zones"]
+__all__ = ["Zones", "ZoneTable"]
+
+_POINT = dict(lo=-COORD_LIMIT, hi=COORD_LIMIT)
 
 
-def _zone(data: Any, where: str, camera: Any, seen: set[str]) -> ZoneSpec:
-    data = table(data, where, ("name", "polygon", "world", "loiter_s"))
-    zone_name = name(data, where, seen)
-    pts = geometry(data, "polygon", where, camera)
-    used = "polygon" if "polygon" in data else "world"
-    if len(pts) < 3:
-        raise ConfigError(f"{where}.{used} must have at least 3 [x, y] points, got {len(pts)}")
-    if not polygon_is_simple(pts):
-        raise ConfigError(f"{where}.{used} must be a simple polygon: two of its edges cross "
-                          "or a point repeats")
-    if abs(polygon_area(pts)) < 1.0:
-        raise ConfigError(f"{where}.{used} encloses no area (its points lie on a line)")
-    loiter = number(data, "loiter_s", where)
-    return ZoneSpec(zone_name, tuple((float(x), float(y)) for x, y in pts), loiter)
+@dataclass(frozen=True, kw_only=True)
+class ZoneTable(SceneSection):
+    """A ``[[zone]]`` table as written."""
+
+    name: str = param(REQUIRED, nonblank=True, doc="unique among zones")
+    polygon: tuple[tuple[float, float], ...] | None = param(
+        None, **_POINT, doc="at least 3 points in pixels, a simple polygon (no crossing edges, "
+                            "no repeated point; exactly one of polygon and world)")
+    world: tuple[tuple[float, float], ...] | None = param(
+        None, **_POINT, doc="the polygon in ground-plane metres, projected through `--camera`")
+    loiter_s: float | None = positive(None, "seconds in the zone before `loiter` (none: no "
+                                            "loitering)")
 
 
 @RULES.register
@@ -43,6 +44,7 @@ class Zones(BaseRule):
     """Zone entries, exits with their dwell, and loitering."""
 
     name = section = "zone"
+    schema, many, exactly_one = ZoneTable, True, (("polygon", "world"),)
     events = (
         EventType("zone_enter", ("zone",), meaning="the track became inside the zone"),
         EventType("zone_exit", ("zone", "dwell_s"),
@@ -52,18 +54,21 @@ class Zones(BaseRule):
                   meaning="the track has stayed `loiter_s` in the zone; once a visit"),
     )
     frame_order = ("zone_exit", "zone_enter", "loiter")
-    keys = (
-        SceneKey("zone[i].name", "text", "—", "unique among zones"),
-        SceneKey("zone[i].polygon` / `.world", "≥ 3 `[x, y]`", "—",
-                 "a simple polygon (no crossing edges, no repeated point), pixels or metres"),
-        SceneKey("zone[i].loiter_s", "float > 0", "none", "seconds in the zone before `loiter`"),
-    )
 
     @classmethod
-    def parse(cls, data: Any, camera: Any, where: str) -> tuple[ZoneSpec, ...]:
-        seen: set[str] = set()
-        return tuple(_zone(t, f"zone[{i}]", camera, seen)
-                     for i, t in enumerate(array_of_tables(data, "zone"), 1))
+    def build(cls, table: ZoneTable, camera: Any, where: str,
+              earlier: tuple = ()) -> ZoneSpec:
+        zone_name = unique_name(table.name, where, [z.name for z in earlier])
+        used, pts = pixels(table, "polygon", where, camera)
+        if len(pts) < 3:
+            raise ConfigError(f"{where}.{used} must have at least 3 [x, y] points, "
+                              f"got {len(pts)}")
+        if not polygon_is_simple(pts):
+            raise ConfigError(f"{where}.{used} must be a simple polygon: two of its edges cross "
+                              "or a point repeats")
+        if abs(polygon_area(pts)) < 1.0:
+            raise ConfigError(f"{where}.{used} encloses no area (its points lie on a line)")
+        return ZoneSpec(zone_name, tuple((float(x), float(y)) for x, y in pts), table.loiter_s)
 
     @classmethod
     def idle_summary(cls) -> dict[str, Any]:
