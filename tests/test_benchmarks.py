@@ -190,3 +190,14 @@ def test_video_benchmark_reports_each_encoder_and_drawing_row(data):
     assert all(float(r[1]) > 0 and float(r[3]) > 0 and float(r[4]) > 30 for r in rows), out
     drawn = re.findall(r"^(legend|two zones|annotate).*?(\d+\.\d{3}) ms$", out, re.M)
     assert len(drawn) == 5, out
+
+
+@pytest.mark.slow
+def test_seed_sweeps_script_finds_the_crossing_switch_of_seed_9():
+    # the one seed of docs/pipeline.md's sweep at which the crossing people switch identities
+    out = subprocess.run([sys.executable, str(REPO / "benchmarks" / "seed_sweeps.py"), "identity",
+                          "--seeds", "9"], capture_output=True, text=True, timeout=300,
+                         check=True).stdout
+    rows = {line.split("|")[1].strip(): line for line in out.splitlines() if line.startswith("| `")}
+    assert "1 of 1 (seed 9)" in rows["`synth:crossing` (two people crossing)"], out
+    assert "0 of 1" in rows["`synth:column` (a person passing behind a column)"], out
