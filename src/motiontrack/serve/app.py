@@ -3,7 +3,8 @@
 Starlette (an ASGI toolkit: routing, requests, streaming responses) served by uvicorn; a
 handful of routes needs nothing more. No path taken from a request reaches the file system:
 cameras are looked up by name in the hub, scene files are the ones the cameras file names, the
-page's assets and the files' JSON Schemas are fixed lists. Routes are documented in ``docs/serve.md``.
+page's assets and the files' JSON Schemas are fixed lists. Routes are documented in
+``docs/serve.md``.
 """
 
 from __future__ import annotations
