@@ -132,7 +132,7 @@ def _client(app):
 ROUTES = ["/", "/static/app.js", "/static/style.css", "/api/cameras",
           "/api/cameras/cam/events?since=0", "/api/cameras/cam/counts",
           "/api/cameras/cam/snapshot.jpg", "/api/cameras/cam/stream.mjpg",
-          "/api/cameras/cam/scene", "/api/events"]
+          "/api/cameras/cam/scene", "/api/events", "/api/schema/scene", "/api/schema/cameras"]
 
 
 def test_token_is_required_on_every_route(tmp_path):
@@ -146,6 +146,33 @@ def test_token_is_required_on_every_route(tmp_path):
         assert ok.status_code == 200 and [x["name"] for x in ok.json()] == ["cam", "plain"]
         assert c.get("/api/cameras?token=s3cret").status_code == 200
         assert c.get("/?token=s3cret").status_code == 200
+
+
+def test_file_schemas_are_served_as_exported_and_revalidated_by_etag(tmp_path):
+    from motiontrack.analytics.scene import scene_json_schema
+    from motiontrack.serve.cameras import cameras_json_schema
+
+    app, _, _ = _app(tmp_path, token="s3cret")
+    auth = {"Authorization": "Bearer s3cret"}
+    with _client(app) as c:
+        for name, exported in (("scene", scene_json_schema()), ("cameras", cameras_json_schema())):
+            r = c.get(f"/api/schema/{name}", headers=auth)
+            assert r.status_code == 200 and r.headers["content-type"] == "application/json"
+            assert r.json() == exported
+            assert "no-cache" in r.headers["cache-control"]
+            etag = r.headers["etag"]
+            # the same tag again (also weak, also in a list): 304 without a body
+            for asked in (etag, f"W/{etag}", f'"other", {etag}'):
+                again = c.get(f"/api/schema/{name}", headers={**auth, "If-None-Match": asked})
+                assert again.status_code == 304 and again.content == b"", asked
+                assert again.headers["etag"] == etag
+            assert c.get(f"/api/schema/{name}", headers={**auth, "If-None-Match": '"other"'}
+                         ).status_code == 200
+            # the token is checked before the cache: a known tag without it is still 401
+            assert c.get(f"/api/schema/{name}", headers={"If-None-Match": etag}).status_code == 401
+        assert c.get("/api/schema/scene?token=s3cret").json() == scene_json_schema()
+        assert c.get("/api/schema/scene.toml", headers=auth).status_code == 404
+        assert c.get("/api/schema/..%2Fapp.py", headers=auth).status_code == 404
 
 
 def test_unknown_camera_is_404_and_no_path_reaches_the_files(tmp_path):

@@ -239,11 +239,42 @@ def test_a_line_drawn_in_the_editor_is_saved_and_counted(server, page, tmp_path)
                                                    "'[data-testid=\"editor-canvas\"]').width") == w,
                 timeout=10)
 
-    # a name the scene already has: the server refuses the scene and the page shows its words
+    # a name the scene file's schema refuses (blank): the page names the line and the key in the
+    # schema's words and sends nothing
+    schema = server.get("/api/schema/scene")
+    pattern = schema["properties"]["line"]["items"]["properties"]["name"]["pattern"]
+    before = (server.root / name / "scene.toml").read_bytes()
+    _js(page, """
+        const real = window.fetch;
+        window.sceneWrites = 0;
+        window.fetch = (url, options = {}) => {
+          if (options.method === "PUT") window.sceneWrites += 1;
+          return real(url, options);
+        };
+    """)
+    _click_source_points(page, [(0.25 * w, 0.3 * h), (0.25 * w, 0.98 * h)])
+    n = len(scene["lines"])
+    blank = page.find_element("css selector", f'[data-testid="editor-line-name-{n}"]')
+    blank.clear()
+    blank.send_keys("  ")
+    page.find_element("css selector", '[data-testid="editor-save"]').click()
+    error = page.find_element("css selector", '[data-testid="editor-error"]')
+    refusal = f"not saved: line {n + 1}: name must match the pattern {pattern}"
+    server.wait("the schema's refusal shown",
+                lambda: error.is_displayed() and error.text.startswith(refusal), timeout=10)
+    assert _js(page, "return window.sceneWrites") == 0
+    assert (server.root / name / "scene.toml").read_bytes() == before
+    page.find_element("css selector", '[data-testid="editor-reload"]').click()
+    server.wait("the unsaved line discarded",
+                lambda: len(page.find_elements("css selector",
+                                               '[data-testid^="editor-line-name-"]'))
+                == len(scene["lines"]) and not error.is_displayed(), timeout=10)
+
+    # a name the scene already has (the schema cannot say names are unique): the server refuses
+    # the scene and the page shows its words
     page.find_element("css selector", '[data-testid="editor-name"]').send_keys("gate")
     _click_source_points(page, [(0.25 * w, 0.3 * h), (0.25 * w, 0.98 * h)])
     page.find_element("css selector", '[data-testid="editor-save"]').click()
-    error = page.find_element("css selector", '[data-testid="editor-error"]')
     server.wait("the server's error shown", lambda: error.is_displayed() and "gate" in error.text,
                 timeout=10)
     assert "400" in error.text
@@ -349,7 +380,9 @@ def test_items_in_metres_are_listed_and_saved_back_as_they_are(server, page):
         const [far, yard] = arguments, real = window.fetch;
         window.sentScenes = [];
         window.fetch = async (url, options = {}) => {
-          if (!String(url).includes("/scene")) return real(url, options);
+          // the camera's scene only, not the scene file's schema (api/schema/scene)
+          if (!String(url).includes("/scene") || String(url).includes("api/schema/"))
+            return real(url, options);
           if (options.method === "PUT") {
             window.sentScenes.push(JSON.parse(options.body));
             return new Response(options.body, {headers: {"content-type": "application/json"}});

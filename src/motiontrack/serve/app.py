@@ -3,12 +3,14 @@
 Starlette (an ASGI toolkit: routing, requests, streaming responses) served by uvicorn; a
 handful of routes needs nothing more. No path taken from a request reaches the file system:
 cameras are looked up by name in the hub, scene files are the ones the cameras file names, the
-page's assets are a fixed list. Routes are documented in ``docs/serve.md``.
+page's assets and the files' JSON Schemas are fixed lists. Routes are documented in
+``docs/serve.md``.
 """
 
 from __future__ import annotations
 
 import asyncio
+import hashlib
 import hmac
 import json
 from importlib import resources
@@ -21,7 +23,9 @@ from starlette.requests import Request
 from starlette.responses import JSONResponse, Response, StreamingResponse
 from starlette.routing import Route
 
+from ..analytics.scene import scene_json_schema
 from ..errors import MotionTrackError
+from .cameras import cameras_json_schema
 from .hub import CameraState, Cursor, Hub
 from .scenes import SceneFiles
 
@@ -89,7 +93,7 @@ def create_app(hub: Hub, token: str | None = None,
     is shutting down)."""
     files = scenes if isinstance(scenes, SceneFiles) else SceneFiles(scenes or {})
     routes = [*_page_routes(), *_api_routes(hub), *_stream_routes(hub, stopping),
-              *_editor_routes(hub, files)]
+              *_editor_routes(hub, files), *_schema_routes()]
     app: Any = Starlette(routes=routes)
     return _TokenCheck(app, token) if token else app
 
@@ -270,6 +274,47 @@ def _editor_routes(hub: Hub, files: SceneFiles) -> list[Route]:
 
     return [Route("/api/cameras/{name}/scene", get_scene, methods=["GET"]),
             Route("/api/cameras/{name}/scene", put_scene, methods=["PUT"])]
+
+
+def _schema_routes() -> list[Route]:
+    """The JSON Schemas (draft 2020-12) of the scene file and the cameras file, which the
+    editor checks a scene against before it sends it. Each is built once: the rules that make
+    up the scene file's schema are registered when the app is created, and an ETag lets a page
+    that opens again revalidate instead of downloading it."""
+    bodies = {"scene": _Cached.of(scene_json_schema()),
+              "cameras": _Cached.of(cameras_json_schema())}
+
+    async def schema(request: Request) -> Response:
+        cached = bodies.get(request.path_params["file"])
+        return cached.response(request) if cached else _error(404, "no such schema")
+
+    return [Route("/api/schema/{file}", schema)]
+
+
+class _Cached:
+    """A JSON body served with an ETag: a request whose ``If-None-Match`` names it gets 304."""
+
+    # ``private``: behind a token the answer is for that client, not for a shared cache;
+    # ``no-cache``: reused only after the server confirms its ETag (a new version of the
+    # server may change the schema)
+    _CACHE_CONTROL = "private, no-cache"
+
+    def __init__(self, body: bytes) -> None:
+        self.body = body
+        self.etag = '"' + hashlib.sha256(body).hexdigest()[:32] + '"'
+
+    @classmethod
+    def of(cls, data: Any) -> _Cached:
+        return cls(json.dumps(data, ensure_ascii=False, separators=(",", ":")).encode())
+
+    def response(self, request: Request) -> Response:
+        headers = {"ETag": self.etag, "Cache-Control": self._CACHE_CONTROL}
+        asked = request.headers.get("if-none-match", "")
+        # RFC 9110 13.1.2: a list of tags, weak ones compared by their opaque part, or "*"
+        tags = {t.strip().removeprefix("W/") for t in asked.split(",")}
+        if self.etag in tags or "*" in tags:
+            return Response(status_code=304, headers=headers)
+        return Response(self.body, media_type="application/json", headers=headers)
 
 
 def _part(jpeg: bytes, wall: float | None = None) -> bytes:

@@ -229,6 +229,115 @@ function listen() {
   // EventSource reconnects by itself; nothing else to do on error
 }
 
+// ---------------------------------------------------------------- scene schema
+
+// The editor checks the lines and zones it is about to send against the scene file's JSON Schema
+// (api/schema/scene, draft 2020-12), so that a bad name or number is named at once; the server
+// checks the scene again with everything a schema cannot say (unique names, simple polygons,
+// metres through the calibration) and its answer is the one that counts. Only the keywords the
+// export uses are understood; any other is ignored, which can let a scene through to the server,
+// never refuse one the schema allows.
+
+function jsonType(v) {
+  if (v === null) return "null";
+  if (Array.isArray(v)) return "array";
+  if (typeof v === "number") return Number.isInteger(v) ? "integer" : "number";
+  return typeof v;
+}
+
+const TYPE_WORDS = {
+  object: "a table", array: "an array", string: "a string", number: "a number",
+  integer: "a whole number", boolean: "true or false", null: "null",
+};
+
+function shown(v) {
+  const text = JSON.stringify(v);
+  return text === undefined ? String(v) : text.length > 40 ? text.slice(0, 37) + "..." : text;
+}
+
+function sameJson(a, b) {
+  return JSON.stringify(a) === JSON.stringify(b);
+}
+
+// The first problem of `value` against `schema` as a phrase about `where` (a key path such as
+// "points[1][0]"; "" for the value itself), or null when there is none.
+function schemaProblem(schema, value, where) {
+  if (schema === true || schema === undefined || schema === null) return null;
+  const subject = (rest) => (where ? where + " " : "") + rest;
+  if (schema === false) return subject("is not allowed");
+  const type = jsonType(value);
+  if (schema.type !== undefined) {
+    const types = [].concat(schema.type);
+    if (!types.some((t) => t === type || (t === "number" && type === "integer")))
+      return subject("must be " + types.map((t) => TYPE_WORDS[t] || t).join(" or ") + ", got " + shown(value));
+  }
+  if ("const" in schema && !sameJson(value, schema.const))
+    return subject("must be " + shown(schema.const) + ", got " + shown(value));
+  if (Array.isArray(schema.enum) && !schema.enum.some((e) => sameJson(e, value)))
+    return subject("must be one of " + schema.enum.map(shown).join(", ") + ", got " + shown(value));
+  if (typeof value === "number") {
+    if (schema.minimum !== undefined && !(value >= schema.minimum))
+      return subject("must be at least " + schema.minimum + ", got " + value);
+    if (schema.exclusiveMinimum !== undefined && !(value > schema.exclusiveMinimum))
+      return subject("must be more than " + schema.exclusiveMinimum + ", got " + value);
+    if (schema.maximum !== undefined && !(value <= schema.maximum))
+      return subject("must be at most " + schema.maximum + ", got " + value);
+    if (schema.exclusiveMaximum !== undefined && !(value < schema.exclusiveMaximum))
+      return subject("must be less than " + schema.exclusiveMaximum + ", got " + value);
+  }
+  if (typeof value === "string") {
+    const length = [...value].length;   // JSON Schema counts characters, not UTF-16 units
+    if (schema.minLength !== undefined && length < schema.minLength)
+      return subject("must have at least " + schema.minLength + " character(s), got " + length);
+    if (schema.maxLength !== undefined && length > schema.maxLength)
+      return subject("must have at most " + schema.maxLength + " character(s), got " + length);
+    if (schema.pattern !== undefined && !new RegExp(schema.pattern, "u").test(value))
+      return subject("must match the pattern " + schema.pattern + ", got " + shown(value));
+  }
+  if (type === "array") {
+    if (schema.minItems !== undefined && value.length < schema.minItems)
+      return subject("must have at least " + schema.minItems + " item(s), got " + value.length);
+    if (schema.maxItems !== undefined && value.length > schema.maxItems)
+      return subject("must have at most " + schema.maxItems + " item(s), got " + value.length);
+    const prefix = schema.prefixItems || [];
+    for (let i = 0; i < value.length; i++) {
+      // draft 2020-12: `items` is for the elements after `prefixItems`; numbered from 1, as the
+      // server's messages number them (`zone[1].polygon[2][1]`)
+      const problem = schemaProblem(i < prefix.length ? prefix[i] : schema.items, value[i],
+        where + "[" + (i + 1) + "]");
+      if (problem) return problem;
+    }
+  }
+  if (type === "object") {
+    const key = (k) => (where ? where + "." : "") + k;
+    for (const k of schema.required || [])
+      if (!(k in value)) return key(k) + " is required";
+    const props = schema.properties || {};
+    for (const [k, v] of Object.entries(value)) {
+      let problem = null;
+      if (Object.hasOwn(props, k)) problem = schemaProblem(props[k], v, key(k));
+      else if (schema.additionalProperties === false)
+        problem = "unknown key " + key(k) + "; valid keys: " + Object.keys(props).join(", ");
+      else problem = schemaProblem(schema.additionalProperties, v, key(k));
+      if (problem) return problem;
+    }
+  }
+  for (const sub of schema.allOf || []) {
+    const problem = schemaProblem(sub, value, where);
+    if (problem) return problem;
+  }
+  if (schema.anyOf && !schema.anyOf.some((sub) => !schemaProblem(sub, value, where)))
+    return subject("does not match any of its forms");
+  if (schema.oneOf && schema.oneOf.filter((sub) => !schemaProblem(sub, value, where)).length !== 1) {
+    // the export's "exactly one of two keys" is a oneOf of one required key each
+    const keys = schema.oneOf.map((sub) =>
+      Object.keys(sub).length === 1 && sub.required && sub.required.length === 1 ? sub.required[0] : null);
+    if (keys.every((k) => k)) return subject("needs exactly one of " + keys.join(" and "));
+    return subject("must match exactly one of its forms");
+  }
+  return null;
+}
+
 // ---------------------------------------------------------------- editor
 
 // Geometry is kept in the camera's source pixels: the canvas's own resolution is the scene's
@@ -240,8 +349,53 @@ const editor = {
   zones: [],             // [{name, polygon: [[x, y], ...], loiter_s?}]
   pending: [],           // points of the item being drawn
   dirty: false,
+  schema: null,          // the scene file's JSON Schema; null: the server's check alone
+  schemaLoaded: null,    // the promise of loadSchema(): a save waits for it
+
+  async loadSchema() {
+    try {
+      // revalidated by its ETag, not fetched again, when the page opens once more
+      this.schema = await api("api/schema/scene", { cache: "no-cache" });
+    } catch (err) {
+      this.schema = null;
+    }
+  },
+
+  // the schema of an item of the scene's `line` or `zone` array (undefined without one)
+  itemSchema(kind) {
+    const table = this.schema && this.schema.properties && this.schema.properties[kind];
+    return table ? table.items : undefined;
+  },
+
+  // the first problem of the lines and zones against the schema, naming the item and the key
+  // ("line 2: name must match the pattern ..."), or null
+  problem() {
+    if (!this.schema) return null;
+    for (const [kind, items] of [["line", this.lines], ["zone", this.zones]]) {
+      const table = this.schema.properties && this.schema.properties[kind];
+      if (!table) continue;
+      for (let i = 0; i < items.length; i++) {
+        const problem = schemaProblem(table.items, items[i], "");
+        if (problem) return kind + " " + (i + 1) + ": " + problem;
+      }
+      // the array's own limits (its items are checked above, each with its number)
+      const { items: _, prefixItems: __, ...own } = table;
+      const problem = schemaProblem(own, items, kind + "s");
+      if (problem) return problem;
+    }
+    return null;
+  },
+
+  // the fewest corners of a zone: the schema's, else the scene file's 3
+  zoneMinPoints() {
+    const polygon = this.itemSchema("zone");
+    const min = polygon && polygon.properties && polygon.properties.polygon
+      && polygon.properties.polygon.minItems;
+    return Number.isInteger(min) ? min : 3;
+  },
 
   init() {
+    this.schemaLoaded = this.loadSchema();
     this.select = document.getElementById("editor-camera");
     this.canvas = document.getElementById("editor-canvas");
     this.picture = document.getElementById("editor-picture");
@@ -355,8 +509,9 @@ const editor = {
 
   closeZone() {
     if (this.tool() !== "zone") return;
-    if (this.pending.length < 3) {
-      this.message("a zone needs at least 3 points");
+    const min = this.zoneMinPoints();
+    if (this.pending.length < min) {
+      this.message("a zone needs at least " + min + " points");
       return;
     }
     this.zones.push({ name: this.nextName("zone"), polygon: this.pending });
@@ -428,6 +583,13 @@ const editor = {
   async save() {
     if (!this.camera) return;
     this.error("");
+    await this.schemaLoaded;
+    const problem = this.problem();
+    if (problem) {
+      this.message("");
+      this.error("not saved: " + problem);
+      return;
+    }
     const body = { ...(this.scene || {}), lines: this.lines, zones: this.zones };
     try {
       await api(cameraPath(this.camera, "scene"), {
