@@ -4,6 +4,10 @@ from __future__ import annotations
 
 import csv
 import json
+import signal
+import subprocess
+import sys
+import time
 
 import numpy as np
 import pytest
@@ -180,6 +184,42 @@ def test_an_interrupted_analyze_keeps_the_frames_analysed_and_says_so(tmp_path):
     rows = list(csv.DictReader((out / "counts.csv").read_text().splitlines()))
     assert [r["frames"] for r in rows] == ["3"]
     assert not (out / ".motiontrack.lock").exists()
+
+
+def test_analyze_forced_into_the_tracked_runs_folder_keeps_that_runs_files(tmp_path, scene_file):
+    run = tmp_path / "run"
+    assert main(["track", "synth:walker?n_frames=30", "--no-video", "-o", str(run)]) == 0
+    tracks = (run / "tracks.txt").read_bytes()
+    assert main(["analyze", str(run / "tracks.txt"), "--scene", str(scene_file), "-o", str(run),
+                 "--force"]) == 0
+    # the tracks it read and the track run's other outputs stay; the analysis is added
+    assert (run / "tracks.txt").read_bytes() == tracks
+    assert (run / "config.toml").is_file() and (run / "gt.txt").is_file()
+    assert (run / "events.jsonl").is_file() and (run / "counts.csv").is_file()
+
+
+@pytest.mark.slow
+def test_sigterm_stops_analyze_keeping_the_frames_analysed(tmp_path, scene_file):
+    # one track at frame 1 and frame 2,000,000: two million frames to step, so it is still running
+    tracks = _rows(tmp_path / "tracks.txt", [(1, 1, 100, 20), (2_000_000, 1, 100, 40)])
+    out = tmp_path / "out"
+    proc = subprocess.Popen([sys.executable, "-m", "motiontrack", "analyze", str(tracks),
+                             "--scene", str(scene_file), "--fps", "25", "-o", str(out)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.monotonic() + 60
+        while not (out / ".motiontrack.lock").exists() and time.monotonic() < deadline:
+            time.sleep(0.05)
+        time.sleep(0.5)
+        proc.send_signal(signal.SIGTERM)
+        _, err = proc.communicate(timeout=20)
+    finally:
+        proc.kill()
+    assert proc.returncode == 130, err
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["interrupted"] is True and 0 < summary["frames"] < 2_000_000
+    rows = list(csv.DictReader((out / "counts.csv").read_text().splitlines()))
+    assert rows and int(rows[-1]["frames"]) <= summary["frames"]
 
 
 def test_analysed_events_in_memory_are_those_analyze_writes(tmp_path):

@@ -46,10 +46,11 @@ def cmd_analyze(args: argparse.Namespace) -> int:
     from ..calibrate import load_camera
     from ..errors import ConfigError
     from ..io.annotations import read_annotations
-    from ..run.analyze import analyze_tracks
+    from ..run.analyze import analyze_job
     from ..run.folder import RunFolder
     from ..run.folders import source_name
     from ..run.heatmaps import median_background
+    from ._common import frame_loop
     from ._sinks import sink_settings, sink_targets, sinks_writer
 
     targets = sink_targets(args)
@@ -64,12 +65,14 @@ def cmd_analyze(args: argparse.Namespace) -> int:
     background = median_background(args.video) if args.video is not None else None
     size = ((background.shape[1], background.shape[0]) if background is not None
             else beside.frame_size())
-    summary = analyze_tracks(tracks, scene, fps, args.out, camera=camera, bin_s=args.bin_s,
-                             force=args.force, source=str(args.tracks), size=size,
-                             background=background,
-                             sinks=sinks_writer(targets, args.camera_name,
-                                                source_name(args.tracks.resolve().parent),
-                                                settings))
+    job = analyze_job(tracks, scene, fps, args.out, camera=camera, bin_s=args.bin_s,
+                      force=args.force, source=str(args.tracks), size=size,
+                      background=background,
+                      sinks=sinks_writer(targets, args.camera_name,
+                                         source_name(args.tracks.resolve().parent), settings))
+    # the signals every job command takes: SIGINT or SIGTERM keeps the frames analysed so far
+    with frame_loop(job.expected_frames()) as loop:
+        summary = job.layout(job.run(progress=loop.update, should_stop=loop.stop))
     totals = summary["analytics"]
     n = sum(totals["events"].values())
     lines = ", ".join(f"{k} in {v['in']} out {v['out']}" for k, v in totals["lines"].items())

@@ -24,7 +24,6 @@ from ..io.sources import Source, SourceInfo
 from ..types import Annotations, Event, FrameResult
 from .analytics_writers import CountsWriter, EventsWriter
 from .event_sinks import EventSinksWriter
-from .folder import RunFolder
 from .heatmaps import HeatmapWriter, scene_geometry
 from .job import Job, JobSummary
 
@@ -177,7 +176,8 @@ def analyze_job(tracks: Annotations, scene: Scene, fps: float, out: str | Path, 
                                  geometry=scene_geometry(scene.lines, scene.zones),
                                  boxes_of=lambda r: r.boxes))
     n = int(len(np.unique(src.tracks.ids)))
-    return Job(src, proc, writers, out, force=force, layout=_layout(fps, n))
+    # the folder is often the tracked run's own: --force replaces the analysis, not its tracks
+    return Job(src, proc, writers, out, force=force, layout=_layout(fps, n), replace_listed=False)
 
 
 def analyze_tracks(tracks: Annotations, scene: Scene, fps: float, out: str | Path, *,

@@ -225,13 +225,18 @@ class Job:
         a job without it, such as ``overlay``, writes files into a folder it shares).
     layout : what ``summary.json`` holds, made of the run's :class:`JobSummary` (default
         :meth:`JobSummary.as_dict`; ``analyze`` keeps the fields of a tracks file's analysis).
+    replace_listed : with ``force``, also remove the outputs the folder's old ``summary.json``
+        lists (a run of the same command with other settings may have written files this one
+        does not). A job that adds its outputs to another run's folder, as ``analyze`` does to
+        the folder of the tracks it reads, says False: there they are that run's files.
     """
 
     def __init__(self, source: Source, processor: Processor, writers: Sequence[Writer],
                  out_dir: str | Path, *, force: bool = False,
                  config: tuple[Callable[[Any, Path], None], Any] | None = None,
                  summary: bool = True, own_folder: bool | None = None,
-                 layout: Callable[[JobSummary], dict[str, Any]] = JobSummary.as_dict) -> None:
+                 layout: Callable[[JobSummary], dict[str, Any]] = JobSummary.as_dict,
+                 replace_listed: bool = True) -> None:
         self.source = source
         self.processor = processor
         self.writers = list(writers)
@@ -247,6 +252,7 @@ class Job:
         if config is not None:
             self.paths["config"] = self.folder.config
         self.force = force
+        self.replace_listed = replace_listed
         own = summary if own_folder is None else own_folder
         self._lock = OutputLock(self.out) if own else None
         try:
@@ -397,7 +403,7 @@ class Job:
     def _clear_folder(self) -> None:
         """Before the first output appears: remove the temporary files a killed run left and,
         with ``force``, the old outputs (of this job, and those the old summary lists)."""
-        old = self._old_outputs() if self.force else []
+        old = self._old_outputs() if self.force and self.replace_listed else []
         if self._lock is not None:  # no other run writes into the folder now
             remove_leftover_temps([*self.paths.values(), *old])
         if self.force:
