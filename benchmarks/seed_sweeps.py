@@ -47,20 +47,12 @@ from motiontrack.io.events import read_events
 from motiontrack.pipeline import open_configured_source
 from motiontrack.run.processors import TrackProcessor
 from motiontrack.synth import make_scene
+from scene_events import seeds_arg  # benchmarks/ is the script's folder, first on sys.path
 
 IDENTITY_SCENES = {"crossing": "two people crossing", "column": "a person passing behind a column"}
 EXACT_SCENES = ("walker", "runner", "crossing", "loiter")
 DIRECTIONS = (("gate", "in"), ("gate", "out"))
 SWEEPS = ("identity", "events", "abandoned")
-
-
-def seeds_arg(text: str) -> list[int]:
-    """``0-9,20`` → [0, 1, ..., 9, 20]."""
-    out: list[int] = []
-    for part in text.split(","):
-        a, _, b = part.partition("-")
-        out += list(range(int(a), int(b or a) + 1))
-    return out
 
 
 def quiet_main(argv: list[str]) -> None:

@@ -47,7 +47,7 @@ def test_nested_tables_and_arrays_of_tables_are_built():
     ({"zone": [{"name": "g", "dwell_s": 0}]}, "zone[1].dwell_s must be in (0, 3600], got 0.0"),
     ({"zone": [{"name": "g", "dwell_s": "long"}]}, "zone[1].dwell_s must be a number, got 'long'"),
     ({"zone": [{"name": "g", "kind": "area"}]},
-     "zone[1].kind must be one of ['zone', 'line'], got 'area'"),
+     "zone[1].kind must be one of zone, line, got 'area'"),
     ({"limits": {"speed": 101}}, "limits.speed must be in [0.0, 100.0], got 101.0"),
     ({"limits": 3}, "limits must be a table, got 3"),
     ({"zone": {"name": "g"}}, "zone must be an array, got a table"),

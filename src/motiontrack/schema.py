@@ -127,7 +127,8 @@ def check_value(m: typing.Mapping[str, Any], v: Any, where: str) -> None:
     if not m or v is None:
         return
     if m.get("choices") is not None and v not in m["choices"]:
-        raise ConfigError(f"{where} must be one of {list(m['choices'])}, got {shown(v)}")
+        raise ConfigError(f"{where} must be one of {', '.join(map(str, m['choices']))}, "
+                          f"got {shown(v)}")
     if isinstance(v, (int, float)) and not isinstance(v, bool):
         lo, hi = m.get("lo"), m.get("hi")
         rng = _range_text(m)

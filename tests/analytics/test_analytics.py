@@ -241,7 +241,7 @@ def test_speeding_once_per_episode_in_pixels_per_second():
     "scene, message",
     [
         ({"colour": 1}, r"unknown scene key\(s\) colour; valid keys: anchor, hysteresis_px"),
-        ({"anchor": "head"}, r"anchor must be one of \['bottom_center', 'center'\], got 'head'"),
+        ({"anchor": "head"}, "anchor must be one of bottom_center, center, got 'head'"),
         ({"line": [{"name": "a", "points": [[0, 0]]}]}, r"line\[1\].points must be two \[x, y\] points"),
         ({"line": [GATE, {"name": "b", "points": [[0, 0], [0, 0.5]]}]}, r"line\[2\].points: the two"),
         ({"line": [GATE, GATE]}, r"line\[2\].name 'gate' is used twice"),

@@ -199,21 +199,22 @@ def test_events_reach_the_feed_within_two_seconds_of_their_frame(server, page, t
 
 
 def _click_source_points(driver, points) -> None:
-    """Click the editor's canvas at points given in the camera's source pixels."""
-    from selenium.webdriver.common.action_chains import ActionChains
+    """Click the editor's canvas at points given in the camera's source pixels.
 
+    Each click is dispatched by the page's own script at the position the canvas has at that
+    moment: the page reflows while it runs (its snapshot, its lists and messages), so a position
+    WebDriver computed before moving its mouse can be stale by the time the mouse arrives."""
     canvas = driver.find_element("css selector", '[data-testid="editor-canvas"]')
-    size = _js(driver, """
-        const c = arguments[0], r = c.getBoundingClientRect();
-        return {w: c.width, h: c.height, cw: r.width, ch: r.height};
-    """, canvas)
     driver.execute_script("arguments[0].scrollIntoView({block: 'center'})", canvas)
     for x, y in points:
-        # Selenium's offsets are from the element's centre, in CSS pixels
-        dx = x * size["cw"] / size["w"] - size["cw"] / 2
-        dy = y * size["ch"] / size["h"] - size["ch"] / 2
-        ActionChains(driver).move_to_element_with_offset(canvas, int(round(dx)),
-                                                         int(round(dy))).click().perform()
+        driver.execute_script("""
+            const c = arguments[0], r = c.getBoundingClientRect();
+            const at = {clientX: r.left + arguments[1] * r.width / c.width,
+                        clientY: r.top + arguments[2] * r.height / c.height,
+                        bubbles: true, cancelable: true, view: window};
+            c.dispatchEvent(new MouseEvent("mousemove", at));
+            c.dispatchEvent(new MouseEvent("click", at));
+        """, canvas, x, y)
         time.sleep(0.1)
 
 

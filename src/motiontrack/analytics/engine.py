@@ -24,7 +24,7 @@ from ..calibrate.measure import world_positions
 from ..errors import ConfigError
 from ..types import Event, SceneFrame, StaticFrame
 from .objects import StaticObjects
-from .rule import FrameTable, Rule, RuleContext, TrackState
+from .rule import FrameTable, Rule, RuleContext, TrackMemory
 from .rules import RULES
 from .scene import Scene
 
@@ -75,7 +75,7 @@ class Analytics:
         self.objects = None
         if any(r.uses_static for r, _ in active):
             self.objects = StaticObjects(self.fps, scene.forget_s * self.fps)
-        self.tracks: dict[int, TrackState] = {}
+        self.tracks: dict[int, TrackMemory] = {}
         self.context = RuleContext(
             self.fps, scene.anchor, scene.hysteresis_px, scene.forget_s * self.fps, camera,
             self.objects, self.tracks,
@@ -153,13 +153,13 @@ class Analytics:
         return events
 
     def _table(self, frame: int, ids: np.ndarray, boxes: np.ndarray,
-               static: StaticFrame | None, gone: list) -> tuple[FrameTable, list[TrackState]]:
+               static: StaticFrame | None, gone: list) -> tuple[FrameTable, list[TrackMemory]]:
         """The frame's :class:`FrameTable`, new tracks given a row."""
         states, fresh = [], []
         for tid in ids.tolist():
             st = self.tracks.get(tid)
             if st is None:
-                st = self.tracks[tid] = TrackState(self._rows.take())
+                st = self.tracks[tid] = TrackMemory(self._rows.take())
                 fresh.append(st.row)
             states.append(st)
         rows = np.fromiter((st.row for st in states), dtype=np.int64, count=len(states))
@@ -169,7 +169,7 @@ class Analytics:
                            np.asarray(fresh, dtype=np.int64), self.context, static, gone)
         return table, states
 
-    def _remember(self, table: FrameTable, states: list[TrackState]) -> None:
+    def _remember(self, table: FrameTable, states: list[TrackMemory]) -> None:
         """The tracks' last sighting, for the next frame's rules and for forgetting."""
         points, world, frame = table.points, table.world, table.frame
         self._rows.point[table.rows] = points

@@ -40,7 +40,7 @@ from ..schema import from_dict
 from ..types import EVENT_TYPES, Event, StaticFrame, register_event_type, unregister_event_type
 from .validate import array_of_tables, one_of
 
-__all__ = ["EventType", "SceneKey", "TrackState", "RuleContext", "FrameTable", "Rule",
+__all__ = ["EventType", "SceneKey", "TrackMemory", "RuleContext", "FrameTable", "Rule",
            "BaseRule", "Columns", "RuleRegistry", "RULES", "rounded", "row_of"]
 
 
@@ -76,7 +76,7 @@ def row_of(world: np.ndarray | None, i: int) -> tuple[float, float] | None:
     return None if world is None else (float(world[i, 0]), float(world[i, 1]))
 
 
-class TrackState:
+class TrackMemory:
     """What the engine remembers of one track between frames: its row in every rule's
     per-track columns, the frame it was last seen in and its last box, anchor and ground
     position (updated after the rules of a frame ran, so they see the previous sighting)."""
@@ -99,7 +99,7 @@ class RuleContext:
 
     Attributes
     ----------
-    tracks : mapping of track id → TrackState
+    tracks : mapping of track id → TrackMemory
         The engine's live tracks (read only for rules).
     objects : StaticObjects or None
         Static objects followed from frame to frame (:mod:`.objects`), stepped by the engine
@@ -112,7 +112,7 @@ class RuleContext:
     forget_frames: float
     camera: Any = None
     objects: Any = None
-    tracks: Mapping[int, TrackState] = field(default_factory=dict)
+    tracks: Mapping[int, TrackMemory] = field(default_factory=dict)
     world_of: Callable[[np.ndarray], np.ndarray] | None = None
 
     def anchors(self, boxes: np.ndarray) -> np.ndarray:
@@ -237,7 +237,7 @@ class Rule(Protocol):
     def step(self, frame: FrameTable) -> list[Event]:
         """The events of one frame."""
 
-    def forget(self, frame: int, tid: int, state: TrackState) -> list[Event]:
+    def forget(self, frame: int, tid: int, state: TrackMemory) -> list[Event]:
         """The events of a track forgotten in ``frame`` (unseen for ``forget_s``)."""
 
     def counts(self) -> dict[str, Any]:
@@ -300,7 +300,7 @@ class BaseRule:
     def step(self, frame: FrameTable) -> list[Event]:
         raise NotImplementedError
 
-    def forget(self, frame: int, tid: int, state: TrackState) -> list[Event]:
+    def forget(self, frame: int, tid: int, state: TrackMemory) -> list[Event]:
         return []
 
     def counts(self) -> dict[str, Any]:

@@ -74,8 +74,7 @@ class HeatmapWriter(Writer):
     ----------
     out : the output folder.
     anchor : the scene's anchor (``bottom_center`` | ``center``).
-    size : ``(width, height)`` of the image map; ``None``: the source's (a job) — required
-        when driven directly.
+    size : ``(width, height)`` of the image map; ``None``: the source's.
     camera : a calibrated camera fitted to the frames: also ``heatmap_world.png``.
     background : the picture under the image map (any size, gray or BGR), or a function
         returning it when the run ends; ``None`` in a job: the motion detector's background,

@@ -212,9 +212,6 @@ class SyntheticScene:
             raise IndexError(f"frame index must be in [0, {self.n_frames - 1}], got {i}")
         return i
 
-    def _rng(self, purpose: int) -> np.random.Generator:
-        return np.random.default_rng([self.seed, purpose, stable_hash(self.name)])
-
     @property
     def background(self) -> np.ndarray:
         """The static background (with the column), ``(H, W, 3) uint8`` BGR, before lighting/noise.

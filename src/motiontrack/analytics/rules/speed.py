@@ -10,7 +10,7 @@ import numpy as np
 
 from ...types import Event
 from ..movement import REARM, SpeedWindow
-from ..rule import RULES, BaseRule, EventType, FrameTable, RuleContext, TrackState, rounded
+from ..rule import RULES, BaseRule, EventType, FrameTable, RuleContext, TrackMemory, rounded
 from ..specs import SpeedSpec
 
 __all__ = ["Speed"]
@@ -34,7 +34,7 @@ class Speed(BaseRule):
         super().__init__(spec, context)
         self.windows: dict[int, SpeedWindow] = {}
 
-    def forget(self, frame: int, tid: int, state: TrackState) -> list[Event]:
+    def forget(self, frame: int, tid: int, state: TrackMemory) -> list[Event]:
         self.windows.pop(tid, None)
         return []
 

@@ -16,7 +16,7 @@ import numpy as np
 from ...types import Event
 from ..movement import Stay
 from ..objects import BAG_RATIO, TrackedObject
-from ..rule import RULES, BaseRule, EventType, FrameTable, RuleContext, TrackState
+from ..rule import RULES, BaseRule, EventType, FrameTable, RuleContext, TrackMemory
 from ..specs import StationarySpec
 
 __all__ = ["Stationary", "STATIONARY_STILL"]
@@ -63,7 +63,7 @@ class Stationary(BaseRule):
         self.stays: dict[int, Stay] = {}   # every live track's stay, in the engine's order
         self.silent: set[int] = set()      # stationary tracks whose place an object reports
 
-    def forget(self, frame: int, tid: int, state: TrackState) -> list[Event]:
+    def forget(self, frame: int, tid: int, state: TrackMemory) -> list[Event]:
         """A forgotten track ends its stay at its last position, unless a static object takes
         the stay over or already reports the place."""
         stay = self.stays.pop(tid, None)
@@ -160,7 +160,7 @@ class Stationary(BaseRule):
         return self.objects is not None and any(
             o.stationary == "open" and covers(box, o.box) for o in self.objects.objects)
 
-    def _handed_over(self, tid: int, state: TrackState, stay: Stay) -> bool:
+    def _handed_over(self, tid: int, state: TrackMemory, stay: Stay) -> bool:
         """A forgotten stationary track whose place a static object of its size (not a bag it
         left) still holds: the object carries the stay on under the track's id (the tracker
         lost someone standing still)."""

@@ -15,7 +15,7 @@ from ...errors import ConfigError
 from ...schema import REQUIRED, param
 from ...types import Event
 from ..geometry import polygon_area, polygon_is_simple
-from ..rule import RULES, BaseRule, Columns, EventType, FrameTable, RuleContext, TrackState, rounded
+from ..rule import RULES, BaseRule, Columns, EventType, FrameTable, RuleContext, TrackMemory, rounded
 from ..specs import COORD_LIMIT, SceneSection, ZoneSpec, positive
 from ..validate import pixels, unique_name
 from ..zones import ZoneEdges
@@ -90,7 +90,7 @@ class Zones(BaseRule):
         self.peak = np.zeros(n, dtype=np.int64)
         self.occupancy_sum = np.zeros(n, dtype=np.int64)
 
-    def forget(self, frame: int, tid: int, state: TrackState) -> list[Event]:
+    def forget(self, frame: int, tid: int, state: TrackMemory) -> list[Event]:
         """A forgotten track exits its zones at its last position, dwell up to its last
         sighting."""
         if not self.edges.n:
