@@ -39,7 +39,8 @@ WARMUP = 40  # frames: the walker is in view and every model has settled
 @pytest.mark.parametrize("method", DETECTORS.names())
 @pytest.mark.slow
 def test_each_detector_finds_the_walker(method):
-    spec = "synth:walker"
+    # 170 frames: 130 after the warm-up with the walker fully in view
+    spec = "synth:walker?n_frames=170"
     gt = parse_synth_spec(spec).ground_truth()
     by_frame = gt.by_frame()
     _, results = run_scene(spec, [f"motion.method={method}"])
