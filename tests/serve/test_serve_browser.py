@@ -218,6 +218,14 @@ def _click_source_points(driver, points) -> None:
         time.sleep(0.1)
 
 
+def _listed(driver, kind: str) -> list[str]:
+    """The names in the editor's list of ``kind`` (line or zone) items, read in one script: the
+    page may render the list again between two WebDriver calls (a stale element)."""
+    return _js(driver, "return [...document.querySelectorAll("
+                       "`[data-testid^=\"editor-${arguments[0]}-name-\"]`)].map((e) => e.value)",
+               kind)
+
+
 def _count_row(driver, camera: str, line: str) -> dict | None:
     return _js(driver, """
         const row = document.querySelector(
@@ -293,8 +301,7 @@ def test_a_line_drawn_in_the_editor_is_saved_and_counted(server, page, tmp_path)
     a, b = (0.4 * w, 0.3 * h), (0.4 * w, 0.98 * h)
     page.find_element("css selector", '[data-testid="editor-name"]').send_keys("door")
     _click_source_points(page, [a, b])
-    names = [e.get_attribute("value") for e in
-             page.find_elements("css selector", '[data-testid^="editor-line-name-"]')]
+    names = _listed(page, "line")
     assert names == [line["name"] for line in scene["lines"]] + ["door"]
     page.find_element("css selector", '[data-testid="editor-save"]').click()
     server.wait("the scene saved",
@@ -340,8 +347,7 @@ def test_a_zone_drawn_closes_with_enter_and_a_deleted_item_leaves_the_scene_file
     corners = [(0.05 * w, 0.6 * h), (0.25 * w, 0.6 * h), (0.25 * w, 0.9 * h), (0.05 * w, 0.9 * h)]
     _click_source_points(page, corners)
     page.find_element("css selector", '[data-testid="editor-canvas"]').send_keys(Keys.ENTER)
-    names = [e.get_attribute("value") for e in
-             page.find_elements("css selector", '[data-testid^="editor-zone-name-"]')]
+    names = _listed(page, "zone")
     assert names == [z["name"] for z in scene["zones"]] + ["kerb"]
     # the scene's line goes: its Delete button is labelled with its name
     gate = page.find_element("css selector", '[aria-label="Delete line gate"]')
@@ -396,11 +402,9 @@ def test_items_in_metres_are_listed_and_saved_back_as_they_are(server, page):
     """, far, yard)
     Select(page.find_element("css selector", '[data-testid="editor-camera"]')).select_by_value(name)
     server.wait("the editor listing the items in metres too",
-                lambda: [e.get_attribute("value") for e in page.find_elements(
-                    "css selector", '[data-testid^="editor-line-name-"]')]
-                == [line["name"] for line in scene["lines"]] + ["far"], timeout=10)
-    zone_names = [e.get_attribute("value") for e in
-                  page.find_elements("css selector", '[data-testid^="editor-zone-name-"]')]
+                lambda: _listed(page, "line") == [line["name"] for line in scene["lines"]] + ["far"],
+                timeout=10)
+    zone_names = _listed(page, "zone")
     assert zone_names == [z["name"] for z in scene["zones"]] + ["yard"]
     far_input = page.find_element("css selector",
                                   f'[data-testid="editor-line-name-{len(scene["lines"])}"]')
