@@ -18,7 +18,7 @@ from motiontrack.io.atomic import DiskFullError, OutputLock, free_bytes
 from motiontrack.io.sources import open_source
 from motiontrack.io.video import DISK_RESERVE
 from motiontrack.run import track_job
-from motiontrack.run.job import Writer
+from helpers.writers import FailAt
 from test_outputs import small_disk  # noqa: F401 (the fixture: a 2 MB file system)
 
 HIGHWAY = "cdnet-highway"
@@ -114,20 +114,10 @@ def test_a_mask_folder_in_use_by_another_run_is_refused(tmp_path):
     assert _names(tmp_path / "o") == []
 
 
-class _FailAt(Writer):
-    def __init__(self, frame: int) -> None:
-        self.paths = {}
-        self.frame = frame
-
-    def write(self, result) -> None:
-        if result.index == self.frame:
-            raise RuntimeError("encoder gave up")
-
-
 def test_a_failed_run_removes_its_mask_images_and_a_stopped_one_keeps_them(tmp_path):
     cfg = load_config(None, ["output.video=false"])
     job = track_job(WALKER, cfg, tmp_path / "o", mask_images=tmp_path / "m")
-    job.writers.append(_FailAt(6))
+    job.writers.append(FailAt(6))
     with pytest.raises(RuntimeError, match="encoder gave up"):
         job.run()
     assert _names(tmp_path / "m") == []                   # no image, no temporary, no lock

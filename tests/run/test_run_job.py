@@ -18,27 +18,17 @@ from motiontrack.errors import InputError
 from motiontrack.io.sources import SCHEMES, ArraySource, open_source
 from motiontrack.io.video import VideoSink
 from motiontrack.pipeline import open_configured_source
-from motiontrack.run import Job, Writer, track_job
+from motiontrack.run import Job, track_job
 from motiontrack.run.processors import TrackProcessor
 from motiontrack.run.writers import TracksWriter, VideoWriter
+
+from helpers.writers import FailAt
 
 WALKER = "synth:walker?n_frames=12"
 
 
 def _files(folder):
     return sorted(p.name for p in folder.iterdir()) if folder.exists() else []
-
-
-class _FailAt(Writer):
-    """A writer whose ``write`` raises at one frame, like an encoder that gives up."""
-
-    def __init__(self, frame: int) -> None:
-        self.paths = {}
-        self.frame = frame
-
-    def write(self, result) -> None:
-        if result.index == self.frame:
-            raise RuntimeError("encoder gave up")
 
 
 def _job(out, *extra, force=False):
@@ -52,7 +42,7 @@ def _job(out, *extra, force=False):
 def test_a_failed_run_removes_its_outputs_so_the_retry_needs_no_force(tmp_path):
     out = tmp_path / "o"
     with pytest.raises(RuntimeError, match="encoder gave up"):
-        _job(out, _FailAt(5)).run()
+        _job(out, FailAt(5)).run()
     assert _files(out) == []                      # no tracks, video, config, summary or .part
     summary = _job(out).run()                     # the same folder, without --force
     assert summary.frames == 12 and summary.status == "complete"
