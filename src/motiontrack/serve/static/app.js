@@ -189,6 +189,7 @@ function renderCounts(name) {
 
 function describe(ev) {
   const parts = [ev.type];
+  if (ev.reason) parts.push(ev.reason);
   if (ev.line) parts.push(ev.line + (ev.direction ? " " + ev.direction : ""));
   if (ev.zone) parts.push(ev.zone);
   if (ev.track !== undefined) parts.push("track " + ev.track);
