@@ -516,3 +516,8 @@ def test_a_discontinuity_resets_the_models_and_ends_the_tracks():
     assert not any(r.tracks for r in results[20:23])
     after = {t.id for r in results[23:] for t in r.tracks}
     assert after and not after & before and min(after) > max(before)
+    # the same reset by hand: new models, no tracks, the warm-up counted from here
+    detector = pipe.detector
+    pipe.reset(Discontinuity("seek"))
+    assert pipe.detector is not detector and pipe.tracker.active_count == 0
+    assert pipe._warm_from == pipe.frames_seen == 26

@@ -211,10 +211,12 @@ class Pipeline:
         self.sequential = False
 
     def reset(self, discontinuity: Discontinuity) -> None:
-        """Every stage's state after a discontinuity, in the order the frame meets them:
-        :meth:`reset_motion` (image work), then :meth:`reset_tracking`. :meth:`results` calls
-        each in the thread that runs its stage."""
+        """Every stage's state after ``discontinuity``, in the order a frame meets them:
+        :meth:`reset_motion` (image work), :meth:`reset_regions`, :meth:`reset_tracking`.
+        :meth:`results` calls each in the thread that runs its stage when a frame carries one."""
+        log.info("source discontinuity (%s): models and tracks reset", discontinuity.reason)
         self.reset_motion()
+        self.reset_regions(self.frames_seen)
         self.reset_tracking()
 
     def reset_motion(self) -> None:
@@ -376,6 +378,9 @@ class Pipeline:
         """Tracking stage of one frame, after :meth:`detect` (and the people stage, when on)."""
         regions, mask, small = det.regions, det.mask, det.motion.small
         if frame.discontinuity is not None:
+            if self.frames_seen:   # (a run's first frame has nothing to reset)
+                log.info("frame %d: source discontinuity (%s): models and tracks reset",
+                         frame.index, frame.discontinuity.reason)
             self.reset_tracking()
         people = PeopleFrame(heads=det.heads) if det.heads is not None else None
         if self.people is not None:
