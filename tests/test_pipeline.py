@@ -481,3 +481,43 @@ def test_a_stage_that_raises_stops_the_reading_threads(tmp_path, monkeypatch):
                 for _ in run(str(p), PipelineConfig()):
                     pass
         assert not [t for t in threading.enumerate() if t.name == "motiontrack-decode"], stage
+
+
+def _square_frames(n, bright, x0=10):
+    """``n`` frames of a grey picture (``bright``) with a white square moving 3 px a frame."""
+    out = []
+    for k in range(n):
+        img = np.full((72, 96, 3), bright, np.uint8)
+        x = x0 + 3 * k
+        img[30:45, x:x + 12] = 255
+        out.append(img)
+    return out
+
+
+def test_a_discontinuity_resets_the_models_and_ends_the_tracks():
+    from dataclasses import replace as dc_replace
+
+    from motiontrack.pipeline import Pipeline
+    from motiontrack.types import Discontinuity, Frame
+
+    cfg = load_config(None, ["motion.warmup=3", "tracker.confirm_hits=2"])
+    images = _square_frames(20, 60) + _square_frames(6, 160)   # the picture jumps at frame 20
+    pipe = Pipeline(cfg, (96, 72), fps=25.0)
+    frames = [Frame(index=k, image=img, timestamp=k / 25.0) for k, img in enumerate(images)]
+    frames[20] = dc_replace(frames[20], discontinuity=Discontinuity("loop"))
+    results = list(pipe.results(frames))
+    before = {t.id for r in results[:20] for t in r.tracks}
+    assert before and results[19].tracks                  # the square is tracked
+    # after the jump: the models learn the new picture afresh (warm-up: no regions for 3
+    # frames, instead of the whole changed picture as one region), and no track of the frames
+    # before it goes on
+    assert results[20].discontinuity == Discontinuity("loop")
+    assert [len(r.regions) for r in results[20:23]] == [0, 0, 0]
+    assert not any(r.tracks for r in results[20:23])
+    after = {t.id for r in results[23:] for t in r.tracks}
+    assert after and not after & before and min(after) > max(before)
+    # the same reset by hand: new models, no tracks, the warm-up counted from here
+    detector = pipe.detector
+    pipe.reset(Discontinuity("seek"))
+    assert pipe.detector is not detector and pipe.tracker.active_count == 0
+    assert pipe._warm_from == pipe.frames_seen == 26

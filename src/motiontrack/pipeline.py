@@ -2,6 +2,12 @@
 
     source → preprocess → motion (mask) → clean-up → regions → [people] → tracker → FrameResult
 
+A frame that carries a :class:`~motiontrack.types.Discontinuity` (the source looped,
+reconnected, or was positioned at a start frame) resets every stage before it is processed
+(:meth:`Pipeline.reset`): the motion and background models learn afresh (with the warm-up
+again), the tracker ends its tracks, and the result carries the mark on to the analytics and
+the writers.
+
 :class:`Pipeline` holds every stage's state and processes frames; :func:`run` is the Python API
 (:func:`motiontrack.track`): a :class:`TrackRun` that yields one
 :class:`~motiontrack.types.FrameResult` per frame. Writing outputs is the run layer's work
@@ -35,7 +41,8 @@ from .people.heads import split_regions_by_heads
 from .preprocess import load_roi, preprocess
 from .tracking.bridge import Bridge
 from .tracking.tracker import TRACKERS
-from .types import Annotations, Box, Frame, FrameResult, PeopleFrame, Region, StaticFrame
+from .types import (Annotations, Box, Discontinuity, Frame, FrameResult, PeopleFrame, Region,
+                    StaticFrame)
 
 log = logging.getLogger(__name__)
 
@@ -101,6 +108,8 @@ class Motion:
     detections: list[Region] = field(default_factory=list)
     static: StaticFrame | None = None
     background: np.ndarray | None = None
+    #: the frame's discontinuity: the models were reset before it
+    discontinuity: Discontinuity | None = None
 
 
 @dataclass(frozen=True)
@@ -186,6 +195,9 @@ class Pipeline:
         #: frames a lost track may coast: its stopped pixels are kept that long
         self._keep_unseen = self.tracker.max_lost
         self.frames_seen = 0
+        #: the run's frame count (``index`` of :meth:`regions_of`) at the last reset: the
+        #: warm-up counts from there
+        self._warm_from = 0
         #: the people stage's shapes read the detector's background image of each frame: it is
         #: taken right after the detector's update, in the detector's thread, and travels with
         #: the frame's Motion, so detection of the next frame can run meanwhile
@@ -197,6 +209,41 @@ class Pipeline:
         #: while the worker detects the next frame (measured faster than running head splitting
         #: in the worker, which it would slow down).
         self.sequential = False
+
+    def reset(self, discontinuity: Discontinuity) -> None:
+        """Every stage's state after ``discontinuity``, in the order a frame meets them:
+        :meth:`reset_motion` (image work), :meth:`reset_regions`, :meth:`reset_tracking`.
+        :meth:`results` calls each in the thread that runs its stage when a frame carries one."""
+        log.info("source discontinuity (%s): models and tracks reset", discontinuity.reason)
+        self.reset_motion()
+        self.reset_regions(self.frames_seen)
+        self.reset_tracking()
+
+    def reset_motion(self) -> None:
+        """New motion and dual-background models: they re-learn the scene from the next frame
+        (a model of the frames before a jump would see the whole picture change)."""
+        if self.detector is not None:
+            self.detector = create_detector(self.cfg.motion)
+        if self.static is not None:
+            self.static = DualBackground(self.static.fps, self.scale)
+
+    def reset_regions(self, index: int) -> None:
+        """The ghost filter's background afresh, and the warm-up counted again from ``index``."""
+        if self.ghosts is not None:
+            self.ghosts = GhostFilter(self.cfg.motion.ghost_ratio,
+                                      pixels=self.cfg.motion.ghost_pixels)
+        self._warm_from = index
+
+    def reset_tracking(self) -> None:
+        """The tracker ends every track (ids keep counting); the bridge and the people stage
+        forget theirs; the gap to the next frame is not a gap."""
+        self.tracker.reset()
+        if self.bridge is not None:
+            self.bridge = Bridge(self.cfg.tracker.bridge, self.cfg.tracker.bridge_frames)
+        if self.people is not None:
+            self.people.reset()
+        self._prev_tracks = ()
+        self._last_ts = None
 
     def _frame_gap(self, frame: Frame) -> int:
         """Frame periods since the previous frame, from the timestamps (wall-clock for live
@@ -238,23 +285,30 @@ class Pipeline:
 
     def motion(self, frame: Frame, small: np.ndarray | None = None) -> Motion:
         """First half of :meth:`detect`, the image work (OpenCV, which releases the GIL)."""
+        cut = frame.discontinuity
         if self._det_index is not None:
             return Motion(None, detections=_regions_from_detections(
-                self.detections, self._det_index.get(frame.index + 1)))
+                self.detections, self._det_index.get(frame.index + 1)), discontinuity=cut)
+        if cut is not None:
+            self.reset_motion()
         if small is None:
             small = self.prepare(frame)
-        raw = self.detector.apply(small, self._protect_mask(small.shape[:2]))
+        # the tracks of the frames before a jump say nothing of where this frame moves
+        protect = self._protect_mask(small.shape[:2]) if cut is None else None
+        raw = self.detector.apply(small, protect)
         if self.roi is not None:
             raw = np.bitwise_and(raw, self.roi)
         static = self.static.apply(small) if self.static is not None else None
         background = self.detector.background() if self._wants_background else None
         return Motion(clean_mask(raw, self.cfg.cleanup), raw_mask=raw, small=small, static=static,
-                      background=background)
+                      background=background, discontinuity=cut)
 
     def regions_of(self, index: int, motion: Motion) -> Detection:
         """Second half of :meth:`detect`: the mask's regions, split between heads while the
         scene is upright (``people.auto_split``)."""
         mask = motion.mask
+        if motion.discontinuity is not None:
+            self.reset_regions(index)
         if mask is None:
             return Detection(motion, None, motion.detections)
         if self.keep_stopped:
@@ -263,7 +317,7 @@ class Pipeline:
             mask, regions = self.ghosts.regions(motion.small, mask, self._find, self.scale)
         else:
             regions = self._find(mask)
-        if index < self.cfg.motion.warmup:
+        if index - self._warm_from < self.cfg.motion.warmup:
             regions = []
         heads = None
         if regions:
@@ -323,6 +377,11 @@ class Pipeline:
     def track(self, frame: Frame, det: Detection) -> FrameResult:
         """Tracking stage of one frame, after :meth:`detect` (and the people stage, when on)."""
         regions, mask, small = det.regions, det.mask, det.motion.small
+        if frame.discontinuity is not None:
+            if self.frames_seen:   # (a run's first frame has nothing to reset)
+                log.info("frame %d: source discontinuity (%s): models and tracks reset",
+                         frame.index, frame.discontinuity.reason)
+            self.reset_tracking()
         people = PeopleFrame(heads=det.heads) if det.heads is not None else None
         if self.people is not None:
             background = det.motion.background
@@ -352,7 +411,8 @@ class Pipeline:
                            mask=mask, regions=tuple(regions), tracks=tuple(tracks),
                            raw_mask=det.motion.raw_mask, people=people,
                            earlier=tuple(self.tracker.confirmed_earlier),
-                           static=det.motion.static if self.report_static else None)
+                           static=det.motion.static if self.report_static else None,
+                           discontinuity=frame.discontinuity)
 
     def process(self, frame: Frame) -> FrameResult:
         """Both stages of one frame."""

@@ -24,6 +24,8 @@ __all__ = [
     "TrackState",
     "Track",
     "Frame",
+    "Discontinuity",
+    "DISCONTINUITY_REASONS",
     "FrameResult",
     "PeopleFrame",
     "Annotations",
@@ -170,6 +172,35 @@ class Track:
             raise ValueError(f"track id must be >= 1, got id={self.id}")
 
 
+#: why a source's frames jump: ``loop`` (a file played again from its start), ``reconnect`` (a
+#: live source back after a gap), ``seek`` (the source was positioned at a start frame)
+DISCONTINUITY_REASONS = ("loop", "reconnect", "seek")
+
+
+@dataclass(frozen=True)
+class Discontinuity:
+    """The mark of the first frame after a jump in a source's picture or time: what the
+    stages learnt from the frames before it (background models, tracks, the analytics' stays
+    and zone occupants) no longer applies (:meth:`motiontrack.pipeline.Pipeline.reset`).
+
+    Attributes
+    ----------
+    reason : str
+        One of :data:`DISCONTINUITY_REASONS`.
+    """
+
+    reason: str
+
+    def __post_init__(self) -> None:
+        if self.reason not in DISCONTINUITY_REASONS:
+            raise ValueError(f"discontinuity reason must be one of "
+                             f"{', '.join(DISCONTINUITY_REASONS)}, got {self.reason!r}")
+
+    def to_json(self, frame: int) -> dict:
+        """The record of ``events.jsonl`` and of serve's event stream, at 1-based ``frame``."""
+        return {"type": "discontinuity", "reason": self.reason, "frame": int(frame)}
+
+
 @dataclass(frozen=True)
 class Frame:
     """One decoded frame.
@@ -182,11 +213,14 @@ class Frame:
         ``(H, W, 3) uint8`` BGR (or ``(H, W) uint8`` gray).
     timestamp : float
         Seconds: the source's position for files, wall-clock time for live sources.
+    discontinuity : Discontinuity or None
+        Set on the first frame after a jump (a loop, a reconnection, a seek).
     """
 
     index: int
     image: np.ndarray = field(repr=False)
     timestamp: float = 0.0
+    discontinuity: Discontinuity | None = None
 
     def __post_init__(self) -> None:
         if self.index < 0:
@@ -235,7 +269,8 @@ class FrameResult:
     ran; ``static`` the recently stopped objects of the dual background, when the run asked
     for them (a scene with ``[abandoned]``). ``earlier`` holds the tracks confirmed in this frame at the earlier frames where they
     were still tentative, as ``(frame index, Track)`` pairs (empty unless ``tracker.backfill``
-    applies to the run).
+    applies to the run). ``discontinuity`` is the frame's :attr:`Frame.discontinuity`: the
+    stages were reset before it.
     """
 
     index: int
@@ -249,6 +284,7 @@ class FrameResult:
     earlier: tuple[tuple[int, Track], ...] = field(default=(), repr=False)
     scene: SceneFrame | None = field(default=None, repr=False)
     static: StaticFrame | None = field(default=None, repr=False)
+    discontinuity: Discontinuity | None = None
 
     def reported(self) -> list[tuple[int, Track]]:
         """``(frame index, track)`` rows this frame adds to a tracks file: its tracks, then the
@@ -639,12 +675,15 @@ class SceneFrame:
         Crossings of each line so far.
     occupancy : mapping of zone name → int
         Tracks inside each zone after this frame.
+    discontinuity : Discontinuity or None
+        Set when the analytics' per-track state was reset before this frame.
     """
 
     frame: int
     events: tuple[Event, ...] = ()
     line_counts: Mapping[str, tuple[int, int]] = field(default_factory=dict)
     occupancy: Mapping[str, int] = field(default_factory=dict)
+    discontinuity: Discontinuity | None = None
 
 
 @dataclass(frozen=True)

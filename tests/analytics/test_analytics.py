@@ -8,7 +8,7 @@ import pytest
 from motiontrack.analytics import Analytics, parse_scene
 from motiontrack.analytics.geometry import (points_in_polygon, polygon_is_simple,
                                             segments_intersect, side)
-from motiontrack.types import Box, Track, TrackState
+from motiontrack.types import Box, Discontinuity, Track, TrackState
 
 FPS = 10.0  # t = (frame - 1) / 10
 
@@ -214,6 +214,27 @@ def test_frames_must_increase():
     an.step(2, [], np.zeros((0, 4)))
     with pytest.raises(ValueError, match="increasing"):
         an.step(2, [], np.zeros((0, 4)))
+
+
+def test_a_discontinuity_drops_every_track_without_events_and_keeps_the_totals():
+    scene = {"line": [GATE], "zone": [U_ZONE], "stationary": {"after_s": 0.2, "radius_px": 3}}
+    an = Analytics(parse_scene(scene), FPS)
+    an.step(1, [1, 2], [foot(20, 50), foot(150, 80)])      # 1 in u; 2 above the gate
+    an.step(2, [1, 2], [foot(20, 50), foot(150, 120)])     # 2 crosses in
+    fr = an.step(3, [1], [foot(20, 50)])                   # 1 still for 2 frames: stationary
+    assert [e.type for e in fr.events] == ["stationary_start"] and fr.occupancy == {"u": 1}
+    # frame 4 comes after a loop: track 1 (the same id, now at the gate's far end) is a new
+    # track; its stay, its zone membership and track 2 are gone without stationary_end,
+    # zone_exit or a crossing, and the zone is empty; the gate keeps its total
+    fr = an.step(4, [1], [foot(150, 80)], discontinuity=Discontinuity("loop"))
+    assert fr.events == () and fr.discontinuity == Discontinuity("loop")
+    assert fr.occupancy == {"u": 0} and fr.line_counts == {"gate": (1, 0)}
+    fr = an.step(5, [1], [foot(20, 50)])                   # back in u: a new entry
+    assert [e.type for e in fr.events] == ["zone_enter"] and fr.discontinuity is None
+    s = an.summary()
+    assert s["discontinuities"] == {"loop": 1} and s["lines"] == {"gate": {"in": 1, "out": 0}}
+    assert s["zones"]["u"]["enters"] == 2 and s["zones"]["u"]["exits"] == 0
+    assert s["stationary_at_end"] == 0
 
 
 # ------------------------------------------------------------------------ stationary and speed

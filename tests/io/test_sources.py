@@ -339,3 +339,23 @@ def test_array_source_and_bad_arguments():
     assert len(list(src)) == 2
     with pytest.raises(SourceError, match="start must be >= 0"):
         ArraySource([np.zeros((4, 4), np.uint8)], start=-1)
+
+
+def test_live_source_marks_the_first_frame_after_each_reconnection():
+    # 3 frames per connection, 8 frames: connections give frames 0-2, 3-5, 6-7; frames 3 and
+    # 6 are the first after a reconnection, frame 0 the first of all (no jump before it)
+    it = iter([True] * 10)
+    src = LiveSource(0, max_frames=8, backoff=0.0, reset_frames=2,
+                     opener=lambda t: FakeCapture([], it, 3), sleep=lambda s: None,
+                     clock=itertools.count().__next__)
+    marks = [(f.index, f.discontinuity.reason) for f in src if f.discontinuity is not None]
+    assert marks == [(3, "reconnect"), (6, "reconnect")]
+
+
+@pytest.mark.parametrize("start, marked", [(0, []), (5, [(5, "seek")])])
+def test_sources_mark_a_start_frame_as_a_seek(start, marked):
+    images = [np.full((8, 8, 3), i, np.uint8) for i in range(10)]
+    for src in (ArraySource(images, start=start), open_source("synth:walker?n_frames=10&width=96"
+                                                              "&height=72", start=start)):
+        got = [(f.index, f.discontinuity.reason) for f in src if f.discontinuity is not None]
+        assert got == marked

@@ -225,6 +225,57 @@ def test_scene_put_is_validated_and_keeps_other_settings(tmp_path):
         assert c.put("/api/cameras/plain/scene", json=new).status_code == 409
 
 
+#: a scene written by hand: comments, blank lines, aligned values, keys in its own order
+HAND_SCENE = """\
+# Gate camera, main entrance.
+anchor = "bottom_center"    # feet on the ground
+forget_s = 3.0
+
+# -- counting ------------------------------------------------------------
+[[line]]
+name   = "gate"                         # the turnstiles
+points = [[100, 400], [540, 400]]       # left to right: in = walking down
+
+[[line]]
+name   = "side-door"
+points = [[600, 100], [600, 300]]
+
+# -- waiting -------------------------------------------------------------
+[[zone]]
+name     = "queue"
+polygon  = [[80, 300], [300, 300], [300, 470], [80, 470]]
+loiter_s = 30.0                         # half a minute is loitering
+
+[stationary]
+after_s   = 10.0
+radius_px = 12
+"""
+
+
+def test_saving_an_edited_scene_keeps_the_hand_written_rest_byte_for_byte(tmp_path):
+    from motiontrack.serve.scenes import SceneFiles
+
+    scene = tmp_path / "scene.toml"
+    scene.write_text(HAND_SCENE)
+    files = SceneFiles({"cam": scene})
+    view = files.read("cam")
+    view["lines"][0]["points"] = [[100, 410], [540, 410]]      # the gate moved 10 px down
+    files.write("cam", view)
+    expected = HAND_SCENE.replace("points = [[100, 400], [540, 400]]       #",
+                                  "points = [[100, 410], [540, 410]]       #")
+    assert expected != HAND_SCENE and scene.read_text() == expected
+    # a line added and the side door removed: the other tables and every comment stay
+    view["lines"] = [view["lines"][0], {"name": "exit", "points": [[0, 0], [10, 10]]}]
+    files.write("cam", view)
+    text = scene.read_text()
+    assert "side-door" not in text and 'name = "exit"' in text
+    for kept in ("# Gate camera, main entrance.", "# feet on the ground", "# the turnstiles",
+                 "loiter_s = 30.0                         # half a minute is loitering",
+                 "[stationary]\nafter_s   = 10.0\nradius_px = 12\n"):
+        assert kept in text
+    assert [ln["name"] for ln in read_toml(scene)["line"]] == ["gate", "exit"]
+
+
 def test_scene_edits_in_metres_are_checked_with_the_cameras_calibration(tmp_path, data):
     from motiontrack.calibrate import load_camera
     from motiontrack.serve.scenes import SceneFiles, check_scene_files

@@ -35,7 +35,7 @@ pytestmark = pytest.mark.skipif(not _headless(), reason="OpenCV's GUI build show
 class Track:
     """``motiontrack track SOURCE --show --port P`` in a subprocess without a display."""
 
-    def __init__(self, tmp_path: Path, source: str) -> None:
+    def __init__(self, tmp_path: Path, source: str, *more: str) -> None:
         self.port, self.out = free_port(), tmp_path / "run"
         self.err = open(tmp_path / "stderr.txt", "w+")
         env = {**os.environ, "PYTHONUNBUFFERED": "1"}
@@ -43,7 +43,7 @@ class Track:
             env.pop(k, None)
         self.proc = subprocess.Popen(
             [sys.executable, "-m", "motiontrack", "track", source, "--show", "--port",
-             str(self.port), "--no-video", "-o", str(self.out)],
+             str(self.port), "--no-video", "-o", str(self.out), *more],
             stdout=subprocess.PIPE, stderr=self.err, env=env, text=True)
         self.client = httpx.Client(base_url=f"http://127.0.0.1:{self.port}", timeout=5)
 
@@ -85,8 +85,8 @@ class Track:
 def track(tmp_path):
     runs = []
 
-    def start(source: str) -> Track:
-        runs.append(Track(tmp_path, source))
+    def start(source: str, *more: str) -> Track:
+        runs.append(Track(tmp_path, source, *more))
         return runs[-1]
 
     yield start
@@ -132,3 +132,68 @@ def test_headless_show_keeps_the_page_after_the_run_until_ctrl_c(track):
     assert "frames    40" in out
     summary = json.loads((t.out / "summary.json").read_text())
     assert (summary["status"], summary["frames"]) == ("complete", 40)
+
+
+#: the walker's scene: a line across its path, a zone over the right half
+WALKER_SCENE = """\
+# the walker's street
+[[line]]
+name = "middle"   # halfway
+points = [[320, 0], [320, 480]]
+
+[[zone]]
+name = "right"
+polygon = [[330, 0], [640, 0], [640, 480], [330, 480]]
+"""
+
+
+@pytest.mark.slow
+def test_headless_show_plays_a_file_at_its_rate_and_keeps_page_and_scene_after_it(
+        track, tmp_path):
+    scene = tmp_path / "scene.toml"
+    scene.write_text(WALKER_SCENE)
+    # 50 frames at the walker's 25 fps: two seconds shown, not the fraction of a second it
+    # takes to process them
+    t = track("synth:walker?n_frames=50", "--scene", str(scene))
+    t.poll(lambda: "run finished" in t.stderr(), 60, "the run finished")
+    summary = json.loads((t.out / "summary.json").read_text())
+    assert summary["frames"] == 50 and summary["seconds"] >= 49 / 25 - 0.05
+    cam = t.camera()
+    assert (cam["status"], cam["scene"]) == ("ended", True)
+    name = cam["name"]
+    events = t.client.get(f"/api/cameras/{name}/events").json()
+    assert [e["type"] for e in events] == ["zone_enter"]
+    # the page shows the finished run: the last picture as a still, the events in the feed
+    _page_after_the_run(t, name, len(events))
+    # the editor edits the run's scene file: the line moves, the comments stay
+    got = t.client.get(f"/api/cameras/{name}/scene")
+    assert got.status_code == 200 and got.json()["lines"][0]["name"] == "middle"
+    edit = {**got.json()}
+    edit["lines"] = [{"name": "middle", "points": [[300, 0], [300, 480]]}]
+    assert t.client.put(f"/api/cameras/{name}/scene", json=edit).status_code == 200
+    assert scene.read_text() == WALKER_SCENE.replace("[[320, 0], [320, 480]]",
+                                                     "[[300, 0], [300, 480]]")
+    code, _ = t.interrupt()
+    assert code == 0, t.stderr()
+
+
+def _page_after_the_run(t: Track, name: str, n_events: int) -> None:
+    """The page opened after the run: its tile holds a picture and its feed the events."""
+    from helpers.browser import chromium
+
+    driver = chromium("1200,900")
+    try:
+        driver.get(f"http://127.0.0.1:{t.port}/")
+        t.poll(lambda: driver.execute_script(
+            "const img = document.querySelector(`[data-testid=\"camera-img-${arguments[0]}\"]`);"
+            "return img && img.complete && img.naturalWidth > 0;", name), 15,
+            "the tile's picture")
+        t.poll(lambda: len(driver.find_elements("css selector", '[data-testid="event"]'))
+               == n_events, 15, "the run's events in the feed")
+        shot = driver.find_element("css selector", f'[data-testid="camera-img-{name}"]')
+        img = cv2.imdecode(np.frombuffer(shot.screenshot_as_png, np.uint8), cv2.IMREAD_COLOR)
+        assert img.mean() > 20   # the walker's street, not a black tile
+        errors = [e for e in driver.get_log("browser") if e["level"] == "SEVERE"]
+        assert not errors, errors
+    finally:
+        driver.quit()

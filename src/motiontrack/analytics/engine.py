@@ -8,7 +8,11 @@ frame's table is built (anchors, ground positions, each track's row and its prev
 :class:`~.rule.FrameTable`), every rule steps on it, and the frame's events are ordered by
 track, then by rule and type (:meth:`.rule.RuleRegistry.event_order`), then by line or zone.
 The built-in rules: line crossings, zone membership (enter, exit, loiter), stationary stays,
-abandoned objects, speeding (:mod:`.rules`). Events carry the frame, its time
+abandoned objects, speeding (:mod:`.rules`). A frame marked with a
+:class:`~motiontrack.types.Discontinuity` (the source looped, reconnected or was positioned at
+a start frame) first drops every track's state (:meth:`Analytics.reset`: stays, zone occupants,
+static objects; totals and counts stay), without events, and its ``SceneFrame`` carries the
+mark for the event stream. Events carry the frame, its time
 ``(frame - 1) / fps``, the track's anchor in pixels and, with a camera, its foot point on the
 ground plane in metres.
 """
@@ -22,7 +26,7 @@ import numpy as np
 
 from ..calibrate.measure import world_positions
 from ..errors import ConfigError
-from ..types import Event, SceneFrame, StaticFrame
+from ..types import Discontinuity, Event, SceneFrame, StaticFrame
 from .objects import StaticObjects
 from .rule import FrameTable, Rule, RuleContext, TrackMemory
 from .rules import RULES
@@ -90,6 +94,8 @@ class Analytics:
         self._counts: dict[str, Any] | None = None
         self.frames = 0
         self.by_type: Counter[str] = Counter()
+        #: discontinuities seen, by reason (``summary.json``)
+        self.resets: Counter[str] = Counter()
 
     @property
     def wants_static(self) -> bool:
@@ -107,16 +113,19 @@ class Analytics:
                               [(t.box.x, t.box.y, t.box.w, t.box.h) for t in tracks],
                               static).events)
 
-    def step(self, frame: int, ids: Any, boxes: Any,
-             static: StaticFrame | None = None) -> SceneFrame:
+    def step(self, frame: int, ids: Any, boxes: Any, static: StaticFrame | None = None,
+             discontinuity: Discontinuity | None = None) -> SceneFrame:
         """One frame from columns: ``ids`` (N,) int and ``boxes`` (N, 4) ``x, y, w, h``
         pixels, and the frame's static objects (``FrameResult.static``; the ``abandoned`` rule
         needs them). Frames must come in increasing order; a frame without tracks is a step too
-        (it is how tracks are forgotten and occupancy averaged)."""
+        (it is how tracks are forgotten and occupancy averaged). A ``discontinuity`` resets
+        (:meth:`reset`) before the frame."""
         frame = int(frame)
         if frame < 1 or frame <= self.last_frame:
             raise ValueError(f"analytics frames must be 1-based and increasing: frame {frame} "
                              f"after {self.last_frame}")
+        if discontinuity is not None:
+            self.reset(discontinuity)
         ids, boxes = _first_of_each(np.asarray(ids, dtype=np.int64).reshape(-1),
                                     np.asarray(boxes, dtype=np.float64).reshape(-1, 4))
         gone = [] if self.objects is None else self.objects.step(frame, ids, boxes, static)
@@ -134,7 +143,21 @@ class Analytics:
             for rule in self.rules.values():
                 self._counts.update(rule.counts())
         return SceneFrame(frame, tuple(events), dict(self._counts["line_counts"]),
-                          dict(self._counts["occupancy"]))
+                          dict(self._counts["occupancy"]), discontinuity)
+
+    def reset(self, discontinuity: Discontinuity) -> None:
+        """Forget every track and static object, and each rule's per-track state (stays, zone
+        occupants, speed windows), without events: after a discontinuity the tracks of the
+        frames before it are gone, not ended in place. Line and zone totals are kept; track
+        and object ids keep counting."""
+        self.resets[discontinuity.reason] += 1
+        self.tracks.clear()
+        self._rows.free = list(range(len(self._rows.point) - 1, -1, -1))
+        if self.objects is not None:
+            self.objects.reset()
+        for rule in self.rules.values():
+            rule.reset()
+        self._counts = None
 
     def finish(self, last_frame: int | None = None) -> list[Event]:
         """Events at the end of the input: none. A track still in a zone or stationary has not
@@ -205,6 +228,7 @@ class Analytics:
         out: dict[str, Any] = {
             "scene": self.scene.source, "fps": self.fps, "frames": self.frames,
             "events": {t: int(self.by_type.get(t, 0)) for t in self._types},
+            "discontinuities": dict(self.resets),
         }
         for r in RULES.ordered():
             rule = self.rules.get(r.name)

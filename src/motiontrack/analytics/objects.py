@@ -113,6 +113,11 @@ class StaticObjects:
             self.objects = [o for o in self.objects if frame - o.last_seen <= self.forget_frames]
         return gone
 
+    def reset(self) -> None:
+        """Forget every object and the tracks' history (object ids keep counting)."""
+        self.objects = []
+        self.history.clear()
+
     def object_id(self, o: TrackedObject, ids: np.ndarray, boxes: np.ndarray) -> int:
         """The object's event id, fixed the first time it is asked for: a track lying on the
         object (not its owner), else a new object id."""

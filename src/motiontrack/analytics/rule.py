@@ -240,6 +240,10 @@ class Rule(Protocol):
     def forget(self, frame: int, tid: int, state: TrackMemory) -> list[Event]:
         """The events of a track forgotten in ``frame`` (unseen for ``forget_s``)."""
 
+    def reset(self) -> None:
+        """Drop every track's state after a discontinuity of the source (no events: the tracks
+        neither left nor ended; the engine forgets them all), keeping the totals."""
+
     def counts(self) -> dict[str, Any]:
         """``SceneFrame`` entries (``line_counts``, ``occupancy``) now."""
 
@@ -302,6 +306,9 @@ class BaseRule:
 
     def forget(self, frame: int, tid: int, state: TrackMemory) -> list[Event]:
         return []
+
+    def reset(self) -> None:
+        """Nothing kept by track id: the engine's new rows clear the :class:`Columns`."""
 
     def counts(self) -> dict[str, Any]:
         return {}

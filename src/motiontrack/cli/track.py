@@ -51,9 +51,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--bin-s", type=float, default=60.0,
                    help="with --scene: seconds per row of counts.csv (default 60)")
     p.add_argument("--show", action="store_true",
-                   help="live view: a window (q quits, space pauses) with OpenCV's GUI build; with "
-                        "the headless build the serve page of this source on 127.0.0.1 "
-                        "(docs/serve.md), kept open after the run until Ctrl-C")
+                   help="live view, a file played at its own frame rate: a window (q quits, "
+                        "space pauses) with OpenCV's GUI build; with the headless build the serve "
+                        "page of this source on 127.0.0.1 (docs/serve.md; its editor edits "
+                        "--scene), kept open after the run until Ctrl-C")
     p.add_argument("--port", type=int, default=0,
                    help="with --show and headless OpenCV: the page's port (default: a free one)")
     add_sink_options(p, "the source's name, as the run folder's")
@@ -93,7 +94,7 @@ def _live_view(args):
     except ImportError as exc:
         raise ConfigError(f"--show needs a GUI build of OpenCV or the web extras ({exc.name} is "
                           "missing): pip install 'motiontrack[serve]'") from None
-    view = LiveView(view_name(source_name(args.source)), port=args.port)
+    view = LiveView(view_name(source_name(args.source)), port=args.port, scene=args.scene)
     print(f"live view: {view.url}  (Ctrl-C stops)", file=sys.stderr, flush=True)
     view.open_browser()
     return view
@@ -143,7 +144,7 @@ def cmd_track(args) -> int:
                         detections=det, show=_viewer() if window else None, save=args.save,
                         mask_images=args.mask_images, scoring=args.scoring, scene=args.scene,
                         bin_s=args.bin_s, sinks=sinks, camera_name=args.camera_name,
-                        sink_settings=settings,
+                        sink_settings=settings, pace=args.show,
                         writers=[view.writer()] if view else ())
         log.info("source %s", job.info.describe())
         with frame_loop(job.expected_frames()) as loop:

@@ -2,7 +2,8 @@
 
 The header is :func:`motiontrack.types.events_header` (``schema``, ``version``, ``fps``,
 ``source``, ``scene``); each further non-empty line is one :meth:`Event.to_json` object
-(``docs/analytics.md``). Reading checks the schema name and version and every event, and names
+(``docs/analytics.md``), or a ``{"type": "discontinuity", "reason", "frame"}`` record where the
+source jumped (:class:`~motiontrack.types.Discontinuity`). Reading checks the schema name and version and every event, and names
 the file and line of the first problem in one :class:`~motiontrack.errors.InputError`.
 """
 
@@ -15,7 +16,7 @@ from pathlib import Path
 from typing import Iterable, Mapping
 
 from ..errors import InputError, excerpt, location
-from ..types import EVENTS_SCHEMA, EVENTS_SCHEMA_VERSION, Event, events_header
+from ..types import EVENTS_SCHEMA, EVENTS_SCHEMA_VERSION, Discontinuity, Event, events_header
 from .atomic import atomic_write_text
 from .textfile import read_text
 
@@ -28,10 +29,12 @@ MAX_EVENTS_BYTES = 512 * 2**20
 
 @dataclass(frozen=True)
 class EventsFile:
-    """An events file's header and events (in file order)."""
+    """An events file's header and events (in file order), and its discontinuity records as
+    ``(frame, Discontinuity)``."""
 
     header: Mapping = field(default_factory=dict)
     events: tuple[Event, ...] = ()
+    discontinuities: tuple[tuple[int, Discontinuity], ...] = ()
 
     @property
     def fps(self) -> float:
@@ -99,6 +102,7 @@ def read_events(path: str | Path) -> EventsFile:
     text = read_text(p, "events file", MAX_EVENTS_BYTES, encoding="utf-8")
     header: dict | None = None
     events: list[Event] = []
+    cuts: list[tuple[int, Discontinuity]] = []
     for number, line in enumerate(text.splitlines(), 1):
         if not line.strip():
             continue
@@ -108,12 +112,26 @@ def read_events(path: str | Path) -> EventsFile:
             header = _check_header(obj, where)
             continue
         try:
-            events.append(Event.from_json(obj))
+            if isinstance(obj, dict) and obj.get("type") == "discontinuity":
+                cuts.append(_discontinuity(obj))
+            else:
+                events.append(Event.from_json(obj))
         except (ValueError, TypeError) as exc:
             raise InputError(f"{where}: {exc}") from None
     if header is None:
         raise InputError(f"events file {location(p)} is empty: it needs at least the header line")
-    return EventsFile(header, tuple(events))
+    return EventsFile(header, tuple(events), tuple(cuts))
+
+
+def _discontinuity(obj: dict) -> tuple[int, Discontinuity]:
+    """A discontinuity record: ``{"type": "discontinuity", "reason": ..., "frame": N}``."""
+    extra = sorted(set(obj) - {"type", "reason", "frame"})
+    if extra:
+        raise ValueError(f"discontinuity record has unknown keys {', '.join(extra)}")
+    frame = obj.get("frame")
+    if isinstance(frame, bool) or not isinstance(frame, int) or frame < 1:
+        raise ValueError(f"discontinuity frame must be an integer >= 1, got {frame!r}")
+    return frame, Discontinuity(obj.get("reason"))
 
 
 def format_events(events: Iterable[Event], header: Mapping) -> str:

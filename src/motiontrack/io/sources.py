@@ -28,7 +28,7 @@ import numpy as np
 
 from ..errors import ConfigError, InputError, SourceError
 from ..registry import Registry
-from ..types import Annotations, Frame
+from ..types import Annotations, Discontinuity, Frame
 
 log = logging.getLogger(__name__)
 
@@ -103,6 +103,12 @@ class Source:
     def ground_truth(self) -> Annotations | None:
         """The exact ground truth of a source that knows it (synthetic scenes), else None."""
         return None
+
+    def seek_mark(self, index: int) -> Discontinuity | None:
+        """The :class:`~motiontrack.types.Discontinuity` of frame ``index``: ``seek`` on the
+        first frame of a source positioned at ``start > 0``, else None. Every source marks its
+        first frame with it."""
+        return Discontinuity("seek") if self.start > 0 and index == self.start else None
 
     def set_fps(self, fps: float) -> None:
         """Take ``fps`` as the frame rate instead of the one the source states (``source.fps``):
@@ -298,7 +304,8 @@ class VideoFileSource(_DecodedAhead):
                     if produced == 0 and self.start > 0:   # the file's length was not known
                         raise _start_past_end(self.start, str(self.path), index)
                     break
-                yield Frame(index=index, image=img, timestamp=index / fps)
+                yield Frame(index=index, image=img, timestamp=index / fps,
+                            discontinuity=self.seek_mark(index))
                 index += 1
                 produced += 1
             expected = self.info.frame_count
@@ -388,7 +395,8 @@ class LiveSource(Source):
     A stream whose length OpenCV knows (frame count > 0: a video file served over HTTP) is a file,
     not live: the end of the stream is the end of the source (before the announced length it is
     *truncated*), nothing reconnects, and frames carry ``index / fps`` timestamps. Live frames carry
-    wall-clock timestamps so a tracker can see the gap of a reconnection.
+    wall-clock timestamps, and the first frame after a reconnection a ``reconnect``
+    :class:`~motiontrack.types.Discontinuity`: the stages reset what they learnt before the gap.
 
     Stopping: reading, reconnecting and the back-off waits run in a reader thread that reads one
     frame each time the consumer asks for one, while the consumer waits in slices of ``_POLL``
@@ -428,6 +436,9 @@ class LiveSource(Source):
         self._what = f"camera {target}" if isinstance(target, int) else f"stream {target}"
         #: reconnections performed so far
         self.reconnects = 0
+        #: set by the reader when it reconnected for the image it hands over next: that frame
+        #: carries a ``reconnect`` :class:`~motiontrack.types.Discontinuity`
+        self._reconnected = False
         self._attempts = 0       # reconnection attempts since the stream was last stable
         self._delay = backoff    # the next back-off wait (s)
         self._stable = 0         # frames read since the last reconnection
@@ -468,9 +479,14 @@ class LiveSource(Source):
                             and not self._stopping()):
                         raise _start_past_end(self.start, self._what, index)
                     return
+                # the reader sets _reconnected before its reply and reads nothing until the
+                # next request: the flag belongs to this image
+                mark, self._reconnected = self._reconnected, False
                 if index >= self.start:
                     stamp = self._clock() if self.info.live else index / fps
-                    yield Frame(index=index, image=img, timestamp=stamp)
+                    cut = (Discontinuity("reconnect") if mark and produced
+                           else self.seek_mark(index) if produced == 0 else None)
+                    yield Frame(index=index, image=img, timestamp=stamp, discontinuity=cut)
                     produced += 1
                 index += 1
         finally:
@@ -595,6 +611,7 @@ class LiveSource(Source):
                 self._cap = cap
                 self.reconnects += 1
                 self._stable = 0
+                self._reconnected = True
                 return True
             if self._stopping():
                 return False
@@ -690,7 +707,8 @@ class ImageSequenceSource(_DecodedAhead):
             if img.shape[:2] != (self.info.height, self.info.width):
                 raise SourceError(f"image {self.files[index]} is {img.shape[1]}x{img.shape[0]}, "
                                   f"expected {self.info.width}x{self.info.height} like the first")
-            yield Frame(index=index, image=img, timestamp=index / fps)
+            yield Frame(index=index, image=img, timestamp=index / fps,
+                        discontinuity=self.seek_mark(index))
 
 
 class ArraySource(Source):
@@ -708,7 +726,8 @@ class ArraySource(Source):
     def __iter__(self) -> Iterator[Frame]:
         end = len(self.images) if not self.max_frames else min(len(self.images), self.start + self.max_frames)
         for i in range(self.start, end):
-            yield Frame(index=i, image=np.asarray(self.images[i]), timestamp=i / (self.info.fps or 25.0))
+            yield Frame(index=i, image=np.asarray(self.images[i]),
+                        timestamp=i / (self.info.fps or 25.0), discontinuity=self.seek_mark(i))
 
 
 def open_source(spec: Any, start: int = 0, max_frames: int = 0, **live_options: Any) -> Source:

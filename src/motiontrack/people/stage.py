@@ -51,6 +51,13 @@ class PeopleStage:
         self._hyp_active: set[int] = set()
         self._hog_cache: list[Region] = []
 
+    def reset(self) -> None:
+        """Forget the people followed so far (after a discontinuity of the source)."""
+        if self.shape_tracker is not None:
+            self.shape_tracker.reset()
+        self._hyp_active = set()
+        self._hog_cache = []
+
     @property
     def needs_background(self) -> bool:
         """Whether :meth:`process` reads the motion detector's background image of the frame

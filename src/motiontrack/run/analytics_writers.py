@@ -28,7 +28,8 @@ __all__ = ["EventsWriter", "CountsWriter"]
 
 class EventsWriter(Writer):
     """``events.jsonl``: a header object (schema, version, fps, source, scene), then one JSON
-    object per event in frame order (``docs/analytics.md``)."""
+    object per event in frame order (``docs/analytics.md``); a frame after a discontinuity of
+    the source is preceded by its ``{"type": "discontinuity", "reason", "frame"}`` record."""
 
     def __init__(self, out: Path, source: str = "", scene: str = "") -> None:
         self.paths = {"events": RunFolder(out).events}
@@ -42,6 +43,8 @@ class EventsWriter(Writer):
 
     def write(self, result: FrameResult) -> None:
         frame = result.scene
+        if frame is not None and frame.discontinuity is not None:
+            self._file.write(json.dumps(frame.discontinuity.to_json(frame.frame)) + "\n")
         if frame is not None and frame.events:
             self._file.write("".join(json.dumps(e.to_json()) + "\n" for e in frame.events))
             self.count += len(frame.events)

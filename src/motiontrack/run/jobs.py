@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any, Callable, Iterable, Sequence
 from ..config import PipelineConfig, SourceConfig, save_config
 from ..errors import ConfigError
 from ..evaluate.scoring import DEFAULT_SCORING, ignores_zero_marked
+from ..io.pacing import PacedSource
 from ..io.sources import Source
 from ..imaging import scaled_size
 from ..io.video import extension_for
@@ -60,7 +61,7 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
               scoring: str = DEFAULT_SCORING, scene: str | Path | None = None,
               bin_s: float = 60.0, sinks: Sequence[Any] = (),
               camera_name: str | None = None, sink_settings: Any = None,
-              writers: Sequence[Writer] = ()) -> Job:
+              writers: Sequence[Writer] = (), pace: bool = False) -> Job:
     """``motiontrack track``: ``tracks.txt``, the annotated video, the mask video and the
     intermediate movies as ``cfg.output`` and ``save`` ask, the mask of every frame as
     ``bin%06d.png`` in the folder ``mask_images``, the live view with ``show``, ``gt.txt`` and
@@ -72,7 +73,9 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
     targets, :mod:`motiontrack.io.sinks`) receive every event too, named ``camera_name``
     (default: the source's name, :func:`~motiontrack.run.folders.source_name`), sent as
     ``sink_settings`` say (a :class:`~motiontrack.io.sinks.SinkSettings`). ``writers``
-    are more outputs, given every frame after the others (``serve``'s live view)."""
+    are more outputs, given every frame after the others (``serve``'s live view). ``pace``
+    plays a recorded source at its own frame rate (:class:`~motiontrack.io.pacing.PacedSource`:
+    ``track --show``, someone is watching)."""
     out = Path(out_dir)
     ignores_zero_marked(scoring)   # an unknown name fails before the source opens
     camera_name = _sink_camera_name(sinks, scene, camera_name, source)
@@ -91,6 +94,8 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
         camera = load_camera(cfg.measure.camera)
 
     def build(src: Source) -> Job:
+        if pace:
+            src = PacedSource(src)
         truth = gt if gt is not None else src.ground_truth()
         external = detections is not None
         fitted = None

@@ -88,7 +88,7 @@ class TrackProcessor:
             boxes = np.array([float(f"{v:.2f}") for t in result.tracks
                               for v in t.box.as_array()]).reshape(-1, 4)
             scene = self.analytics.step(result.index + 1, [t.id for t in result.tracks], boxes,
-                                        result.static)
+                                        result.static, result.discontinuity)
             yield replace(result, scene=scene)
 
     def annotate(self, result: FrameResult) -> np.ndarray:

@@ -1,8 +1,12 @@
 """The scene files the web editor reads and writes: only those the cameras file names.
 
 The editor sees a scene as ``{"lines": [{"name", "points"}], "zones": [{"name", "polygon",
-"loiter_s"?}]}`` (pixels). Saving replaces the file's ``[[line]]`` and ``[[zone]]`` tables and
-keeps its other settings (``anchor``, ``[stationary]``...); the result is validated as
+"loiter_s"?}]}`` (pixels). Saving changes only what was edited: the file is read as a TOML
+document (``tomlkit``) that keeps its comments, order and formatting; a line or zone whose
+name the file already has keeps its table, with only the keys whose values changed rewritten
+(each keeping its trailing comment), new ones are appended, removed ones dropped, and the
+tables are reordered only when the editor's order differs. Everything else (``anchor``,
+``[stationary]``, comments...) stays byte for byte. The result is validated as
 ``track --scene`` would read it (:func:`~motiontrack.analytics.parse_scene`, with the camera's
 calibration when the cameras file gives one, so ``world`` geometry in metres is checked as the
 camera will project it) and written under a temporary name then renamed, so the camera, which
@@ -16,12 +20,15 @@ import threading
 from pathlib import Path
 from typing import Any, Mapping
 
-import tomli_w
+import tomlkit
+from tomlkit.exceptions import TOMLKitError
+from tomlkit.items import AoT, Item, Table
 
 from ..analytics import parse_scene
 from ..errors import ConfigError, InputError
 from ..io.atomic import atomic_write_text
-from ..io.tomlfile import parse_toml, read_toml
+from ..io.textfile import read_text
+from ..io.tomlfile import MAX_TOML_BYTES, parse_toml, read_toml
 
 __all__ = ["SceneFiles", "check_scene_files"]
 
@@ -37,6 +44,73 @@ def _clean(v: Any, where: str) -> Any:
     if isinstance(v, float) and not math.isfinite(v):
         raise ConfigError(f"{where} must be a finite number")
     return v
+
+
+def _value(new: Any, old: Item | None = None) -> Item:
+    """``new`` as a TOML item, with the comment and spacing of the item ``old`` it replaces."""
+    item = tomlkit.item(new)
+    if old is not None:
+        for attr in ("indent", "comment_ws", "comment", "trail"):
+            setattr(item.trivia, attr, getattr(old.trivia, attr))
+    return item
+
+
+def _update(table: Table, values: Mapping[str, Any]) -> None:
+    """``table`` holding exactly ``values``: keys gone are removed, keys whose value changed
+    rewritten in place, new keys appended; unchanged keys are not touched."""
+    for key in [k for k in table if k not in values]:
+        del table[key]
+    for key, v in values.items():
+        old = table.get(key)
+        if old is None:
+            table[key] = _value(v)
+        elif not (isinstance(old, Item) and old.unwrap() == v):
+            table[key] = _value(v, old if isinstance(old, Item) else None)
+
+
+def _merge_tables(doc: tomlkit.TOMLDocument, key: str, items: list[dict]) -> None:
+    """The array of tables ``[[key]]`` of ``doc`` set to ``items`` (matched by ``name``)."""
+    old = doc.get(key)
+    if not isinstance(old, AoT):   # absent, or written another way (an inline array)
+        if key in doc:
+            del doc[key]
+        if items:
+            doc.append(key, tomlkit.aot())
+            for item in items:
+                table = tomlkit.table()
+                _update(table, item)
+                doc[key].append(table)
+        return
+    by_name = {t.get("name"): t for t in old}
+    tables = []
+    for item in items:
+        table = by_name.pop(item.get("name"), None)
+        if table is None:
+            table = tomlkit.table()
+        _update(table, item)
+        tables.append(table)
+    if not tables:
+        del doc[key]
+    elif [id(t) for t in tables] != [id(t) for t in old]:
+        while len(old):
+            del old[0]
+        for table in tables:
+            old.append(table)
+
+
+def _edited(path: Path, lines: list, zones: list) -> tuple[str, dict]:
+    """The scene file's text with the editor's lines and zones, and its data."""
+    text = (read_text(path, "scene file", MAX_TOML_BYTES, encoding="utf-8")
+            if path.exists() else "")
+    parse_toml(text, "scene file")   # a broken file is reported as reading it would
+    try:
+        doc = tomlkit.parse(text)
+        _merge_tables(doc, "line", lines)
+        _merge_tables(doc, "zone", zones)
+        out = tomlkit.dumps(doc)
+    except (TOMLKitError, TypeError, ValueError) as exc:
+        raise ConfigError(f"the scene cannot be written as TOML: {exc}") from None
+    return out, parse_toml(out, "scene file")   # what the camera will read back
 
 
 def _calibration(path: Path | None, size: tuple[int, int] | None) -> Any:
@@ -85,19 +159,8 @@ class SceneFiles:
         if not isinstance(lines, list) or not isinstance(zones, list):
             raise ConfigError("lines and zones must be arrays")
         with self._lock:
-            data = read_toml(path, "scene file") if path.exists() else {}
-            data["line"] = _clean(lines, "lines")
-            data["zone"] = _clean(zones, "zones")
-            if not data["line"]:
-                del data["line"]
-            if not data["zone"]:
-                del data["zone"]
+            text, data = _edited(path, _clean(lines, "lines"), _clean(zones, "zones"))
             parse_scene(data, _calibration(self.cameras.get(name), size), source=str(path))
-            try:
-                text = tomli_w.dumps(data)
-            except (TypeError, ValueError) as exc:
-                raise ConfigError(f"the scene cannot be written as TOML: {exc}") from None
-            parse_toml(text, "scene file")   # what the camera will read back
             atomic_write_text(path, text)
         return self.read(name)
 

@@ -5,7 +5,10 @@ live page of :mod:`.app` on 127.0.0.1 instead: a :class:`LiveView` runs uvicorn 
 a one-camera :class:`~.hub.Hub`, and its :meth:`LiveView.writer` is one more output of the track
 job that hands the hub each annotated picture (at most :data:`~.worker.VIEW_FPS` a second),
 each event (with ``seq`` and ``wall``) and the counts. The job, its outputs and its interruption
-rules stay ``track``'s own; the page has no scene editor (the run's scene is fixed).
+rules stay ``track``'s own. ``track --show`` plays a file at its own frame rate
+(:class:`~motiontrack.io.pacing.PacedSource`, as ``serve`` does); after the run the page keeps the
+last picture, the events and the counts. With ``--scene`` the page's editor edits that scene
+file (the running job keeps the scene it started with; the next run reads the saved one).
 """
 
 from __future__ import annotations
@@ -16,6 +19,7 @@ import socket
 import sys
 import threading
 import time
+from pathlib import Path
 
 import cv2
 
@@ -103,16 +107,19 @@ class _ViewWriter(Writer):
 
 class LiveView:
     """The page of one source on ``http://host:port/`` (port 0: a free one), served from a
-    thread until :meth:`close`."""
+    thread until :meth:`close`; ``scene``: the run's scene file, which the page's editor
+    edits."""
 
-    def __init__(self, name: str, host: str = "127.0.0.1", port: int = 0) -> None:
+    def __init__(self, name: str, host: str = "127.0.0.1", port: int = 0,
+                 scene: str | Path | None = None) -> None:
         import uvicorn
 
         self.name = name
-        self.hub = Hub([(name, False)])
+        scene_path = Path(scene) if scene is not None else None
+        self.hub = Hub([(name, scene_path is not None)])
         self.state = self.hub.get(name)
         self._stopping = threading.Event()
-        app = create_app(self.hub, None, {name: None}, stopping=self._stopping.is_set)
+        app = create_app(self.hub, None, {name: scene_path}, stopping=self._stopping.is_set)
         try:
             self._sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
             self._sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)

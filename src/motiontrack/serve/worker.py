@@ -6,7 +6,9 @@ annotated picture, events, counts and status through a :class:`~.channel.Channel
 
 * the source is opened once and read across segments; a video file (or a synthetic scene) is
   played at its own frame rate (the reader sleeps to real time) and starts again at its end when
-  ``loop = true``; a live source reconnects by the run layer's rules;
+  ``loop = true``, its first frame marked with a ``loop``
+  :class:`~motiontrack.types.Discontinuity` (the pipeline and the analytics reset; the event
+  stream gets a ``discontinuity`` record); a live source reconnects by the run layer's rules;
 * each segment is one run into ``OUT/<camera>/<segment>/`` (``tracks.txt``, ``events.jsonl``,
   ``counts.csv``, ``heatmap.png``, ``summary.json``, ``config.toml``), with the run layer's
   output rules; a segment ends after ``rotate_s`` seconds, when its folder reaches
@@ -38,11 +40,12 @@ import cv2
 from ..config import load_config
 from ..config_flags import flag_overrides
 from ..errors import MotionTrackError
+from ..io.pacing import Pacer
 from ..io.sources import Source
 from ..pipeline import open_configured_source
 from ..run import track_job
 from ..run.job import JobContext, Writer
-from ..types import FrameResult
+from ..types import Discontinuity, FrameResult
 from .cameras import CameraSpec
 from .channel import Channel
 
@@ -71,8 +74,10 @@ class _Frames:
     """The camera's frames across segments: looped and paced to real time when the source is a
     file, as they come when it is live."""
 
-    def __init__(self, spec: CameraSpec, cfg: Any, stop: _Flag) -> None:
+    def __init__(self, spec: CameraSpec, cfg: Any, stop: _Flag,
+                 pacer: Pacer | None = None) -> None:
         self.spec, self.cfg, self.stop = spec, cfg, stop
+        self.pacer = pacer or Pacer(sleep=stop.event.wait)
         self.source = self._open()
         self.info = self.source.info
         self.live = bool(self.info.live)
@@ -90,18 +95,16 @@ class _Frames:
         return int(getattr(self.source, "reconnects", 0))
 
     def _frames(self) -> Iterator[Any]:
-        t0 = time.monotonic()
         n = 0
         while True:
             got = False
             for frame in self.source:
+                if self.loops and not got:   # the jump from the last frame to the first
+                    frame = replace(frame, discontinuity=Discontinuity("loop"))
                 got = True
-                if not self.live:   # play at the file's own rate
-                    delay = t0 + n / self.fps - time.monotonic()
-                    if delay < -1.0:    # fell behind (a slow machine): do not race to catch up
-                        t0 += -delay
-                    elif delay > 0 and self.stop.event.wait(delay):
-                        return
+                # a file plays at its own rate
+                if not self.live and self.pacer.wait(n, self.fps):
+                    return
                 n += 1
                 yield frame
             if self.stop() or not (self.spec.loop and got and not self.live):
@@ -267,9 +270,11 @@ class _Camera:
         sent with each event for latency measurements."""
         changed = False
         events = []
+        stamp = {"segment": self.segment} | ({"wall": round(wall, 4)} if wall is not None else {})
+        if sf.discontinuity is not None:
+            events.append(sf.discontinuity.to_json(sf.frame) | stamp)
         for e in sf.events:
-            events.append({**e.to_json(), "segment": self.segment}
-                          | ({"wall": round(wall, 4)} if wall is not None else {}))
+            events.append(e.to_json() | stamp)
             if e.type == "line_cross" and e.line in self.lines and e.direction in ("in", "out"):
                 self.lines[e.line][e.direction] += 1
                 changed = True
@@ -328,8 +333,10 @@ def _config(spec: CameraSpec) -> Any:
 
 
 def run_camera(spec: CameraSpec, out_dir: Path, channel: Channel, stop: _Flag,
-               rotate_s: float = 3600.0, rotate_mb: float = 0.0) -> int:
-    """Run one camera until its source ends or ``stop``; the exit code of the process."""
+               rotate_s: float = 3600.0, rotate_mb: float = 0.0,
+               pacer: Pacer | None = None) -> int:
+    """Run one camera until its source ends or ``stop``; the exit code of the process.
+    ``pacer`` plays a file at its frame rate (tests give one with a clock of their own)."""
     cam = _Camera(spec, channel)
     beat_stop = threading.Event()
 
@@ -346,7 +353,7 @@ def run_camera(spec: CameraSpec, out_dir: Path, channel: Channel, stop: _Flag,
     code = 0
     try:
         cfg = _config(spec)
-        cam.source = frames = _Frames(spec, cfg, stop)
+        cam.source = frames = _Frames(spec, cfg, stop, pacer)
         rotate_bytes = rotate_mb * 1e6 if rotate_mb and math.isfinite(rotate_mb) else 0.0
         try:
             while not stop():

@@ -34,4 +34,5 @@ class SyntheticSource(Source):
         end = self.scene.n_frames if not self.max_frames else min(self.scene.n_frames,
                                                                   self.start + self.max_frames)
         for i in range(self.start, end):
-            yield Frame(index=i, image=self.scene.frame(i), timestamp=i / self.info.fps)
+            yield Frame(index=i, image=self.scene.frame(i), timestamp=i / self.info.fps,
+                        discontinuity=self.seek_mark(i))

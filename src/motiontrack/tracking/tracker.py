@@ -118,6 +118,14 @@ class MultiObjectTracker:
         #: where they were tentative (empty unless :attr:`keep_tentative`)
         self.confirmed_earlier: list[tuple[int, Track]] = []
 
+    def reset(self) -> None:
+        """End every track at once (after a discontinuity of the source): none is reported
+        again; new tracks get new ids (:attr:`next_id` keeps counting)."""
+        self.x = np.zeros((0, 8))
+        self.P = np.zeros((0, 3, 4))
+        self.meta = []
+        self.confirmed_earlier = []
+
     # ------------------------------------------------------------------------------- helpers
     def _search_window(self, tsu: np.ndarray) -> np.ndarray:
         """Largest centre distance (in diagonals of the prediction) at which a track unseen for

@@ -38,6 +38,9 @@ class Speed(BaseRule):
         self.windows.pop(tid, None)
         return []
 
+    def reset(self) -> None:
+        self.windows.clear()
+
     def step(self, frame: FrameTable) -> list[Event]:
         spec, fps = self.spec, self.context.fps
         metres = spec.limit_mps is not None

@@ -75,6 +75,12 @@ class Stationary(BaseRule):
         self.silent.discard(tid)
         return events
 
+    def reset(self) -> None:
+        """Every stay is dropped without ``stationary_end`` (the engine drops the static
+        objects)."""
+        self.stays.clear()
+        self.silent.clear()
+
     def step(self, frame: FrameTable) -> list[Event]:
         events: list[Event] = []
         self._track_stays(frame, events)

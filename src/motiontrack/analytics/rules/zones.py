@@ -105,6 +105,12 @@ class Zones(BaseRule):
             self._exited(k, dwell)
         return events
 
+    def reset(self) -> None:
+        """The zones are empty: their occupants are dropped without ``zone_exit`` (entries,
+        exits and dwell totals are kept)."""
+        self.occupancy[:] = 0
+        self.state.inside[:] = False
+
     def _exited(self, k: int, dwell: int) -> None:
         self.occupancy[k] -= 1
         self.exits[k] += 1

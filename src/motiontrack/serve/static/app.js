@@ -101,6 +101,13 @@ function updateTile(cam) {
   t.fields.fps.textContent = fmt(cam.fps, 1);
   t.fields.frames.textContent = fmt(cam.frames);
   t.fields.reconnects.textContent = fmt(cam.reconnects);
+  // a camera whose run has ended sends no more pictures, and a browser shows an MJPEG part only
+  // once the next one begins: the tile shows the last picture as a still instead
+  const ended = cam.status === "ended";
+  if (ended !== Boolean(t.ended)) {
+    t.ended = ended;
+    t.img.src = ended ? snapshotUrl(cam.name) : streamUrl(cam.name);
+  }
 }
 
 let cameras = [];
@@ -130,6 +137,7 @@ function ensureCounts(name) {
   if (!counts.has(name)) {
     counts.set(name, { lines: {}, zones: {} });
     refreshCounts(name);
+    backfillEvents(name);
   }
 }
 
@@ -189,6 +197,7 @@ function renderCounts(name) {
 
 function describe(ev) {
   const parts = [ev.type];
+  if (ev.reason) parts.push(ev.reason);
   if (ev.line) parts.push(ev.line + (ev.direction ? " " + ev.direction : ""));
   if (ev.zone) parts.push(ev.zone);
   if (ev.track !== undefined) parts.push("track " + ev.track);
@@ -197,7 +206,12 @@ function describe(ev) {
   return parts.join(" · ");
 }
 
-function addEvent(ev) {
+const shownEvents = new Set();   // "camera seq" of the events in the feed
+
+function addEvent(ev, older = false) {
+  const key = ev.camera + " " + ev.seq;
+  if (shownEvents.has(key)) return false;
+  shownEvents.add(key);
   const feed = document.getElementById("feed");
   const item = el("li", {
     "data-testid": "event",
@@ -213,8 +227,21 @@ function addEvent(ev) {
   el("span", { class: "what", text: describe(ev) }),
   el("span", { class: "frame", text: "frame " + fmt(ev.frame) }));
   item.dataset.event = JSON.stringify(ev);
-  feed.prepend(item);
+  if (older) feed.append(item);
+  else feed.prepend(item);
   while (feed.children.length > FEED_MAX) feed.lastElementChild.remove();
+  return true;
+}
+
+// The events a camera had before this page opened (a run that has ended, a page reloaded):
+// kept by the server, shown below the ones that arrive live.
+async function backfillEvents(name) {
+  try {
+    const kept = await api(cameraPath(name, "events"));
+    for (const ev of kept.slice().reverse()) addEvent({ camera: name, ...ev }, true);
+  } catch (err) {
+    // the live stream still shows what comes next
+  }
 }
 
 function listen() {
@@ -223,8 +250,7 @@ function listen() {
     let ev;
     try { ev = JSON.parse(msg.data); } catch (err) { return; }
     if (!ev || !ev.camera) return;
-    addEvent(ev);
-    countEvent(ev);
+    if (addEvent(ev)) countEvent(ev);
   };
   // EventSource reconnects by itself; nothing else to do on error
 }
