@@ -249,7 +249,10 @@ def _coerce(value: Any, typ: Any, where: str, item_meta: typing.Mapping[str, Any
     if typ is float:
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise ConfigError(f"{where} must be a number, got {shown(value)}")
-        return float(value)
+        try:
+            return float(value)
+        except OverflowError:   # an integer of over 308 digits
+            raise ConfigError(f"{where} must be a finite number, got {shown(value)}") from None
     if typ is str:
         if not isinstance(value, str):
             raise ConfigError(f"{where} must be a string, got {shown(value)}")
