@@ -18,8 +18,8 @@ import numpy as np
 
 from ..schema import REQUIRED, Section, param
 
-__all__ = ["COORD_LIMIT", "MAX_POLYGON_POINTS", "MAX_TABLES", "SceneSection", "LineSpec", "ZoneSpec", "StationarySpec",
-           "AbandonedSpec", "SpeedSpec"]
+__all__ = ["COORD_LIMIT", "MAX_POLYGON_POINTS", "MAX_TABLES", "SceneSection", "LineSpec",
+           "ZoneSpec", "StationarySpec", "AbandonedSpec", "SpeedSpec"]
 
 #: largest number accepted (pixels, metres, seconds): far beyond any frame, small enough for
 #: float maths

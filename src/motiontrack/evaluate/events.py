@@ -28,8 +28,8 @@ from ..assignment import linear_sum_assignment
 from ..errors import ConfigError
 from ..types import Event, event_types
 
-__all__ = ["DEFAULT_TOLERANCE_S", "MAX_TOLERANCE_S", "MAX_PAIRS", "EventScore", "EventsEvaluation", "group_key",
-           "match_times", "evaluate_events"]
+__all__ = ["DEFAULT_TOLERANCE_S", "MAX_TOLERANCE_S", "MAX_PAIRS", "EventScore",
+           "EventsEvaluation", "group_key", "match_times", "evaluate_events"]
 
 #: default largest time difference of a match, seconds
 DEFAULT_TOLERANCE_S = 1.0
