@@ -142,3 +142,27 @@ def test_calibrate_show_refuses_a_huge_picture_before_decoding(data, tmp_path, c
     img = png_claiming(tmp_path / "big.png", 25_000, 25_000)
     _refused_by_calibrate(capsys, ["show", str(data("pets09-s2l1", "View_001.xml")), str(img),
                                    "-o", str(tmp_path / "s.png")])
+
+
+def _exif_turned_jpeg(path: Path, img: np.ndarray) -> Path:
+    """A JPEG of ``img`` whose EXIF orientation (6) tells readers to turn it a quarter."""
+    ok, enc = cv2.imencode(".jpg", img)
+    assert ok
+    tiff = b"MM\0*" + struct.pack(">I", 8) + struct.pack(">H", 1)
+    tiff += struct.pack(">HHII", 0x0112, 3, 1, 6 << 16) + struct.pack(">I", 0)
+    app1 = b"Exif\0\0" + tiff
+    data = enc.tobytes()
+    path.write_bytes(data[:2] + b"\xff\xe1" + struct.pack(">H", len(app1) + 2) + app1 + data[2:])
+    return path
+
+
+def test_a_folder_of_exif_turned_photos_reads_every_frame(tmp_path):
+    folder = tmp_path / "imgs"
+    folder.mkdir()
+    for i in range(3):
+        _exif_turned_jpeg(folder / f"{i}.jpg", np.full((20, 30, 3), 60 * i, np.uint8))
+    assert header_size(folder / "0.jpg") == (30, 20)
+    src = ImageSequenceSource(folder)
+    shapes = [f.image.shape[:2] for f in src]
+    assert len(shapes) == 3 and len(set(shapes)) == 1
+    assert (src.info.width, src.info.height) in ((30, 20), (20, 30))

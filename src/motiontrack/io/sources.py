@@ -694,7 +694,8 @@ class ImageSequenceSource(_DecodedAhead):
         end = len(self.files) if not self.max_frames else min(len(self.files), self.start + self.max_frames)
         for index in range(self.start, end):
             size = check_image(self.files[index], self.max_pixels)
-            if size is not None and size != (self.info.width, self.info.height):
+            w, h = self.info.width, self.info.height   # a JPEG's EXIF may turn it a quarter
+            if size is not None and size not in ((w, h), (h, w)):
                 raise SourceError(f"image {self.files[index]} is {size[0]}x{size[1]}, expected "
                                   f"{self.info.width}x{self.info.height} like the first")
             img = cv2.imread(self.files[index], cv2.IMREAD_COLOR)
