@@ -67,17 +67,17 @@ def match_times(gt: Sequence[float], pred: Sequence[float], tolerance_s: float,
     p = np.asarray(pred, dtype=np.float64).reshape(-1)
     if g.size == 0 or p.size == 0:
         return []
+    if g.size * p.size > dense_max:
+        return _match_sparse(g, p, tolerance_s)
     # every allowed pair is worth `big` more than any sum of |Δt|, so the solver first maximises
     # the number of matches and then minimises their total time difference
     big = (tolerance_s + 1.0) * (min(g.size, p.size) + 1)
-    if g.size * p.size <= dense_max:
-        dt = np.abs(g[:, None] - p[None, :])
-        ok = dt <= tolerance_s + _EPS
-        if not ok.any():
-            return []
-        rows, cols = linear_sum_assignment(np.where(ok, dt - big, 0.0))
-        return [(int(r), int(c)) for r, c in zip(rows, cols) if ok[r, c]]
-    return _match_sparse(g, p, tolerance_s, big)
+    dt = np.abs(g[:, None] - p[None, :])
+    ok = dt <= tolerance_s + _EPS
+    if not ok.any():
+        return []
+    rows, cols = linear_sum_assignment(np.where(ok, dt - big, 0.0))
+    return [(int(r), int(c)) for r, c in zip(rows, cols) if ok[r, c]]
 
 
 def _pairs_within(g: np.ndarray, p: np.ndarray, tolerance_s: float,
@@ -103,8 +103,7 @@ def _pairs_within(g: np.ndarray, p: np.ndarray, tolerance_s: float,
     return rows[keep], cols[keep], dt[keep]
 
 
-def _match_sparse(g: np.ndarray, p: np.ndarray, tolerance_s: float,
-                  big: float) -> list[tuple[int, int]]:
+def _match_sparse(g: np.ndarray, p: np.ndarray, tolerance_s: float) -> list[tuple[int, int]]:
     """:func:`match_times` on the pairs within the tolerance, in time ``O(pairs)``.
 
     On a line, two matched pairs that cross (``g1 < g2`` but ``p1 > p2``) can be swapped to
@@ -115,7 +114,6 @@ def _match_sparse(g: np.ndarray, p: np.ndarray, tolerance_s: float,
     ``big``): one pass over the ground truth in time order, keeping per prediction the best
     chain ending there and one running best for the predictions no later event can reach.
     """
-    del big  # the chain compares (matches, -sum) as a pair
     og, op = np.argsort(g, kind="stable"), np.argsort(p, kind="stable")
     rows, cols, dt = _pairs_within(g[og], p[op], tolerance_s, presorted=True)
     if rows.size == 0:
