@@ -24,6 +24,7 @@ import tomli_w
 from . import schema
 from .errors import ConfigError, printable
 from .io.atomic import atomic_write_text
+from .io.imagesize import DEFAULT_MAX_PIXELS
 from .io.tomlfile import parse_toml, read_toml
 from .schema import INT_MAX, INT_MIN, Not, Section, param  # noqa: F401 - the config's names too
 
@@ -35,6 +36,7 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 __all__ = [
+    "DEFAULT_MAX_PIXELS",
     "param",
     "Not",
     "SourceConfig",
@@ -122,6 +124,11 @@ class SourceConfig(_Section):
         doc="streams: longest wait (s) for a connection to open or for the next frame; a stream "
             "silent this long counts as dropped (one reconnect attempt). Cameras keep their "
             "backend's own limit")
+    max_pixels: int = param(
+        DEFAULT_MAX_PIXELS, lo=1, hi=2**30,
+        doc="most pixels (width x height) of a frame: a picture whose header, or a video whose "
+            "container, states more is refused before anything is decoded (a run takes about "
+            "80 bytes per pixel); at most 2**30, OpenCV's own bound on decoding a picture")
 
 
 #: smallest explicit processing scale

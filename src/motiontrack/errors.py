@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import errno
 import math
+import re
 import tempfile
 from pathlib import Path
 
@@ -49,6 +50,15 @@ def printable(text: object) -> str:
     if s.isprintable():
         return s
     return "".join(c if c.isprintable() else repr(c)[1:-1] for c in s)
+
+
+def opencv_reason(exc: Exception) -> str:
+    """The message of an OpenCV error without its source file and function: ``input 'x' is not
+    found`` from ``OpenCV(5.0.0) /io/...cpp:1042: error: (-204:...) input 'x' is not found in
+    function '...'``; one line, at most 120 characters."""
+    text = " ".join(str(exc).split())
+    m = re.search(r"error: \([-\d]+:[^)]*\) (.*?)(?: in function .*)?$", text)
+    return printable((m.group(1) if m else text)[:120])
 
 
 def excerpt(token: object, limit: int = EXCERPT_CHARS) -> str:

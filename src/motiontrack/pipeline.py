@@ -30,6 +30,7 @@ import numpy as np
 from . import synth as _synth  # noqa: F401  (registers the synth: sources)
 from .config import PipelineConfig, SourceConfig, load_config, warn_if_oversized
 from .imaging import pixel_window, resolve_scale, scaled_size
+from .io.imagesize import too_many_pixels
 from .io.sources import Source, open_source, prefetch
 from .motion import create_detector
 from .motion.cleanup import clean_mask
@@ -522,12 +523,17 @@ def run(source: Any, config: PipelineConfig | str | Path | None = None,
 def open_configured_source(source: Any, sc: SourceConfig) -> Source:
     """Open ``source`` with the start/length, frame rate (``source.fps``) and live-reconnection
     settings ``sc`` (``PipelineConfig.source``); a :class:`Source` is returned as it is. Frames
-    far larger than the defaults are sized for get a warning with the memory to expect."""
+    far larger than the defaults are sized for get a warning with the memory to expect; frames
+    of more than ``source.max_pixels`` are refused."""
     if isinstance(source, Source):
         return source
-    src = open_source(source, sc.start, sc.max_frames, reconnect_attempts=sc.reconnect_attempts,
+    src = open_source(source, sc.start, sc.max_frames, max_pixels=sc.max_pixels,
+                      reconnect_attempts=sc.reconnect_attempts,
                       backoff=sc.reconnect_backoff, backoff_max=sc.reconnect_backoff_max,
                       reset_frames=sc.reconnect_reset_frames, read_timeout=sc.read_timeout_s)
+    if src.info.width * src.info.height > sc.max_pixels:   # any other source, once opened
+        src.close()
+        raise too_many_pixels(src.info.name, src.info.width, src.info.height, sc.max_pixels)
     if sc.fps > 0:
         src.set_fps(sc.fps)
     warn_if_oversized(src.info.width, src.info.height, src.info.name)

@@ -71,11 +71,13 @@ class Not:
 def param(default: Any, *, lo: float | None = None, hi: float | None = None,
           lo_open: bool = False, choices: Iterable[Any] | None = None, odd: bool = False,
           pattern: str | None = None, pattern_doc: str = "", nonblank: bool = False,
-          doc: str = "", when: Any = None) -> Any:
+          doc: str = "", when: Any = None, max_items: int | None = None) -> Any:
     """A schema field with its allowed values: ``lo <= value <= hi`` (``lo < value`` with
     ``lo_open``), one of ``choices``, for kernel sizes ``odd`` (0 means "off" and is always
     allowed for odd fields); a string matching ``pattern`` whole (``pattern_doc`` says what that
-    is in words, for the message) or, with ``nonblank``, not empty or blank.
+    is in words, for the message) or, with ``nonblank``, not empty or blank; an array of at
+    most ``max_items`` items (checked before any item is read, so that the work a file can ask
+    for is bounded).
 
     ``default`` is :data:`REQUIRED` for a key the file must give (declare the dataclass
     ``kw_only`` so that required and optional fields may come in any order), ``None`` for an
@@ -95,7 +97,7 @@ def param(default: Any, *, lo: float | None = None, hi: float | None = None,
     meta = {"lo": lo, "hi": hi, "lo_open": lo_open,
             "choices": tuple(choices) if choices is not None else None,
             "odd": odd, "pattern": pattern, "pattern_doc": pattern_doc, "nonblank": nonblank,
-            "doc": doc, "when": tuple(when or ())}
+            "doc": doc, "when": tuple(when or ()), "max_items": max_items}
     if default is REQUIRED:
         return field(metadata=meta)
     if isinstance(default, (list, dict, set)):
@@ -247,12 +249,27 @@ def _coerce(value: Any, typ: Any, where: str, item_meta: typing.Mapping[str, Any
     if typ is float:
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise ConfigError(f"{where} must be a number, got {shown(value)}")
-        return float(value)
+        try:
+            return float(value)
+        except OverflowError:   # an integer of over 308 digits
+            raise ConfigError(f"{where} must be a finite number, got {shown(value)}") from None
     if typ is str:
         if not isinstance(value, str):
             raise ConfigError(f"{where} must be a string, got {shown(value)}")
         return value
     return value
+
+
+def _check_length(m: typing.Mapping[str, Any], value: Any, typ: Any, where: str) -> None:
+    """Refuse an array longer than the field's ``max_items``, before its items are read."""
+    most = m.get("max_items")
+    if most is None or not isinstance(value, (list, tuple)) or len(value) <= most:
+        return
+    item = _items(typ)
+    fixed = _fixed(item) if item is not None else None
+    what = (f"[{', '.join('xyz'[:len(fixed)])}] points" if fixed and _numeric(item)
+            and len(fixed) <= 3 else "items")
+    raise ConfigError(f"{where} must have at most {most:,} {what}, got {len(value):,}")
 
 
 def keys_shown(keys: list[str], prefix: str = "", most: int = 5) -> str:
@@ -295,6 +312,7 @@ def from_dict(cls: type, data: Any, where: str = "") -> Any:
             continue   # none (JSON null) where none may stand: as if the key were absent
         typ = hints[name]
         inside = _optional(typ) or typ
+        _check_length(fields_meta[name], value, inside, f"{where}.{name}" if where else name)
         # a field's range holds for each number of an array of numbers or points
         item_meta = fields_meta[name] if (_items(inside) or _fixed(inside)) and _numeric(
             _items(inside) or inside) else {}
@@ -346,7 +364,10 @@ def _type_schema(typ: Any, m: typing.Mapping[str, Any]) -> dict[str, Any]:
         return _object_schema(typ)
     item = _items(typ)
     if item is not None:
-        return {"type": "array", "items": _type_schema(item, m if _numeric(item) else {})}
+        out = {"type": "array", "items": _type_schema(item, m if _numeric(item) else {})}
+        if m.get("max_items") is not None:
+            out["maxItems"] = m["max_items"]
+        return out
     fixed = _fixed(typ)
     if fixed is not None:
         return {"type": "array", "prefixItems": [_type_schema(t, m) for t in fixed],

@@ -40,7 +40,7 @@ from ..errors import ConfigError
 from ..io.tomlfile import read_toml
 from ..schema import from_dict, json_schema, keys_shown, param, shown
 from .rules import RULES
-from .specs import (COORD_LIMIT, AbandonedSpec, LineSpec, SceneSection, SpeedSpec,
+from .specs import (COORD_LIMIT, MAX_TABLES, AbandonedSpec, LineSpec, SceneSection, SpeedSpec,
                     StationarySpec, ZoneSpec)
 
 __all__ = [
@@ -190,6 +190,7 @@ def scene_json_schema() -> dict[str, Any]:
                 table["allOf"] = [{"oneOf": [{"required": [k]} for k in keys]}
                                   for keys in rule.exactly_one]
         out["properties"][rule.section] = (
-            {"type": "array", "items": table, "description": f"[[{rule.section}]] tables"}
+            {"type": "array", "items": table, "maxItems": MAX_TABLES,
+             "description": f"[[{rule.section}]] tables"}
             if rule.many else table)
     return out

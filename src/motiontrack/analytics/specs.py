@@ -18,12 +18,21 @@ import numpy as np
 
 from ..schema import REQUIRED, Section, param
 
-__all__ = ["COORD_LIMIT", "SceneSection", "LineSpec", "ZoneSpec", "StationarySpec",
-           "AbandonedSpec", "SpeedSpec"]
+__all__ = ["COORD_LIMIT", "MAX_POLYGON_POINTS", "MAX_TABLES", "SceneSection", "LineSpec",
+           "ZoneSpec", "StationarySpec", "AbandonedSpec", "SpeedSpec"]
 
 #: largest number accepted (pixels, metres, seconds): far beyond any frame, small enough for
 #: float maths
 COORD_LIMIT = 10_000_000
+
+#: most points of a zone's polygon: a vertex every 12 px along the border of a whole 4K frame,
+#: far more than a drawn or traced zone needs; the simplicity check tests every pair of edges
+#: (about 0.1 s at this bound) and each frame tests every track against every edge
+MAX_POLYGON_POINTS = 1_000
+
+#: most tables of one array (``[[zone]]``, ``[[line]]``): with :data:`MAX_POLYGON_POINTS` this
+#: bounds the edges every frame's zone test goes through
+MAX_TABLES = 1_000
 
 
 class SceneSection(Section):

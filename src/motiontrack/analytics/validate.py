@@ -13,6 +13,7 @@ import numpy as np
 
 from ..errors import ConfigError, excerpt
 from ..schema import shown
+from .specs import MAX_TABLES
 
 __all__ = ["one_of", "pixels", "unique_name", "array_of_tables"]
 
@@ -52,8 +53,11 @@ def unique_name(value: str, where: str, earlier: Sequence[str]) -> str:
 
 
 def array_of_tables(v: Any, key: str) -> list:
-    """The scene's ``[[key]]`` tables (``v`` absent: none)."""
+    """The scene's ``[[key]]`` tables (``v`` absent: none), at most :data:`.specs.MAX_TABLES`."""
     v = [] if v is None else v
     if not isinstance(v, list):
         raise ConfigError(f"{key} must be an array of tables ([[{key}]]), got {shown(v)}")
+    if len(v) > MAX_TABLES:
+        raise ConfigError(f"{key} must have at most {MAX_TABLES:,} tables ([[{key}]]), "
+                          f"got {len(v):,}")
     return v

@@ -14,6 +14,9 @@ from .specs import ZoneSpec
 
 __all__ = ["ZoneEdges"]
 
+#: most (point, edge) pairs of one block of :meth:`ZoneEdges.classify` (32 MiB per float array)
+_BLOCK = 1 << 22
+
 
 class ZoneEdges:
     """The edges of all zones packed into one array, so that one frame's test of ``N`` points
@@ -31,10 +34,8 @@ class ZoneEdges:
         self.p1 = (np.concatenate([np.roll(v, -1, axis=0) for v in verts]) if verts
                    else np.zeros((0, 2)))
         counts = np.array([len(v) for v in verts], dtype=np.int64)
+        # each zone's edges are one run of columns: per-zone sums and minima by reduceat
         self.starts = np.concatenate([[0], np.cumsum(counts)[:-1]]) if verts else counts
-        # (E, Z) which zone each edge belongs to: edge hits per zone by one product
-        self.owner = np.zeros((len(self.p0), self.n))
-        self.owner[np.arange(len(self.p0)), np.repeat(np.arange(self.n), counts)] = 1.0
         e = self.p1 - self.p0
         self.e = e
         self.ee = np.maximum(np.sum(e * e, axis=1), 1e-12)
@@ -54,12 +55,18 @@ class ZoneEdges:
         n = len(points)
         if n == 0 or self.n == 0:
             return np.zeros((n, self.n), dtype=bool), np.zeros((n, self.n))
+        # blocks of points, so that the (points, edges) arrays stay within _BLOCK numbers
+        rows = max(1, _BLOCK // len(self.p0))
+        if n > rows:
+            parts = [self.classify(points[i:i + rows]) for i in range(0, n, rows)]
+            return (np.concatenate([p[0] for p in parts]),
+                    np.concatenate([p[1] for p in parts]))
         x, y = points[:, 0:1], points[:, 1:2]
         x0, y0, x1, y1 = self.p0[:, 0], self.p0[:, 1], self.p1[:, 0], self.p1[:, 1]
         straddles = (y0 > y) != (y1 > y)
         dy = np.where(y1 != y0, y1 - y0, 1.0)  # only straddling edges are used: never 0 there
         hits = straddles & (x < x0 + (y - y0) * (x1 - x0) / dy)
-        inside = (np.rint(hits @ self.owner).astype(np.int64) % 2) == 1
+        inside = (np.add.reduceat(hits.astype(np.int32), self.starts, axis=1) % 2) == 1
         t = np.clip(((x - x0) * self.e[:, 0] + (y - y0) * self.e[:, 1]) / self.ee, 0.0, 1.0)
         dist = np.hypot(x - (x0 + t * self.e[:, 0]), y - (y0 + t * self.e[:, 1]))
         return inside, np.minimum.reduceat(dist, self.starts, axis=1)

@@ -13,6 +13,7 @@ import errno
 import importlib
 import importlib.util
 import logging
+import os
 import pkgutil
 import sys
 import traceback
@@ -130,7 +131,25 @@ class _BarAwareHandler(logging.StreamHandler):
             self.handleError(record)
 
 
+def _open_standard_streams() -> None:
+    """Open on the null device each standard stream the caller closed (``2>&-``): Python then
+    has no ``sys.stderr`` for messages and progress bars, and the next file opened would take
+    descriptor 2 and receive whatever a library writes there."""
+    for fd, name, mode in ((0, "stdin", "r"), (1, "stdout", "w"), (2, "stderr", "w")):
+        try:
+            os.fstat(fd)
+            continue
+        except OSError:
+            null = os.open(os.devnull, os.O_RDWR)
+        if null != fd:
+            os.dup2(null, fd)
+            os.close(null)
+        if getattr(sys, name) is None:
+            setattr(sys, name, open(fd, mode, closefd=False))
+
+
 def main(argv: list[str] | None = None) -> int:
+    _open_standard_streams()
     # not list(argv): importing the command module cli/list.py binds the name `list` here
     argv = sys.argv[1:] if argv is None else [*argv]
     parser = build_parser(command_module(argv))

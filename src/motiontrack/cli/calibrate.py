@@ -34,6 +34,7 @@ def register(subparsers) -> None:
     c.add_argument("-o", "--output", type=Path, required=True,
                    help="camera YAML to write (- for standard output)")
     c.add_argument("--force", action="store_true", help="overwrite an existing output")
+    _max_pixels_option(c)
     c.set_defaults(func=cmd_chessboard)
 
     s = sub.add_parser("show", help="undistorted image with the projected ground grid")
@@ -44,6 +45,7 @@ def register(subparsers) -> None:
     s.add_argument("--step", type=float, default=None, help="grid spacing in metres (auto)")
     s.add_argument("--extent", default=None, help="grid extent xmin,xmax,ymin,ymax in metres (auto)")
     s.add_argument("--force", action="store_true", help="overwrite an existing output")
+    _max_pixels_option(s)
     s.set_defaults(func=cmd_show)
 
     ln = sub.add_parser("lines", help="thesis method: κ1 from straight lines + coplanar Tsai fit")
@@ -65,6 +67,7 @@ def register(subparsers) -> None:
     ln.add_argument("-o", "--output", type=Path, required=True,
                     help="camera .toml or .xml to write (- for TOML on standard output)")
     ln.add_argument("--force", action="store_true", help="overwrite an existing output")
+    _max_pixels_option(ln)
     ln.set_defaults(func=cmd_lines)
 
     g = sub.add_parser("ground", help="ground plane from image <-> world point pairs")
@@ -77,6 +80,18 @@ def register(subparsers) -> None:
                         "standard output")
     g.add_argument("--force", action="store_true", help="overwrite an existing output")
     g.set_defaults(func=cmd_ground)
+
+
+def _max_pixels_option(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--max-pixels", type=int, default=50_000_000,
+                   help="refuse a picture (its header) or video (its container) of more pixels, "
+                        "before decoding it (50000000; at most 2**30)")
+
+
+def _check_max_pixels(args: argparse.Namespace) -> int:
+    if not 1 <= args.max_pixels <= 2**30:
+        raise ConfigError(f"--max-pixels must be in [1, {2**30}], got {args.max_pixels}")
+    return args.max_pixels
 
 
 def _check_out(path: Path, force: bool) -> None:
@@ -108,14 +123,22 @@ def _suffix(path: Path, default: str) -> str:
     return default if is_stdout(path) else path.suffix.lower()
 
 
-def _read_image(path: Path, gray: bool = False) -> np.ndarray:
+def _read_image(path: Path, max_pixels: int, gray: bool = False) -> np.ndarray:
+    """A picture, or a video's first frame; either refused before decoding when it has more
+    than ``max_pixels`` pixels."""
     import cv2
 
+    from ..io.imagesize import check_frame_size, check_image
+
     require_file(path, "image")
+    check_image(path, max_pixels, "--max-pixels N")
     img = cv2.imread(str(path), cv2.IMREAD_GRAYSCALE if gray else cv2.IMREAD_COLOR)
     if img is None:  # maybe a video: take its first frame
         cap = cv2.VideoCapture(str(path))
         try:
+            check_frame_size(str(path), int(cap.get(cv2.CAP_PROP_FRAME_WIDTH) or 0),
+                             int(cap.get(cv2.CAP_PROP_FRAME_HEIGHT) or 0), max_pixels,
+                             "--max-pixels N")
             ok, img = cap.read()
         finally:
             cap.release()
@@ -135,7 +158,8 @@ def cmd_chessboard(args: argparse.Namespace) -> int:
     pattern = parse_pattern(args.pattern)
     _positive(args.square, "--square", 10.0, "metres")
     _check_out(args.output, args.force)
-    images = [_read_image(p) for p in args.images]
+    most = _check_max_pixels(args)
+    images = [_read_image(p, most) for p in args.images]
     flags = 0 if args.free_aspect else cv2.CALIB_FIX_ASPECT_RATIO
     res = calibrate_chessboard(images, pattern, args.square, [str(p) for p in args.images], flags)
     write_opencv_yaml(args.output, res.camera, res)
@@ -242,7 +266,7 @@ def cmd_show(args: argparse.Namespace) -> int:
 
     _positive(args.step, "--step", MAX_EXTENT_M, "metres")
     camera = load_camera(args.camera)
-    image = _read_image(args.image)
+    image = _read_image(args.image, _check_max_pixels(args))
     size = getattr(camera, "image_size", None)
     if size and tuple(size) != (image.shape[1], image.shape[0]):
         log.warning("image is %dx%d but the camera was calibrated for %dx%d", image.shape[1],
@@ -325,7 +349,7 @@ def cmd_lines(args: argparse.Namespace) -> int:
         raise ConfigError(f"output must be .toml or .xml, got {args.output}")
     _positive(args.half_width, "--half-width", MAX_HALF_WIDTH_PX, "pixels")
     _check_out(args.output, args.force)
-    gray = _read_image(args.image, gray=True)
+    gray = _read_image(args.image, _check_max_pixels(args), gray=True)
     h, w = gray.shape
     if args.geometry is not None:
         cam0 = load_camera(args.geometry)

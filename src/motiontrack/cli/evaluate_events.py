@@ -68,11 +68,12 @@ def format_table(result) -> str:
 
 def run(args: argparse.Namespace) -> int:
     from ..errors import ConfigError
-    from ..evaluate.events import evaluate_events
+    from ..evaluate.events import MAX_TOLERANCE_S, evaluate_events
     from ..io.atomic import atomic_write_text, check_writable, is_stdout
 
-    if not (math.isfinite(args.tolerance_s) and args.tolerance_s >= 0):
-        raise ConfigError(f"--tolerance-s must be a number of seconds >= 0, got {args.tolerance_s}")
+    if not (math.isfinite(args.tolerance_s) and 0 <= args.tolerance_s <= MAX_TOLERANCE_S):
+        raise ConfigError(f"--tolerance-s must be a number of seconds in "
+                          f"[0, {MAX_TOLERANCE_S:.0f}], got {args.tolerance_s}")
     if args.fps is not None and not (math.isfinite(args.fps) and args.fps > 0):
         raise ConfigError(f"--fps must be > 0, got {args.fps}")
     if args.json is not None:

@@ -5,7 +5,6 @@ from __future__ import annotations
 import argparse
 import logging
 import math
-import re
 from typing import Any
 
 log = logging.getLogger("motiontrack")
@@ -72,17 +71,6 @@ def check_model_files(params: dict[str, Any], where: str) -> list[str]:
     return models
 
 
-def _opencv_reason(exc: Exception) -> str:
-    """The message of an OpenCV error without its source file and function: ``input 'x' is not
-    found`` from ``OpenCV(5.0.0) /io/...cpp:1042: error: (-204:...) input 'x' is not found in
-    function '...'``."""
-    from ..errors import printable
-
-    text = " ".join(str(exc).split())
-    m = re.search(r"error: \([-\d]+:[^)]*\) (.*?)(?: in function .*)?$", text)
-    return printable((m.group(1) if m else text)[:120])
-
-
 def register(sub: argparse._SubParsersAction) -> None:
     from ..config_flags import add_flag
     from ._common import CodecOption, out_help
@@ -121,7 +109,7 @@ def cmd_follow(args) -> int:
 
     from ..config import load_config
     from ..config_flags import flag_overrides
-    from ..errors import ConfigError, SourceError, check_output_path
+    from ..errors import ConfigError, SourceError, check_output_path, opencv_reason
     from ..io.video import check_codec
     from ..run import follow_job
     from ..tracking.single import create_single_tracker, parse_box
@@ -145,12 +133,15 @@ def cmd_follow(args) -> int:
     try:
         with frame_loop(job.expected_frames()) as loop:
             s = job.run(progress=loop.update, should_stop=loop.stop)
-    except cv2.error as exc:
-        if not models:  # no model file of the user's: an OpenCV failure is a bug
-            raise
+    except (cv2.error, ConfigError) as exc:
+        # a tracker that OpenCV refuses to start (tracking.single) is a ConfigError from a
+        # cv2.error; with model files of the user's, the models are the likely cause
+        cause = exc if isinstance(exc, cv2.error) else exc.__cause__
+        if not models or not isinstance(cause, cv2.error):
+            raise  # no model file of the user's: an OpenCV failure elsewhere is a bug
         given = ", ".join(f"--param {k}" for k in models)
         raise ConfigError(f"the {args.tracker} tracker cannot run with the model file(s) given "
-                          f"({given}): OpenCV says {_opencv_reason(exc)}") from None
+                          f"({given}): OpenCV says {opencv_reason(cause)}") from None
     if s.frames == 0:
         raise SourceError(f"no frames to follow in {args.source} (check --start)")
     lines = [f"frames    {s.frames} in {s.seconds:.2f} s ({s.fps:.1f} fps), object found in "

@@ -122,7 +122,10 @@ def _split(url: str, option: str, schemes: tuple[str, ...]):
     if not text.isprintable() or any(c.isspace() for c in text):
         raise ConfigError(f"{option} {printable(text)!r}: a URL has no spaces or control "
                           "characters")
-    parts = urlsplit(text)
+    try:
+        parts = urlsplit(text)
+    except ValueError as exc:   # an unclosed [ of an IPv6 address
+        raise ConfigError(f"{option} {_redacted(text)!r} is not a valid URL: {exc}") from None
     if parts.scheme.lower() not in schemes:
         raise ConfigError(f"{option} needs a {' or '.join(s + '://' for s in schemes)} URL, got "
                           f"{_redacted(text)!r}")
@@ -144,7 +147,10 @@ def _split(url: str, option: str, schemes: tuple[str, ...]):
 
 def _redacted(url: str) -> str:
     """``url`` without its user name and password (for messages and summaries)."""
-    parts = urlsplit(url)
+    try:
+        parts = urlsplit(url)
+    except ValueError:   # not a URL: whatever stands between // and the last @ goes
+        return re.sub(r"(//)[^/]*@", r"\1", url, count=1)
     if "@" not in parts.netloc:
         return url
     return urlunsplit(parts._replace(netloc=parts.netloc.rsplit("@", 1)[1]))

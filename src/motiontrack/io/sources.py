@@ -29,6 +29,7 @@ import numpy as np
 from ..errors import ConfigError, InputError, SourceError
 from ..registry import Registry
 from ..types import Annotations, Discontinuity, Frame
+from .imagesize import DEFAULT_MAX_PIXELS, check_frame_size, check_image
 
 log = logging.getLogger(__name__)
 
@@ -254,7 +255,8 @@ class VideoFileSource(_DecodedAhead):
     file given by mistake) is an :class:`~motiontrack.errors.InputError`, also when FFmpeg
     would render its characters as a picture."""
 
-    def __init__(self, path: str | Path, start: int = 0, max_frames: int = 0) -> None:
+    def __init__(self, path: str | Path, start: int = 0, max_frames: int = 0,
+                 max_pixels: int = DEFAULT_MAX_PIXELS) -> None:
         super().__init__(start, max_frames)
         self.path = Path(path)
         if not self.path.exists():
@@ -263,6 +265,7 @@ class VideoFileSource(_DecodedAhead):
             raise SourceError(f"{self.path} is a folder with no images")
         if self.path.stat().st_size == 0:
             raise SourceError(f"video file is empty: {self.path}")
+        check_image(self.path, max_pixels)   # a picture opened as a one-frame video
         cap = cv2.VideoCapture(str(self.path))
         opened = cap.isOpened()
         text_codec = opened and _fourcc(cap) in _TEXT_CODECS
@@ -272,6 +275,12 @@ class VideoFileSource(_DecodedAhead):
                 raise _not_media(self.path)
             raise SourceError(f"cannot open {self.path} as a video (not a video file, or an "
                               "unsupported codec)")
+        try:   # the frame size the container states, before a frame is decoded
+            check_frame_size(str(self.path), int(cap.get(cv2.CAP_PROP_FRAME_WIDTH) or 0),
+                             int(cap.get(cv2.CAP_PROP_FRAME_HEIGHT) or 0), max_pixels)
+        except InputError:
+            cap.release()
+            raise
         ok, first = cap.read()
         if not ok or first is None:
             cap.release()
@@ -676,8 +685,9 @@ class ImageSequenceSource(_DecodedAhead):
     """Frames from an image folder or a glob pattern (e.g. ``input/*.jpg``), in natural order."""
 
     def __init__(self, pattern: str | Path, start: int = 0, max_frames: int = 0,
-                 fps: float | None = None) -> None:
+                 fps: float | None = None, max_pixels: int = DEFAULT_MAX_PIXELS) -> None:
         super().__init__(start, max_frames)
+        self.max_pixels = max_pixels
         p = Path(pattern)
         if p.is_dir():
             files = [str(f) for f in p.iterdir() if f.suffix.lower() in IMAGE_EXTENSIONS]
@@ -688,9 +698,11 @@ class ImageSequenceSource(_DecodedAhead):
         if not files:
             raise SourceError(f"no images found in {name} (extensions: {', '.join(IMAGE_EXTENSIONS)})")
         self.files = sorted(files, key=_natural_key)
+        check_image(self.files[0], max_pixels)
         first = cv2.imread(self.files[0], cv2.IMREAD_COLOR)
         if first is None:
             raise SourceError(f"cannot read image {self.files[0]}")
+        check_frame_size(self.files[0], first.shape[1], first.shape[0], max_pixels)
         self.info = SourceInfo(name=name, width=first.shape[1], height=first.shape[0],
                                fps=fps, frame_count=len(self.files))
 
@@ -698,6 +710,11 @@ class ImageSequenceSource(_DecodedAhead):
         fps = self.info.fps or 25.0
         end = len(self.files) if not self.max_frames else min(len(self.files), self.start + self.max_frames)
         for index in range(self.start, end):
+            size = check_image(self.files[index], self.max_pixels)
+            w, h = self.info.width, self.info.height   # a JPEG's EXIF may turn it a quarter
+            if size is not None and size not in ((w, h), (h, w)):
+                raise SourceError(f"image {self.files[index]} is {size[0]}x{size[1]}, expected "
+                                  f"{self.info.width}x{self.info.height} like the first")
             img = cv2.imread(self.files[index], cv2.IMREAD_COLOR)
             if img is None:
                 self.truncated = True
@@ -730,7 +747,8 @@ class ArraySource(Source):
                         timestamp=i / (self.info.fps or 25.0), discontinuity=self.seek_mark(i))
 
 
-def open_source(spec: Any, start: int = 0, max_frames: int = 0, **live_options: Any) -> Source:
+def open_source(spec: Any, start: int = 0, max_frames: int = 0,
+                max_pixels: int = DEFAULT_MAX_PIXELS, **live_options: Any) -> Source:
     """Open ``spec``: a :class:`Source` (returned as is), a registered scheme (:data:`SCHEMES`,
     e.g. ``synth:NAME``), a camera index (``0`` or ``"0"``), a URL (``rtsp://``, ``http://``...),
     an image folder or glob, or a video file. An existing file is always the video file, even
@@ -739,10 +757,12 @@ def open_source(spec: Any, start: int = 0, max_frames: int = 0, **live_options: 
     A ``start`` at or past the end of a source of known length is a
     :class:`~motiontrack.errors.ConfigError` here; a source whose length is found only by
     reading (a video file without a frame count, a stream of known length) raises it when the
-    first read past ``start`` yields nothing."""
+    first read past ``start`` yields nothing. A picture (its header) or a video file (the
+    frame size of its container) of more than ``max_pixels`` pixels is an
+    :class:`~motiontrack.errors.InputError` before anything is decoded."""
     if isinstance(spec, Source):
         return spec
-    src = _open(spec, start, max_frames, **live_options)
+    src = _open(spec, start, max_frames, max_pixels, **live_options)
     n = src.info.frame_count
     if n is not None and start >= n and not src.info.live:
         src.close()
@@ -750,7 +770,8 @@ def open_source(spec: Any, start: int = 0, max_frames: int = 0, **live_options: 
     return src
 
 
-def _open(spec: Any, start: int, max_frames: int, **live_options: Any) -> Source:
+def _open(spec: Any, start: int, max_frames: int, max_pixels: int,
+          **live_options: Any) -> Source:
     if isinstance(spec, int) or (isinstance(spec, str) and spec.isdigit()):
         return LiveSource(int(spec), start, max_frames, **live_options)
     spec = os.fspath(spec)
@@ -762,7 +783,7 @@ def _open(spec: Any, start: int, max_frames: int, **live_options: Any) -> Source
     if spec.startswith("file://"):
         spec = spec[len("file://"):]
     if Path(spec).is_file():   # whatever its name holds: `video[1080p].mp4` is no glob
-        return VideoFileSource(spec, start, max_frames)
+        return VideoFileSource(spec, start, max_frames, max_pixels)
     if any(ch in spec for ch in "*?[") or Path(spec).is_dir():
-        return ImageSequenceSource(spec, start, max_frames)
-    return VideoFileSource(spec, start, max_frames)
+        return ImageSequenceSource(spec, start, max_frames, max_pixels=max_pixels)
+    return VideoFileSource(spec, start, max_frames, max_pixels)

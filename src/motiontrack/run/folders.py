@@ -46,7 +46,10 @@ def source_name(spec: Any) -> str:
     if text.startswith("file://"):
         text = text[len("file://"):]
     elif _URL.match(text):
-        return _sanitised(urlsplit(text).hostname or "stream")
+        try:
+            return _sanitised(urlsplit(text).hostname or "stream")
+        except ValueError:   # an unclosed [ of an IPv6 address: opening it fails later
+            return "stream"
     scheme = _SCHEME.match(text)
     if scheme and scheme.group(1) in SCHEMES:
         name = scheme.group(2).split("?", 1)[0]

@@ -38,7 +38,7 @@ from typing import Any, Callable, Iterator
 import cv2
 import numpy as np
 
-from ..errors import ConfigError
+from ..errors import ConfigError, opencv_reason
 from ..registry import Registry
 from ..types import Box
 from .association import iou_matrix
@@ -152,7 +152,14 @@ class OpenCVTracker(SingleTracker):
         else:
             x, y = int(round(b.x)), int(round(b.y))
             rect = (x, y, max(1, int(round(b.x2)) - x), max(1, int(round(b.y2)) - y))
-        res = self._cv.init(img, rect)
+        try:
+            res = self._cv.init(img, rect)
+        except cv2.error as exc:  # e.g. MIL on a frame too small for its samples around the box
+            h, w = img.shape[:2]
+            raise ConfigError(f"the {self.name} tracker cannot start on box "
+                              f"{','.join(map(str, rect))} of the {w}x{h} frame (a frame too "
+                              f"small for it around the box?): OpenCV says {opencv_reason(exc)}"
+                              ) from exc
         if res is False:  # the legacy API returns a bool; the new one returns None
             raise ConfigError(f"{self.name} tracker could not initialise on box {rect}")
 

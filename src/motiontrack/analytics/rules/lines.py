@@ -21,7 +21,7 @@ from ..validate import pixels, unique_name
 
 __all__ = ["Lines", "LineTable"]
 
-_POINT = dict(lo=-COORD_LIMIT, hi=COORD_LIMIT)
+_POINT = dict(lo=-COORD_LIMIT, hi=COORD_LIMIT, max_items=2)
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -16,13 +16,13 @@ from ...schema import REQUIRED, param
 from ...types import Event
 from ..geometry import polygon_area, polygon_is_simple
 from ..rule import RULES, BaseRule, Columns, EventType, FrameTable, RuleContext, TrackMemory, rounded
-from ..specs import COORD_LIMIT, SceneSection, ZoneSpec, positive
+from ..specs import COORD_LIMIT, MAX_POLYGON_POINTS, SceneSection, ZoneSpec, positive
 from ..validate import pixels, unique_name
 from ..zones import ZoneEdges
 
 __all__ = ["Zones", "ZoneTable"]
 
-_POINT = dict(lo=-COORD_LIMIT, hi=COORD_LIMIT)
+_POINT = dict(lo=-COORD_LIMIT, hi=COORD_LIMIT, max_items=MAX_POLYGON_POINTS)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -31,7 +31,7 @@ class ZoneTable(SceneSection):
 
     name: str = param(REQUIRED, nonblank=True, doc="unique among zones")
     polygon: tuple[tuple[float, float], ...] | None = param(
-        None, **_POINT, doc="at least 3 points in pixels, a simple polygon (no crossing edges, "
+        None, **_POINT, doc="3 to 1,000 points in pixels, a simple polygon (no crossing edges, "
                             "no repeated point; exactly one of polygon and world)")
     world: tuple[tuple[float, float], ...] | None = param(
         None, **_POINT, doc="the polygon in ground-plane metres, projected through `--camera`")
