@@ -35,7 +35,8 @@ from .people.heads import split_regions_by_heads
 from .preprocess import load_roi, preprocess
 from .tracking.bridge import Bridge
 from .tracking.tracker import TRACKERS
-from .types import Annotations, Box, Frame, FrameResult, PeopleFrame, Region, StaticFrame
+from .types import (Annotations, Box, Frame, FrameResult, PeopleFrame, Region, StaticFrame,
+                    frame_number)
 
 log = logging.getLogger(__name__)
 
@@ -240,7 +241,7 @@ class Pipeline:
         """First half of :meth:`detect`, the image work (OpenCV, which releases the GIL)."""
         if self._det_index is not None:
             return Motion(None, detections=_regions_from_detections(
-                self.detections, self._det_index.get(frame.index + 1)))
+                self.detections, self._det_index.get(frame_number(frame.index))))
         if small is None:
             small = self.prepare(frame)
         raw = self.detector.apply(small, self._protect_mask(small.shape[:2]))
