@@ -1,8 +1,8 @@
 """The metrics of a batch's videos with ground truth combined as TrackEval combines sequences.
 
 Each finished video with ground truth has ``gt.txt`` and ``tracks.txt`` in its folder; every
-such sequence is scored (restricted to the frames the run processed, the scoring ``track``
-uses) and the sequences are combined with :func:`motiontrack.evaluate.mot.combine_sequences`
+such sequence is scored (the frames the run processed that the ground truth covers, as
+``track --gt`` scores them: :func:`~motiontrack.evaluate.score.scored_frames`) and the sequences are combined with :func:`motiontrack.evaluate.mot.combine_sequences`
 in name order, as ``evaluate --gt-folder`` reports ``COMBINED``.
 """
 
@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import Any, Mapping, Sequence
 
 from ..evaluate import mot
+from ..evaluate.score import scored_frames
 from ..evaluate.scoring import DEFAULT_SCORING, ignores_zero_marked
 from ..io.atomic import atomic_write_text
 from ..io.mot import read_mot
@@ -27,7 +28,7 @@ def _sequence(folder: Path, frames: int) -> dict[str, dict]:
     run = RunFolder(folder)
     gt = read_mot(run.gt, kind="gt")
     pred = read_mot(run.tracks, kind="results")   # empty: found nothing
-    gt = gt.select((gt.frames >= 1) & (gt.frames <= frames))
+    gt, pred, _ = scored_frames(gt, pred, (1, frames))   # as `track --gt` scored the run
     return mot.evaluate_sequence(gt, pred,
                                  ignore_zero_marked=ignores_zero_marked(DEFAULT_SCORING))
 
