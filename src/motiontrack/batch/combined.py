@@ -24,11 +24,16 @@ __all__ = ["COMBINED_FILE", "combined_metrics", "write_combined"]
 COMBINED_FILE = "combined.json"
 
 
-def _sequence(folder: Path, frames: int) -> dict[str, dict]:
+def _sequence(folder: Path, summary: Mapping[str, Any]) -> dict[str, dict]:
     run = RunFolder(folder)
     gt = read_mot(run.gt, kind="gt")
     pred = read_mot(run.tracks, kind="results")   # empty: found nothing
-    gt, pred, _ = scored_frames(gt, pred, (1, frames))   # as `track --gt` scored the run
+    window = (summary.get("accuracy") or {}).get("frames_scored")
+    if isinstance(window, list) and len(window) == 2 and all(isinstance(f, int) for f in window):
+        # the frames the run's own accuracy covers (gt.txt no longer knows a scene's length)
+        gt, pred, _ = scored_frames(gt, pred, (window[0], window[1]), outside=True)
+    else:
+        gt, pred, _ = scored_frames(gt, pred, (1, int(summary["frames"])))
     return mot.evaluate_sequence(gt, pred,
                                  ignore_zero_marked=ignores_zero_marked(DEFAULT_SCORING))
 
@@ -41,11 +46,12 @@ def combined_metrics(results: Path, rows: Sequence[Mapping[str, Any]]) -> dict[s
         folder = Path(results) / r["name"]
         if r.get("status") != "done" or not RunFolder(folder).gt.is_file():
             continue
+        summary = RunFolder(folder).summary() or {}
         try:
-            frames = int((RunFolder(folder).summary() or {})["frames"])
+            int(summary["frames"])
         except (ValueError, KeyError, TypeError):
             continue
-        per[r["name"]] = _sequence(folder, frames)
+        per[r["name"]] = _sequence(folder, summary)
     if not per:
         return None
     return {"sequences": list(per), "metrics": mot.flatten(mot.combine_sequences(per.values()))}
