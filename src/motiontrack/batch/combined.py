@@ -1,9 +1,11 @@
 """The metrics of a batch's videos with ground truth combined as TrackEval combines sequences.
 
 Each finished video with ground truth has ``gt.txt`` and ``tracks.txt`` in its folder; every
-such sequence is scored (the frames the run processed that the ground truth covers, as
-``track --gt`` scores them: :func:`~motiontrack.evaluate.score.scored_frames`) and the sequences are combined with :func:`motiontrack.evaluate.mot.combine_sequences`
-in name order, as ``evaluate --gt-folder`` reports ``COMBINED``.
+such sequence is scored over the frames its run's accuracy covered (the frames the run
+processed that the ground truth covers, as ``track --gt`` scores them:
+:func:`~motiontrack.evaluate.score.scored_frames`) and the sequences are combined with
+:func:`motiontrack.evaluate.mot.combine_sequences` in name order, as ``evaluate --gt-folder``
+reports ``COMBINED``.
 """
 
 from __future__ import annotations

@@ -3,8 +3,8 @@
 Every command that scores tracks against ground truth (``evaluate --gt``, ``track --gt``,
 ``sweep``, ``tune``, ``batch``) scores the frames :func:`scored_frames` chooses: those the
 ground truth covers (its first to last frame, or frames 1 to the ``seqLength`` of a MOTChallenge
-``seqinfo.ini`` beside it or a synthetic scene's length, ``meta["seq_length"]``), within the frames asked for (``--frames``,
-or the frames a run processed). Predictions outside the ground truth are left out rather than
+``seqinfo.ini`` beside it or a synthetic scene's length, ``meta["seq_length"]``), within the
+frames asked for (``--frames``, or the frames a run processed). Predictions outside the ground truth are left out rather than
 counted as false positives: a run of 795 frames against ground truth of frames 1–300 would
 otherwise count every box of the 495 frames nobody annotated as wrong.
 ``evaluate --score-outside-gt`` counts them.

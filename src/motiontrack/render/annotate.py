@@ -18,8 +18,8 @@ import numpy as np
 from ..types import Region, Track, frame_number
 from .colors import TrackColors, palette_color
 
-__all__ = ["frame_caption", "INSETS", "LEGEND_STYLES", "text_scale", "line_width", "draw_tracks", "draw_regions",
-           "draw_mask_inset", "draw_legend", "annotate_frame", "draw_label"]
+__all__ = ["frame_caption", "INSETS", "LEGEND_STYLES", "text_scale", "line_width", "draw_tracks",
+           "draw_regions", "draw_mask_inset", "draw_legend", "annotate_frame", "draw_label"]
 
 #: where the mask inset goes (``output.inset``)
 INSETS = ("none", "top-left", "top-right", "bottom-left", "bottom-right")

@@ -87,8 +87,8 @@ class TrackProcessor:
             # sees exactly what this run saw and finds the same events
             boxes = np.array([float(f"{v:.2f}") for t in result.tracks
                               for v in t.box.as_array()]).reshape(-1, 4)
-            scene = self.analytics.step(frame_number(result.index), [t.id for t in result.tracks], boxes,
-                                        result.static)
+            scene = self.analytics.step(frame_number(result.index), [t.id for t in result.tracks],
+                                        boxes, result.static)
             yield replace(result, scene=scene)
 
     def annotate(self, result: FrameResult) -> np.ndarray:
@@ -246,7 +246,8 @@ class DenseFlowProcessor:
         if top is None:   # each frame at its own largest magnitude: the wheel's rim says which
             top = float(cv2.magnitude(self._last[..., 0], self._last[..., 1]).max())
         draw_flow_legend(img, top)
-        draw_label(img, frame_caption(result.index), (4, img.shape[0] - 4), (40, 40, 40), scale=None)
+        draw_label(img, frame_caption(result.index), (4, img.shape[0] - 4), (40, 40, 40),
+                   scale=None)
         return img
 
     def background(self) -> np.ndarray | None:

@@ -137,8 +137,8 @@ class RegionsWriter(Writer):
         if result.regions:
             boxes = np.array([r.box.as_array() for r in result.regions])
             n = len(result.regions)
-            self._file.write(format_mot_rows([frame_number(result.index)] * n, range(1, n + 1), boxes,
-                                             [r.score for r in result.regions]))
+            self._file.write(format_mot_rows([frame_number(result.index)] * n, range(1, n + 1),
+                                             boxes, [r.score for r in result.regions]))
 
     def close(self, keep: bool) -> None:
         if self._file is not None:
