@@ -40,7 +40,8 @@ def main() -> None:
     add_data_argument(ap)
     ap.add_argument("--tracks", type=Path, default=None,
                     help="tracks.txt with world columns (default: track the clip now)")
-    ap.add_argument("--window-s", type=float, default=1.0, help="smoothing window (0: none)")
+    ap.add_argument("--window-s", type=float, default=1.0,
+                    help="window of each speed, seconds (default 1; 0.1 is one frame at 10 fps)")
     args = ap.parse_args()
     video = pets_video(args.data)
     gt = read_mot(video.parent / "gt_mot15.txt", kind="gt")

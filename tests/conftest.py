@@ -24,6 +24,20 @@ def scene_runs(tmp_path_factory):
 
 
 @pytest.fixture(scope="session")
+def pets_camera_run(tmp_path_factory):
+    """The folder of ``track video.avi --camera View_001.xml --no-video`` on PETS 2009 S2L1
+    frames 1-300 (``tracks.txt`` with world columns, ``summary.json`` with track speeds), run
+    once per session for every test asserting on it."""
+    video, xml = require("pets09-s2l1", "video.avi"), require("pets09-s2l1", "View_001.xml")
+    out = tmp_path_factory.mktemp("pets-camera")
+    from motiontrack.cli import main
+
+    assert main(["-q", "track", str(video), "--camera", str(xml), "--no-video", "-o", str(out),
+                 "--force"]) == 0
+    return out
+
+
+@pytest.fixture(scope="session")
 def dask_session_client():
     """One local Dask cluster of 2 worker processes for the whole session, for the tests of the
     batch and sweep logic (starting a cluster takes seconds). The tests that kill or interrupt

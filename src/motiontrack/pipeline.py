@@ -43,7 +43,7 @@ from .preprocess import load_roi, preprocess
 from .tracking.bridge import Bridge
 from .tracking.tracker import TRACKERS
 from .types import (Annotations, Box, Discontinuity, Frame, FrameResult, PeopleFrame, Region,
-                    StaticFrame)
+                    StaticFrame, frame_number)
 
 log = logging.getLogger(__name__)
 
@@ -289,7 +289,8 @@ class Pipeline:
         cut = frame.discontinuity
         if self._det_index is not None:
             return Motion(None, detections=_regions_from_detections(
-                self.detections, self._det_index.get(frame.index + 1)), discontinuity=cut)
+                self.detections, self._det_index.get(frame_number(frame.index))),
+                discontinuity=cut)
         if cut is not None:
             self.reset_motion()
         if small is None:

@@ -5,7 +5,9 @@ Conventions
 * Boxes are ``(x, y, w, h)`` in pixels of the *original* frame: ``x, y`` is the top-left corner,
   ``w, h`` the width and height (MOTChallenge convention).
 * Frame numbers in :class:`Annotations` are 1-based (MOTChallenge); :class:`Frame.index` and
-  :class:`FrameResult.index` are 0-based video frame indices, so ``frame number = index + 1``.
+  :class:`FrameResult.index` are 0-based video frame indices, and :func:`frame_number` turns
+  one into the other: every frame a run shows or writes (the annotated picture's label, stills,
+  tracks, events, masks) carries ``frame_number(index)``.
 * Stacked arrays are ``float64`` of shape ``(N, 4)``; every function handles ``N = 0``.
 """
 
@@ -18,7 +20,19 @@ from typing import Mapping
 
 import numpy as np
 
+#: the number of a source's first frame wherever a frame is shown or written (MOTChallenge)
+FIRST_FRAME = 1
+
+
+def frame_number(index: int) -> int:
+    """The number frame ``index`` (0-based in its source) is shown and written with: the label
+    of the annotated picture, stills, ``tracks.txt``, ``events.jsonl``, mask images (counting
+    from :data:`FIRST_FRAME`, as MOTChallenge files do)."""
+    return int(index) + FIRST_FRAME
+
 __all__ = [
+    "FIRST_FRAME",
+    "frame_number",
     "Box",
     "Region",
     "TrackState",

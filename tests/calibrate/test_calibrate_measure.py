@@ -81,22 +81,38 @@ def test_foot_points_and_empty():
 
 
 def test_track_speed_and_length_hand_built():
-    # track 1 walks 100 px = 1 m per frame to the right for 5 frames at 10 fps; track 2 stands still
-    frames = [1, 2, 3, 4, 5, 1, 2]
-    ids = [1, 1, 1, 1, 1, 2, 2]
-    boxes = [[100 * i, 0, 20, 50] for i in range(5)] + [[0, 0, 20, 50]] * 2
-    m = track_measurements(frames, ids, boxes, SCALE, fps=10.0)
+    # track 1 walks 100 px = 1 m per frame to the right for 5 frames at 10 fps; track 2 stands
+    # still for 3 frames. A 0.4 s window is 4 frames: speeds from frame 3 (2 frames back, half a
+    # window) on, each 1 m per frame = 10 m/s
+    frames = [1, 2, 3, 4, 5, 1, 2, 3]
+    ids = [1, 1, 1, 1, 1, 2, 2, 2]
+    boxes = [[100 * i, 0, 20, 50] for i in range(5)] + [[0, 0, 20, 50]] * 3
+    m = track_measurements(frames, ids, boxes, SCALE, fps=10.0, window_s=0.4)
     assert m[1]["path_length_m"] == pytest.approx(4 * 1.0)
     assert m[1]["duration_s"] == pytest.approx((5 - 1) / 10.0)
-    assert m[1]["mean_speed_mps"] == pytest.approx(4 * 1.0 / ((5 - 1) / 10.0))
+    assert m[1]["mean_speed_mps"] == pytest.approx(1.0 * 10.0)
+    assert (m[1]["speed_window_s"], m[1]["speed_fps"]) == (0.4, 10.0)
     assert m[1]["height_m"] is None  # a homography cannot measure heights
     assert m[2]["path_length_m"] == 0.0 and m[2]["mean_speed_mps"] == 0.0
     json.dumps(m)  # valid JSON (no NaN)
 
 
-def test_single_frame_track_has_no_speed():
+def test_track_speed_ignores_jitter_across_the_way():
+    # 1 m per second along x at 10 fps for 3 s, the foot point jumping 0.1 m across the way
+    # every frame: the frame-to-frame path is 1.4 times the walk, the speed over 1 s is not
+    frames = list(range(1, 31))
+    boxes = [[10 * i - 10, 10 * (i % 2), 20, 50] for i in range(30)]
+    m = track_measurements(frames, [1] * 30, boxes, SCALE, fps=10.0)[1]
+    assert m["path_length_m"] / m["duration_s"] > 1.4
+    assert m["mean_speed_mps"] == pytest.approx(1.0, abs=0.01)
+
+
+def test_track_shorter_than_half_a_window_has_no_speed():
     m = track_measurements([3], [7], [[0, 0, 10, 10]], SCALE, fps=25.0)
     assert m[7]["mean_speed_mps"] is None and m[7]["frames"] == 1
+    m = track_measurements(range(1, 13), [7] * 12, [[i, 0, 10, 10] for i in range(12)], SCALE,
+                           fps=25.0)   # 11 frames apart: under half a second
+    assert m[7]["mean_speed_mps"] is None
 
 
 def test_bad_fps():

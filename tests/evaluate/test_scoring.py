@@ -41,7 +41,7 @@ def test_the_default_is_trackevals_convention():
 def test_box_on_zero_marked_gt_counts_as_the_convention_says_on_both_paths(scoring):
     gt, pred = ann(GT, gt=True), ann(PRED)
     run = score_run(gt, pred, frames=1, scoring=scoring)                  # track --gt
-    flat, _ = evaluate_one(gt, pred, ("clear", "identity", "hota"), 0.75, scoring=scoring)
+    flat, _, _ = evaluate_one(gt, pred, ("clear", "identity", "hota"), 0.75, scoring=scoring)
     for key, value in EXPECTED[scoring].items():
         assert run[key] == pytest.approx(value), key
         assert flat[key] == pytest.approx(value), key

@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 
 import cv2
+import numpy as np
 import pytest
 
 from motiontrack.cli import main
@@ -76,23 +77,30 @@ def test_fps_sets_the_frames_of_every_duration():
 def test_fps_scales_speeds_and_sets_the_video_rate_and_the_summary(data, tmp_path):
     video, xml = data("pets09-s2l1", "video.avi"), data("pets09-s2l1", "View_001.xml")
     common = ["track", str(video), "--max-frames", "40", "--camera", str(xml)]
-    # the same time-out in frames at both rates (10 frames), so the tracks are the same
+    # the same time-out in frames at every rate (10 frames), so the tracks are the same
     assert main(common + ["--no-video", "-o", str(tmp_path / "a"),
                           "--set", "tracker.max_lost_s=1.0"]) == 0
-    assert main(common + ["--fps", "7", "--codec", "mjpg", "-o", str(tmp_path / "b"),
-                          "--set", f"tracker.max_lost_s={10 / 7!r}"]) == 0
-    a, b = (json.loads((tmp_path / n / "summary.json").read_text()) for n in "ab")
+    assert main(common + ["--fps", "5", "--codec", "mjpg", "-o", str(tmp_path / "b"),
+                          "--set", "tracker.max_lost_s=2.0"]) == 0
+    assert main(common + ["--fps", "20", "--no-video", "-o", str(tmp_path / "c"),
+                          "--set", "tracker.max_lost_s=0.5"]) == 0
+    a, b, c = (json.loads((tmp_path / n / "summary.json").read_text()) for n in "abc")
     assert (a["source_fps"], "source_stored_fps" in a) == (10.0, False)
-    assert (b["source_fps"], b["source_stored_fps"]) == (7.0, 10.0)
-    ta, tb = (read_mot(tmp_path / n / "tracks.txt") for n in "ab")
-    assert len(ta) > 0 and (ta.boxes == tb.boxes).all() and (ta.ids == tb.ids).all()
-    speeds = [(m["mean_speed_mps"], b["measurements"][k]["mean_speed_mps"])
-              for k, m in a["measurements"].items() if m["mean_speed_mps"] is not None]
-    assert speeds
-    for at10, at7 in speeds:   # the same path in 10/7 the time
-        assert at7 == pytest.approx(at10 * 7 / 10, rel=1e-6)
+    assert (b["source_fps"], b["source_stored_fps"]) == (5.0, 10.0)
+    ta, tb, tc = (read_mot(tmp_path / n / "tracks.txt") for n in "abc")
+    assert len(ta) > 0 and len(ta) == len(tb) == len(tc)
+    assert all((ta.boxes == t.boxes).all() and (ta.ids == t.ids).all() for t in (tb, tc))
+    # the same path in twice or half the time: each speed is over 1 s, so over 5, 10 or 20
+    # frames of it, and the ratios are near 1/2 and 2 rather than exact
+    for run, fps in ((b, 5.0), (c, 20.0)):
+        ratios = [run["measurements"][k]["mean_speed_mps"] / m["mean_speed_mps"]
+                  for k, m in a["measurements"].items()
+                  if m["mean_speed_mps"] and run["measurements"][k]["mean_speed_mps"]]
+        assert len(ratios) >= 3
+        assert np.median(ratios) == pytest.approx(fps / 10.0, rel=0.15)
+        assert {m["speed_fps"] for m in run["measurements"].values()} == {fps}
     cap = cv2.VideoCapture(str(tmp_path / "b" / "annotated.avi"))
-    assert cap.get(cv2.CAP_PROP_FPS) == pytest.approx(7.0)
+    assert cap.get(cv2.CAP_PROP_FPS) == pytest.approx(5.0)
     cap.release()
 
 

@@ -4,16 +4,18 @@
   ``radius`` of the mean of the stay's positions extends it, the first one farther away ends it
   and starts a new stay there. ``stationary_start`` is emitted when a stay has lasted
   ``after_s``; ``stationary_end`` when that stay ends, with the time it lasted.
-* **Speeding**: the speed is the straight distance from the oldest position of the last
-  ``window_s`` seconds to the current one over their time apart, measured once that span is at
-  least half a window. ``speeding`` is emitted when it exceeds the limit; the track is armed
+* **Speeding**: the speed is :class:`motiontrack.speed.WindowSpeed`: the straight distance
+  from the oldest position of the last ``window_s`` seconds to the current one over their time
+  apart, measured once that span is at least half a window. ``speeding`` is emitted when it
+  exceeds the limit; the track is armed
   again once its speed falls to 90 % of the limit, so a speed hovering at the limit is one event.
 """
 
 from __future__ import annotations
 
 import math
-from collections import deque
+
+from ..speed import WindowSpeed
 
 __all__ = ["Stay", "SpeedWindow", "REARM"]
 
@@ -56,22 +58,12 @@ class Stay:
         return ("end", lasted) if ended else (None, 0)
 
 
-class SpeedWindow:
-    """One track's recent positions and whether it is speeding now."""
+class SpeedWindow(WindowSpeed):
+    """One track's speed (:class:`~motiontrack.speed.WindowSpeed`, the definition
+    ``summary.json``'s track speeds share) and whether it is speeding now."""
 
-    __slots__ = ("samples", "speeding")
+    __slots__ = ("speeding",)
 
-    def __init__(self) -> None:
-        self.samples: deque[tuple[int, float, float]] = deque()
+    def __init__(self, window_s: float, fps: float) -> None:
+        super().__init__(window_s, fps)
         self.speeding = False
-
-    def speed(self, frame: int, p: tuple[float, float], window_frames: float, fps: float) -> float | None:
-        """Add a position; the speed (units per second) over the window, or ``None`` while the
-        window spans less than half its length."""
-        self.samples.append((frame, p[0], p[1]))
-        while self.samples and frame - self.samples[0][0] > window_frames + 1e-9:
-            self.samples.popleft()
-        f0, x0, y0 = self.samples[0]
-        if frame - f0 < window_frames / 2.0 or frame == f0:
-            return None
-        return math.hypot(p[0] - x0, p[1] - y0) * fps / (frame - f0)

@@ -17,6 +17,7 @@ from typing import ClassVar
 import numpy as np
 
 from ..schema import REQUIRED, Section, param
+from ..speed import SPEED_WINDOW_S
 
 __all__ = ["COORD_LIMIT", "MAX_POLYGON_POINTS", "MAX_TABLES", "SceneSection", "LineSpec",
            "ZoneSpec", "StationarySpec", "AbandonedSpec", "SpeedSpec"]
@@ -101,4 +102,4 @@ class SpeedSpec(SceneSection):
     limit_mps: float | None = positive(None, "limit in metres per second; needs a camera "
                                              "(exactly one of limit_mps and limit_px_s)")
     limit_px_s: float | None = positive(None, "limit in pixels per second")
-    window_s: float = positive(1.0, "window of the speed measurement")
+    window_s: float = positive(SPEED_WINDOW_S, "window of the speed measurement")

@@ -1,9 +1,11 @@
 """The metrics of a batch's videos with ground truth combined as TrackEval combines sequences.
 
 Each finished video with ground truth has ``gt.txt`` and ``tracks.txt`` in its folder; every
-such sequence is scored (restricted to the frames the run processed, the scoring ``track``
-uses) and the sequences are combined with :func:`motiontrack.evaluate.mot.combine_sequences`
-in name order, as ``evaluate --gt-folder`` reports ``COMBINED``.
+such sequence is scored over the frames its run's accuracy covered (the frames the run
+processed that the ground truth covers, as ``track --gt`` scores them:
+:func:`~motiontrack.evaluate.score.scored_frames`) and the sequences are combined with
+:func:`motiontrack.evaluate.mot.combine_sequences` in name order, as ``evaluate --gt-folder``
+reports ``COMBINED``.
 """
 
 from __future__ import annotations
@@ -13,6 +15,7 @@ from pathlib import Path
 from typing import Any, Mapping, Sequence
 
 from ..evaluate import mot
+from ..evaluate.score import scored_frames
 from ..evaluate.scoring import DEFAULT_SCORING, ignores_zero_marked
 from ..io.atomic import atomic_write_text
 from ..io.mot import read_mot
@@ -23,11 +26,16 @@ __all__ = ["COMBINED_FILE", "combined_metrics", "write_combined"]
 COMBINED_FILE = "combined.json"
 
 
-def _sequence(folder: Path, frames: int) -> dict[str, dict]:
+def _sequence(folder: Path, summary: Mapping[str, Any]) -> dict[str, dict]:
     run = RunFolder(folder)
     gt = read_mot(run.gt, kind="gt")
     pred = read_mot(run.tracks, kind="results")   # empty: found nothing
-    gt = gt.select((gt.frames >= 1) & (gt.frames <= frames))
+    window = (summary.get("accuracy") or {}).get("frames_scored")
+    if isinstance(window, list) and len(window) == 2 and all(isinstance(f, int) for f in window):
+        # the frames the run's own accuracy covers (gt.txt no longer knows a scene's length)
+        gt, pred, _ = scored_frames(gt, pred, (window[0], window[1]), outside=True)
+    else:
+        gt, pred, _ = scored_frames(gt, pred, (1, int(summary["frames"])))
     return mot.evaluate_sequence(gt, pred,
                                  ignore_zero_marked=ignores_zero_marked(DEFAULT_SCORING))
 
@@ -40,11 +48,12 @@ def combined_metrics(results: Path, rows: Sequence[Mapping[str, Any]]) -> dict[s
         folder = Path(results) / r["name"]
         if r.get("status") != "done" or not RunFolder(folder).gt.is_file():
             continue
+        summary = RunFolder(folder).summary() or {}
         try:
-            frames = int((RunFolder(folder).summary() or {})["frames"])
+            int(summary["frames"])
         except (ValueError, KeyError, TypeError):
             continue
-        per[r["name"]] = _sequence(folder, frames)
+        per[r["name"]] = _sequence(folder, summary)
     if not per:
         return None
     return {"sequences": list(per), "metrics": mot.flatten(mot.combine_sequences(per.values()))}

@@ -137,13 +137,13 @@ def _one_line(exc: BaseException) -> str:
 def _run_track_job(task: BatchTask, partial: Path, t0: float) -> Any:
     """Run the video's ``track`` job into ``partial``: its summary. :class:`VideoTimeout` when
     it ran over ``--timeout-s``, :class:`BatchStopped` when the batch asked it to stop."""
-    from ..io.annotations import read_annotations
+    from ..io.annotations import read_ground_truth
     from ..run.jobs import track_job
 
     v = task.video
     overrides = [f"measure.camera={json.dumps(v.camera)}"] if v.camera else []
     cfg = apply_overrides(from_dict(PipelineConfig, dict(task.config)), overrides)
-    gt = read_annotations(v.gt, mot_kind="gt") if v.gt else None
+    gt = read_ground_truth(v.gt) if v.gt else None
     job = track_job(v.source, cfg, partial, force=True, gt=gt, scene=v.scene)
     frames = _Frames(task, None if task.timeout_s is None else t0 + task.timeout_s)
     # polled after each frame: a run over its time stops itself, so its worker is free

@@ -5,10 +5,11 @@ Method
 * **Position**: the foot point of a box is its bottom centre ``(x + w/2, y + h)``; it is back-projected
   onto the ground plane ``Z = 0`` (``camera.image_to_world``). This assumes the person stands on the
   ground and the box bottom touches the feet.
-* **Path length and speed**: per track, positions are ordered by frame; the path length is the sum of
-  the distances between consecutive valid positions (optionally after a centred moving average of
-  ``window`` frames to suppress box jitter); mean speed = path length / elapsed time, where elapsed
-  time = (last frame - first frame) / fps.
+* **Path length**: per track, positions are ordered by frame; the path length is the sum of the
+  distances between consecutive valid positions (box jitter included).
+* **Speed**: :func:`motiontrack.speed.mean_speed`, the definition the scene rule ``[speed]``
+  uses: the mean over the track's frames of the straight distance from its oldest position of
+  the last ``window_s`` seconds to the current one over their time apart (frames / ``fps``).
 * **Height** (the "vertical through the foot point" construction, cf. Criminisi, Reid & Zisserman,
   "Single view metrology", IJCV 2000, for the single-view idea): the head is assumed to lie on the
   world vertical ``L(s) = F + s e_z`` through the foot point ``F``. The top-centre pixel of the box
@@ -27,6 +28,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
+
+from ..speed import SPEED_WINDOW_S, mean_speed
 
 __all__ = ["foot_points", "world_positions", "box_heights", "track_measurements"]
 
@@ -84,21 +87,12 @@ def box_heights(boxes, camera) -> np.ndarray:
     return np.where(np.isfinite(s), s, np.nan)
 
 
-def _smooth(xy: np.ndarray, window: int) -> np.ndarray:
-    if window <= 1 or len(xy) < 2:
-        return xy
-    half = window // 2
-    out = np.empty_like(xy)
-    for i in range(len(xy)):
-        out[i] = xy[max(0, i - half): i + half + 1].mean(axis=0)
-    return out
-
-
 def _num(v: float) -> float | None:
     return None if v is None or not math.isfinite(v) else float(v)
 
 
-def track_measurements(frames, ids, boxes, camera, fps: float, window: int = 1) -> dict[int, dict]:
+def track_measurements(frames, ids, boxes, camera, fps: float,
+                       window_s: float = SPEED_WINDOW_S) -> dict[int, dict]:
     """Per-track speed, path length and height.
 
     Parameters
@@ -111,16 +105,17 @@ def track_measurements(frames, ids, boxes, camera, fps: float, window: int = 1) 
         ``x, y, w, h`` pixels.
     camera : camera object (see :func:`world_positions`).
     fps : float
-        Frames per second (> 0).
-    window : int
-        Centred moving-average length (frames) applied to positions before the path length.
+        Frames per second (> 0): the rate the frames were recorded at (``--fps``).
+    window_s : float
+        Seconds of the window of each speed (:func:`motiontrack.speed.mean_speed`).
 
     Returns
     -------
     dict
         ``{track_id: {"frames": n, "first_frame", "last_frame", "duration_s", "path_length_m",
-        "mean_speed_mps", "height_m"}}``; undefined values (a single frame, no height model) are
-        ``None`` so the result is valid JSON.
+        "mean_speed_mps", "speed_window_s", "speed_fps", "height_m"}}`` (``speed_window_s`` and
+        ``speed_fps``: the window and frame rate of the speed); undefined values (a track shorter
+        than half a window, no height model) are ``None`` so the result is valid JSON.
     """
     if not (fps > 0 and math.isfinite(fps)):
         raise ValueError(f"fps must be > 0, got {fps}")
@@ -140,11 +135,9 @@ def track_measurements(frames, ids, boxes, camera, fps: float, window: int = 1) 
         f = fr[idx]
         p = pos[idx]
         ok = np.all(np.isfinite(p), axis=1)
-        p = _smooth(p[ok], window)
-        length = float(np.sum(np.linalg.norm(np.diff(p, axis=0), axis=1))) if len(p) > 1 else 0.0
+        length = float(np.sum(np.linalg.norm(np.diff(p[ok], axis=0), axis=1)))
         duration = (f[-1] - f[0]) / fps
-        fv = f[ok]
-        span = (fv[-1] - fv[0]) / fps if len(fv) > 1 else 0.0
+        speed = mean_speed(f[ok].tolist(), p[ok].tolist(), fps, window_s)
         h = hts[idx]
         h = h[np.isfinite(h)]
         out[int(tid)] = {
@@ -153,7 +146,9 @@ def track_measurements(frames, ids, boxes, camera, fps: float, window: int = 1) 
             "last_frame": int(f[-1]),
             "duration_s": float(duration),
             "path_length_m": float(length),
-            "mean_speed_mps": _num(length / span) if span > 0 else None,
+            "mean_speed_mps": _num(speed),
+            "speed_window_s": float(window_s),
+            "speed_fps": float(fps),
             "height_m": _num(float(np.median(h))) if len(h) else None,
         }
     return out

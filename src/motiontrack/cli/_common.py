@@ -223,10 +223,12 @@ class CodecOption(argparse.Action):
 
 
 def read_gt(path: str):
-    """Read a ground-truth file in any supported annotation format (MOT CSV read as gt)."""
-    from ..io.annotations import read_annotations
+    """Read a ground-truth file in any supported annotation format (MOT CSV read as gt), with
+    the length of a ``seqinfo.ini`` beside it
+    (:func:`~motiontrack.io.annotations.read_ground_truth`)."""
+    from ..io.annotations import read_ground_truth
 
-    return read_annotations(path, mot_kind="gt")
+    return read_ground_truth(path)
 
 
 @contextmanager

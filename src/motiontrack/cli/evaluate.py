@@ -23,6 +23,7 @@ from ..evaluate.scoring import DEFAULT_SCORING, SCORING_SUMMARY, ignores_zero_ma
 from ._common import add_scoring_option, frame_range
 
 if TYPE_CHECKING:  # NumPy and the data model load when the command runs, not with every command
+    from ..evaluate.score import ScoredFrames
     from ..types import Annotations
 
 log = logging.getLogger(__name__)
@@ -69,7 +70,13 @@ def register(subparsers) -> None:
                    help="with --gt-folder: the sequences to evaluate, a TrackEval seqmap file "
                         "(header line, then one name per line; default every sequence folder)")
     p.add_argument("--frames", type=frame_range, metavar="A:B",
-                   help="evaluate only frames A..B (inclusive, 1-based)")
+                   help="evaluate only frames A..B (inclusive, 1-based; within those the "
+                        "ground truth covers)")
+    p.add_argument("--score-outside-gt", action="store_true",
+                   help="also score the predicted frames outside the ground truth's (its first "
+                        "to last frame, or 1 to the seqLength of a seqinfo.ini beside it), whose "
+                        "boxes are then false positives; by default they are left out and a line "
+                        "says how many")
     p.add_argument("--metrics", default=None,
                    help="comma-separated subset of clear,identity,hota,framewise "
                         "(default: all that are available)")
@@ -106,10 +113,11 @@ def _read(path: Path, role: str) -> Annotations:
         from ..types import Annotations
 
         return Annotations.empty()
-    mot_kind = "gt" if role == "ground-truth" else "results"
-    from ..io.annotations import read_annotations
+    from ..io.annotations import read_annotations, read_ground_truth
 
-    return read_annotations(path, mot_kind=mot_kind)
+    if role == "ground-truth":   # with the length of a seqinfo.ini beside it
+        return read_ground_truth(path)
+    return read_annotations(path, mot_kind="results")
 
 
 def _pred_files(pred: Path) -> list[tuple[str, Path]]:
@@ -143,30 +151,31 @@ def _named(items: list[tuple[str, Path]]) -> list[tuple[str, Path]]:
     return out
 
 
-def _clip_frames(ann: Annotations, frames: tuple[int, int | None] | None) -> Annotations:
-    if frames is None or len(ann) == 0:
-        return ann
-    lo, hi = frames
-    keep = ann.frames >= lo
-    if hi is not None:
-        keep &= ann.frames <= hi
-    return ann.select(keep)
-
-
 def evaluate_one(gt: Annotations, pred: Annotations, metrics: tuple[str, ...], xi: float,
                  frames: tuple[int, int | None] | None = None,
-                 scoring: str = DEFAULT_SCORING) -> tuple[dict, list[dict]]:
-    """Flat metrics and per-frame rows for one tracker (the command's work, without I/O).
+                 scoring: str = DEFAULT_SCORING, outside: bool = False
+                 ) -> tuple[dict, list[dict], ScoredFrames]:
+    """Flat metrics, per-frame rows and the scored frames for one tracker (the command's work,
+    without I/O).
 
-    ``scoring`` names how zero-marked gt rows count (:data:`~motiontrack.evaluate.scoring.SCORING`);
-    with tracking metrics the flat dict names it under ``"scoring"``."""
+    The frames scored are ``frames`` (``--frames``) within those the ground truth covers
+    (:func:`~motiontrack.evaluate.score.scored_frames`; ``outside``: all of ``frames``, the
+    predictions beyond the ground truth then false positives). ``scoring`` names how
+    zero-marked gt rows count (:data:`~motiontrack.evaluate.scoring.SCORING`); with tracking
+    metrics the flat dict names it under ``"scoring"``."""
     from ..evaluate.clear import clear_metrics
     from ..evaluate.hota import hota_metrics
     from ..evaluate.identity import identity_metrics
     from ..evaluate.mot import flatten
+    from ..evaluate.score import scored_frames
     from ..evaluate.sequence import preprocess
 
-    gt, pred = _clip_frames(gt, frames), _clip_frames(pred, frames)
+    gt, pred, window = scored_frames(gt, pred, frames, outside=outside)
+    if window.empty:
+        c = window.covered
+        raise InputError(f"--frames {frames[0]}:{frames[1] or ''} holds none of the ground "
+                         f"truth's frames {c[0]}–{c[1]} (--score-outside-gt scores the "
+                         f"predictions there as false positives)")
     flat: dict = {}
     rows: dict[int, dict] = {}
     tracking = tuple(m for m in metrics if m in TRACKING)
@@ -188,15 +197,15 @@ def evaluate_one(gt: Annotations, pred: Annotations, metrics: tuple[str, ...], x
         from ..evaluate.framewise import evaluate_framewise
 
         rng = None
-        if frames is not None:
-            last = max([int(a.frames.max()) for a in (gt, pred) if len(a)] or [frames[0]])
-            rng = (frames[0], frames[1] if frames[1] is not None else last)
+        if window.first is not None:
+            last = max([int(a.frames.max()) for a in (gt, pred) if len(a)] or [window.first])
+            rng = (window.first, window.last if window.last is not None else last)
         overall, per_frame = evaluate_framewise(gt, pred, xi, frames=rng)
         flat.update(overall)
         for r in per_frame:
             f = int(r["frame"])
             rows.setdefault(f, {"frame": f}).update({k: v for k, v in r.items() if k != "frame"})
-    return flat, [rows[f] for f in sorted(rows)]
+    return flat, [rows[f] for f in sorted(rows)], window
 
 
 def _fmt(key: str, v) -> str:
@@ -266,9 +275,12 @@ def run(args: argparse.Namespace) -> int:
         pred = _read(path, "result")
         log.info("evaluating %s (%d boxes) against %s (%d boxes)", path, len(pred), args.gt, len(gt))
         try:
-            flat, rows = evaluate_one(gt, pred, metrics, args.xi, args.frames, args.scoring)
+            flat, rows, window = evaluate_one(gt, pred, metrics, args.xi, args.frames,
+                                              args.scoring, args.score_outside_gt)
         except InputError as exc:  # name the file: a folder may hold many
             raise InputError(f"{path}: {exc}") from None
+        if window.note():
+            log.info("%s: %s", name, window.note())
         results[name] = flat
         # the per-frame counts depend on the convention too: each row names it
         tag = {"scoring": flat["scoring"]} if "scoring" in flat else {}
@@ -304,6 +316,9 @@ def run_benchmark(args: argparse.Namespace) -> int:
     if args.frames is not None or args.per_frame is not None:
         raise ConfigError("--frames and --per-frame apply to --gt/--pred, not to a benchmark "
                           "folder (sequences are scored whole, as TrackEval does)")
+    if args.score_outside_gt:
+        raise ConfigError("--score-outside-gt applies to --gt/--pred; a benchmark folder is "
+                          "scored over its seqinfo.ini lengths, as TrackEval does")
     metrics = _parse_metrics(args.metrics) if args.metrics is not None else TRACKING
     if "framewise" in metrics:
         raise ConfigError("framewise metrics are not combined over sequences; with --gt-folder "

@@ -4,14 +4,14 @@ Each tracker track is paired with the ground-truth object it matches in most fra
 frame, tracker and ground-truth boxes (``consider`` rows only) are matched one to one at IoU
 >= ``threshold``, maximising the total IoU (the frame-level matching of CLEAR-MOT without its
 continuity rule). Over the frames where the pair is matched, both mean speeds are measured the
-same way: the positions in frame order are averaged over a centred window of ``window_s``
-seconds (box jitter of a frame or two otherwise adds path that nobody walked: on PETS S2L1 it
-makes tracker speeds 0.2 m/s too high), then the path length through them is divided by the
-time between the first and last averaged positions (the frame numbers averaged alike, so that
-the shorter windows at the ends do not bias a steady walk). The tracker's positions are its ``world`` column (``tracks.txt``
-columns 8–9 with ``track --camera``), the ground truth's its own (``gt_mot15.txt`` columns
-8–9). Both speeds come from the same frames at the same frame rate, so a frame rate other than
-the true one scales both alike.
+same way, the way ``summary.json`` and the scene rule ``[speed]`` measure a track's speed
+(:func:`motiontrack.speed.mean_speed`): the mean over those frames of the straight distance from
+the position ``window_s`` seconds earlier (the oldest within the window) to the current one over
+their time apart (box jitter of a frame or two otherwise adds path that nobody walked). The
+tracker's positions are its ``world`` column (``tracks.txt`` columns 8–9 with ``track
+--camera``), the ground truth's its own (``gt_mot15.txt`` columns 8–9). Both speeds come from
+the same frames at the same frame rate, so a frame rate other than the true one scales both
+alike.
 """
 
 from __future__ import annotations
@@ -21,6 +21,7 @@ from collections import Counter, defaultdict
 import numpy as np
 
 from ..assignment import linear_sum_assignment
+from ..speed import SPEED_WINDOW_S, mean_speed
 from ..types import Annotations
 from .pairs import box_iou_xywh
 
@@ -51,30 +52,11 @@ def majority_matches(gt: Annotations, pred: Annotations,
     return out
 
 
-def _smooth(xy: np.ndarray, window: int) -> np.ndarray:
-    """Centred moving average over ``window`` (odd) samples, shorter at the ends."""
-    if window <= 1 or len(xy) < 2:
-        return xy
-    half = window // 2
-    c = np.vstack([np.zeros((1, xy.shape[1])), np.cumsum(xy, axis=0)])
-    k = np.arange(len(xy))
-    lo, hi = np.maximum(k - half, 0), np.minimum(k + half + 1, len(xy))
-    return (c[hi] - c[lo]) / (hi - lo)[:, None]
-
-
-def _mean_speed(frames: np.ndarray, xy: np.ndarray, fps: float, window: int) -> float:
-    t = _smooth(frames.astype(np.float64).reshape(-1, 1), window)[:, 0]
-    p = _smooth(xy, window)
-    length = float(np.sum(np.linalg.norm(np.diff(p, axis=0), axis=1)))
-    return length * fps / float(t[-1] - t[0])
-
-
 def speed_pairs(gt: Annotations, pred: Annotations, fps: float, threshold: float = 0.5,
-                min_frames: int = 10, window_s: float = 1.0) -> list[dict]:
+                min_frames: int = 10, window_s: float = SPEED_WINDOW_S) -> list[dict]:
     """Per tracker track matched in at least ``min_frames`` frames: ``track``, ``gt``,
     ``frames``, ``speed_mps`` (tracker), ``gt_speed_mps`` and ``diff_mps`` (tracker − ground
-    truth), in track order. ``window_s`` = 0: no smoothing."""
-    window = 2 * int(round(window_s * fps / 2.0)) + 1
+    truth), in track order; ``window_s`` (> 0) is the window of each speed."""
     g_index = {(int(f), int(i)): k for k, (f, i) in enumerate(zip(gt.frames, gt.ids))}
     p_index = {(int(f), int(i)): k for k, (f, i) in enumerate(zip(pred.frames, pred.ids))}
     rows = []
@@ -86,8 +68,10 @@ def speed_pairs(gt: Annotations, pred: Annotations, fps: float, threshold: float
         ok = np.all(np.isfinite(ours), axis=1) & np.all(np.isfinite(theirs), axis=1)
         if np.count_nonzero(ok) < max(2, min_frames):
             continue
-        v = _mean_speed(frames[ok], ours[ok], fps, window)
-        g = _mean_speed(frames[ok], theirs[ok], fps, window)
+        v = mean_speed(frames[ok].tolist(), ours[ok].tolist(), fps, window_s)
+        g = mean_speed(frames[ok].tolist(), theirs[ok].tolist(), fps, window_s)
+        if v is None or g is None:   # matched over less than half a window
+            continue
         rows.append({"track": tid, "gt": gid, "frames": int(np.count_nonzero(ok)),
                      "speed_mps": v, "gt_speed_mps": g, "diff_mps": v - g})
     return rows

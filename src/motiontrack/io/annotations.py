@@ -17,6 +17,7 @@ The safe XML parser the CVML and CVAT readers share is :mod:`motiontrack.io.xmls
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import re
 from pathlib import Path
@@ -26,7 +27,7 @@ from ..types import Annotations
 from .cvat import read_cvat, write_cvat
 from .cvml import read_cvml, write_cvml
 from .jsonfmt import read_json, write_json
-from .mot import read_mot, write_mot
+from .mot import read_mot, read_seqinfo, write_mot
 from .viper import read_viper, write_viper
 from .xmlsafe import tag_text
 
@@ -34,6 +35,7 @@ __all__ = [
     "FORMATS",
     "detect_format",
     "read_annotations",
+    "read_ground_truth",
     "write_annotations",
 ]
 
@@ -154,6 +156,30 @@ def read_annotations(path: str | Path, kind: str = "auto", mot_kind: str = "auto
     if fmt == "mot":
         return read_mot(p, kind=mot_kind)
     return _READERS[fmt](p)
+
+
+def read_ground_truth(path: str | Path, kind: str = "auto") -> Annotations:
+    """Read ground truth (:func:`read_annotations`, MOTChallenge CSV read as gt) with
+    ``meta["seq_length"]``: the ``seqLength`` of a MOTChallenge ``seqinfo.ini`` in the file's
+    folder or the one above (``SEQ/gt/gt.txt`` beside ``SEQ/seqinfo.ini``), when there is one
+    that states it. Scoring covers the frames 1 to that length
+    (:func:`motiontrack.evaluate.score.gt_coverage`); a ``seqinfo.ini`` that cannot be read is
+    named in a warning and left aside."""
+    gt = read_annotations(path, kind=kind, mot_kind="gt")
+    p = Path(path)
+    for folder in (p.parent, p.parent.parent):
+        ini = folder / "seqinfo.ini"
+        if not ini.is_file():
+            continue
+        try:
+            length = read_seqinfo(ini).get("seqlength")
+        except InputError as exc:
+            log.warning("%s; scoring the ground truth's own frames", exc)
+            return gt
+        if isinstance(length, int) and length >= 1:
+            return dataclasses.replace(gt, meta={**gt.meta, "seq_length": length})
+        return gt
+    return gt
 
 
 _READERS = {"viper": read_viper, "cvml": read_cvml, "cvat": read_cvat, "json": read_json}

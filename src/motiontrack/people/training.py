@@ -33,6 +33,7 @@ from ..io.atomic import atomic_write_bytes
 from ..io.sources import open_source
 from ..motion import clean_mask, create_detector
 from ..synth import MASK_PERSON, make_scene
+from ..types import frame_number
 from . import bspline
 from .shape_model import ShapeModel, apply_similarity, fit_similarity
 
@@ -282,7 +283,7 @@ def outlines_from_video(source, gt, n_control: int = 32, every: int = 2, min_hei
         if max_frames and k >= max_frames:
             break
         mask = clean_mask(det.apply(frame.image), CleanupConfig())
-        fno = frame.index + 1
+        fno = frame_number(frame.index)
         if frame.index < warmup or fno not in rows or (frame.index % max(1, every)):
             continue
         g = gt.select(np.isin(np.arange(len(gt)), rows[fno]))

@@ -15,11 +15,11 @@ from typing import Mapping, Sequence
 import cv2
 import numpy as np
 
-from ..types import Region, Track
+from ..types import Region, Track, frame_number
 from .colors import TrackColors, palette_color
 
-__all__ = ["INSETS", "LEGEND_STYLES", "text_scale", "line_width", "draw_tracks", "draw_regions",
-           "draw_mask_inset", "draw_legend", "annotate_frame", "draw_label"]
+__all__ = ["frame_caption", "INSETS", "LEGEND_STYLES", "text_scale", "line_width", "draw_tracks",
+           "draw_regions", "draw_mask_inset", "draw_legend", "annotate_frame", "draw_label"]
 
 #: where the mask inset goes (``output.inset``)
 INSETS = ("none", "top-left", "top-right", "bottom-left", "bottom-right")
@@ -37,6 +37,13 @@ def text_scale(shape: Sequence[int]) -> tuple[float, int]:
     side = max(1, min(int(shape[0]), int(shape[1])))
     scale = side / _TEXT_SIDE
     return scale, max(1, int(round(scale * 1.5)))
+
+
+def frame_caption(index: int) -> str:
+    """The frame label every annotated picture carries: ``"frame N"`` with N the number
+    ``tracks.txt`` and ``events.jsonl`` give that frame (:func:`~motiontrack.types.frame_number`;
+    ``index`` is the 0-based index in the source)."""
+    return f"frame {frame_number(index)}"
 
 
 def line_width(shape: Sequence[int], seen: bool = True) -> int:

@@ -20,7 +20,7 @@ import numpy as np
 
 from ..errors import ConfigError
 from ..types import FrameResult
-from .annotate import annotate_frame
+from .annotate import annotate_frame, frame_caption
 
 __all__ = ["STREAMS", "parse_streams", "stream_image"]
 
@@ -64,5 +64,5 @@ def stream_image(name: str, result: FrameResult, background: np.ndarray | None =
         return None if result.mask is None else np.asarray(result.mask, dtype=np.uint8)
     if name == "annotated":
         return annotate_frame(result.frame, result.tracks, result.regions, result.mask, trail,
-                              "none", text=f"frame {result.index}", colors=colors)
+                              "none", text=frame_caption(result.index), colors=colors)
     raise ConfigError(f"unknown stream {name!r}; valid: {', '.join(STREAMS)}")

@@ -21,10 +21,10 @@ import numpy as np
 from ..config import FarnebackParams, PipelineConfig
 from ..io.sources import Source, SourceInfo
 from ..pipeline import Pipeline
-from ..render.annotate import annotate_frame, draw_label
+from ..render.annotate import annotate_frame, draw_label, frame_caption
 from ..render.colors import TrackColors
 from ..render.people import draw_people
-from ..types import Annotations, Box, FrameResult, Track, TrackState
+from ..types import Annotations, Box, FrameResult, Track, TrackState, frame_number
 
 if TYPE_CHECKING:
     # each processor imports the modules only it uses when it is made: a command loads what it
@@ -87,8 +87,8 @@ class TrackProcessor:
             # sees exactly what this run saw and finds the same events
             boxes = np.array([float(f"{v:.2f}") for t in result.tracks
                               for v in t.box.as_array()]).reshape(-1, 4)
-            scene = self.analytics.step(result.index + 1, [t.id for t in result.tracks], boxes,
-                                        result.static, result.discontinuity)
+            scene = self.analytics.step(frame_number(result.index), [t.id for t in result.tracks],
+                                        boxes, result.static, result.discontinuity)
             yield replace(result, scene=scene)
 
     def annotate(self, result: FrameResult) -> np.ndarray:
@@ -96,7 +96,7 @@ class TrackProcessor:
         colors = self.colors.assign(t.id for t in result.tracks)
         img = annotate_frame(result.frame, result.tracks, result.regions, result.mask, out.trail,
                              out.inset, inset_scale=out.inset_scale,
-                             text=f"frame {result.index}", colors=colors, legend=self.legend)
+                             text=frame_caption(result.index), colors=colors, legend=self.legend)
         if self.pipe.people is not None and result.people is not None:
             draw_people(img, result.people, inplace=True, colors=colors)
         if self.analytics is not None:
@@ -146,7 +146,7 @@ class FollowProcessor:
                               tracks=tracks)
 
     def annotate(self, result: FrameResult) -> np.ndarray:
-        img = annotate_frame(result.frame, result.tracks, text=f"frame {result.index}",
+        img = annotate_frame(result.frame, result.tracks, text=frame_caption(result.index),
                              colors=self._colors.assign(t.id for t in result.tracks))
         draw_label(img, self._label, (4, 4), (40, 40, 40) if result.tracks else (0, 0, 200),
                    scale=None)
@@ -187,7 +187,7 @@ class SparseFlowProcessor:
         out = self.cfg.output
         colors = self.colors.assign(t.id for t in result.tracks)
         img = annotate_frame(result.frame, result.tracks, (), result.mask, out.trail, out.inset,
-                             inset_scale=out.inset_scale, text=f"frame {result.index}",
+                             inset_scale=out.inset_scale, text=frame_caption(result.index),
                              colors=colors, legend=self.legend)
         from ..render.flow import draw_feature_trails
 
@@ -246,7 +246,8 @@ class DenseFlowProcessor:
         if top is None:   # each frame at its own largest magnitude: the wheel's rim says which
             top = float(cv2.magnitude(self._last[..., 0], self._last[..., 1]).max())
         draw_flow_legend(img, top)
-        draw_label(img, f"frame {result.index}", (4, img.shape[0] - 4), (40, 40, 40), scale=None)
+        draw_label(img, frame_caption(result.index), (4, img.shape[0] - 4), (40, 40, 40),
+                   scale=None)
         return img
 
     def background(self) -> np.ndarray | None:
@@ -273,7 +274,7 @@ class OverlayProcessor:
 
     def results(self, source: Source) -> Iterator[FrameResult]:
         for frame in source:
-            f = frame.index + 1
+            f = frame_number(frame.index)
             if f < self.first:   # a ready-made Source ignores start/max_frames
                 continue
             if self.last is not None and f > self.last:
@@ -284,8 +285,8 @@ class OverlayProcessor:
     def annotate(self, result: FrameResult) -> np.ndarray:
         from ..render.overlay import draw_overlay, layers_at
 
-        f = result.index + 1
-        return draw_overlay(result.frame, layers_at(self.layers, f), frame_label=f"frame {f}")
+        return draw_overlay(result.frame, layers_at(self.layers, frame_number(result.index)),
+                            frame_label=frame_caption(result.index))
 
     def background(self) -> np.ndarray | None:
         return None

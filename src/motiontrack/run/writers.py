@@ -22,7 +22,7 @@ from ..io.video import DISK_RESERVE, VideoSink, check_codec, extension_for
 from ..render.colors import TrackColors
 from ..render.streams import parse_streams, stream_image
 from ..tracking.gaps import fill_gaps
-from ..types import Annotations, FrameResult
+from ..types import Annotations, FrameResult, frame_number
 from .folder import RunFolder
 from .job import JobContext, JobSummary, Writer
 
@@ -72,7 +72,7 @@ class TracksWriter(Writer):
         boxes = np.array([t.box.as_array() for _, t in rows])
         tid = [t.id for _, t in rows]
         world = self._world(boxes) if self.camera is not None else None
-        self._file.write(format_mot_rows([f + 1 for f, _ in rows], tid, boxes,
+        self._file.write(format_mot_rows([frame_number(f) for f, _ in rows], tid, boxes,
                                          [t.score for _, t in rows], world))
         self.ids.update(tid)
 
@@ -137,8 +137,8 @@ class RegionsWriter(Writer):
         if result.regions:
             boxes = np.array([r.box.as_array() for r in result.regions])
             n = len(result.regions)
-            self._file.write(format_mot_rows([result.index + 1] * n, range(1, n + 1), boxes,
-                                             [r.score for r in result.regions]))
+            self._file.write(format_mot_rows([frame_number(result.index)] * n, range(1, n + 1),
+                                             boxes, [r.score for r in result.regions]))
 
     def close(self, keep: bool) -> None:
         if self._file is not None:
@@ -267,7 +267,7 @@ class StillsWriter(Writer):
         self._ctx = ctx
 
     def write(self, result: FrameResult) -> None:
-        path = self.paths.get(f"frame_{result.index + 1}")
+        path = self.paths.get(f"frame_{frame_number(result.index)}")
         if path is not None:
             ok, buf = cv2.imencode(".png", self._ctx.annotated(result))
             if ok:
@@ -344,7 +344,7 @@ class MaskImagesWriter(Writer):
         img = np.where(mask, np.uint8(255), np.uint8(0))
         if img.shape[::-1] != self._size:
             img = cv2.resize(img, self._size, interpolation=cv2.INTER_NEAREST)
-        path = self.folder / f"bin{result.index + 1:06d}.png"
+        path = self.folder / f"bin{frame_number(result.index):06d}.png"
         free = free_bytes(self.folder)
         if free < DISK_RESERVE:   # leave room for the small outputs, as a video does
             raise DiskFullError(path, f"{free // 1024} KiB left on the device, less than the "

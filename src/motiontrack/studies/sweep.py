@@ -52,8 +52,9 @@ from ..config_activity import check_study_keys
 from ..errors import ConfigError, InputError, printable
 from ..evaluate.framewise import evaluate_framewise
 from ..evaluate.mot import evaluate_tracking
+from ..evaluate.score import scored_frames
 from ..evaluate.scoring import DEFAULT_SCORING, ignores_zero_marked
-from ..io.annotations import read_annotations
+from ..io.annotations import read_ground_truth
 from ..io.atomic import (OutputLock, atomic_write_text, check_writable, remove_leftover_temps,
                          remove_outputs)
 from ..io.manifest import SequenceSpec, absolute_path, default_sequence_name, read_manifest
@@ -262,7 +263,7 @@ def load_study(folder: str | Path) -> tuple[Study, dict[str, Any]]:
 def _load_gt(seq: SequenceSpec):
     if seq.gt is None:
         return parse_synth_spec(seq.source).ground_truth()
-    return read_annotations(seq.gt, mot_kind="gt")
+    return read_ground_truth(seq.gt)
 
 
 def execute_run(spec: RunSpec) -> dict[str, Any]:
@@ -290,14 +291,16 @@ def execute_run(spec: RunSpec) -> dict[str, Any]:
         files = {f"{spec.run_dir()}/{name}.txt": job.paths[name].read_text(encoding="utf-8")
                  for name in ("tracks", "regions")}
     info = job.info
-    lo = job.source.start + 1
-    hi = lo + summary.frames - 1
-    gt = gt.select((gt.frames >= lo) & (gt.frames <= hi))
+    first = job.source.start + 1
+    n_tracks = int(len(np.unique(tracks.ids))) if len(tracks) else 0
+    # the processed frames the ground truth covers, as `motiontrack track --gt` scores them
+    gt, tracks, window = scored_frames(gt, tracks, (first, first + summary.frames - 1))
+    lo, hi = window.first, window.last
     size = (float(info.width), float(info.height))
     row: dict[str, Any] = {"run": spec.run, "sequence": seq.name, "group": seq.group}
     row.update({k: v for k, v in spec.params})
     row["frames"] = summary.frames
-    row["n_tracks"] = int(len(np.unique(tracks.ids))) if len(tracks) else 0
+    row["n_tracks"] = n_tracks
     det = evaluate_framewise(gt, regions, spec.xi, frame_size=size, frames=(lo, hi))[0]
     trk = evaluate_framewise(gt, tracks, spec.xi, frame_size=size, frames=(lo, hi))[0]
     for prefix, res in (("det_", det), ("trk_", trk)):

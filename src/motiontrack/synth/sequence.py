@@ -439,7 +439,9 @@ class SyntheticScene:
             consider=vis_a >= 0.5,
             classes=np.ones(n, dtype=np.int64),
             visibility=vis_a,
-            meta={"format": "synth", "kind": "gt", "source": self.spec},
+            # the scene's frames are all annotated, those without anyone in view too
+            meta={"format": "synth", "kind": "gt", "source": self.spec,
+                  "seq_length": self.n_frames},
         )
         for name in ("frames", "ids", "boxes", "scores", "consider", "classes", "visibility",
                      "world"):

@@ -1,6 +1,7 @@
 """``[speed]``: tracks faster than a limit over a window (``speeding``), in metres per second
 with a camera or pixels per second without. The speed of one track is
-:class:`..movement.SpeedWindow`; a track speeds again only after falling to
+:class:`motiontrack.speed.WindowSpeed` (the definition of the track speeds in
+``summary.json`` too); a track speeds again only after falling to
 :data:`..movement.REARM` of the limit.
 """
 
@@ -50,10 +51,12 @@ class Speed(BaseRule):
         finite = np.isfinite(pos).all(axis=1).tolist()
         events = []
         for i, tid in enumerate(frame.ids.tolist()):
-            w = self.windows.setdefault(tid, SpeedWindow())
+            w = self.windows.get(tid)
+            if w is None:
+                w = self.windows[tid] = SpeedWindow(spec.window_s, fps)
             if not finite[i]:
                 continue
-            v = w.speed(frame.frame, (pos[i, 0], pos[i, 1]), spec.window_s * fps, fps)
+            v = w.add(frame.frame, float(pos[i, 0]), float(pos[i, 1]))
             if v is None:
                 continue
             if v > limit and not w.speeding:
