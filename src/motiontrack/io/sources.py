@@ -29,6 +29,7 @@ import numpy as np
 from ..errors import ConfigError, InputError, SourceError
 from ..registry import Registry
 from ..types import Annotations, Frame
+from .paths import natural_key
 
 log = logging.getLogger(__name__)
 
@@ -651,10 +652,6 @@ class LiveSource(Source):
             self._busy_until = 0.0
 
 
-def _natural_key(s: str) -> list[Any]:
-    return [int(t) if t.isdigit() else t.lower() for t in re.split(r"(\d+)", s)]
-
-
 class ImageSequenceSource(_DecodedAhead):
     """Frames from an image folder or a glob pattern (e.g. ``input/*.jpg``), in natural order."""
 
@@ -670,7 +667,7 @@ class ImageSequenceSource(_DecodedAhead):
             name = str(pattern)
         if not files:
             raise SourceError(f"no images found in {name} (extensions: {', '.join(IMAGE_EXTENSIONS)})")
-        self.files = sorted(files, key=_natural_key)
+        self.files = sorted(files, key=natural_key)
         first = cv2.imread(self.files[0], cv2.IMREAD_COLOR)
         if first is None:
             raise SourceError(f"cannot read image {self.files[0]}")
