@@ -6,6 +6,11 @@ from __future__ import annotations
 import pytest
 
 from helpers.data import require
+from helpers.procs import enable_ctrl_c
+
+# the tests that send SIGINT to a motiontrack process need it to start with Ctrl-C enabled,
+# also when the suite itself was started in the background of a shell (SIGINT ignored)
+enable_ctrl_c()
 
 
 @pytest.fixture
@@ -57,3 +62,13 @@ def shared_dask(dask_session_client):
 
     with reusing_client(dask_session_client) as client:
         yield client
+
+
+@pytest.fixture
+def loaded_machine():
+    """A busy-loop process on every core for the duration of the test (what must hold when
+    the machine is busy: a full test run, other work beside it)."""
+    from helpers.procs import cpu_burners
+
+    with cpu_burners() as burners:
+        yield burners

@@ -36,6 +36,28 @@ def test_python_api_yields_frame_results():
 WARMUP = 40  # frames: the walker is in view and every model has settled
 
 
+def test_a_frame_results_rows_are_an_attribute_not_a_method():
+    with motiontrack.track("synth:walker?n_frames=40") as frames:
+        results = list(frames)
+    with_tracks = [r for r in results if r.tracks]
+    assert with_tracks
+    for r in results:
+        assert r.reported == (*((r.index, t) for t in r.tracks), *r.earlier)
+
+
+def test_the_public_result_objects_hold_values_not_methods():
+    """A value of a result is read as ``result.value``; the only methods are conversions."""
+    import inspect
+
+    from motiontrack.types import Box, Frame, FrameResult, PeopleFrame, Region, Track
+
+    conversions = {"as_array"}
+    for cls in (Box, Region, Track, Frame, FrameResult, PeopleFrame):
+        methods = {n for n, v in vars(cls).items() if not n.startswith("_")
+                   and inspect.isfunction(v)}
+        assert methods <= conversions, (cls.__name__, methods - conversions)
+
+
 @pytest.mark.parametrize("method", DETECTORS.names())
 @pytest.mark.slow
 def test_each_detector_finds_the_walker(method):

@@ -284,7 +284,8 @@ class FrameResult:
     for them (a scene with ``[abandoned]``). ``earlier`` holds the tracks confirmed in this frame at the earlier frames where they
     were still tentative, as ``(frame index, Track)`` pairs (empty unless ``tracker.backfill``
     applies to the run). ``discontinuity`` is the frame's :attr:`Frame.discontinuity`: the
-    stages were reset before it.
+    stages were reset before it. Every value is an attribute or a property (:attr:`reported`),
+    never a method to call.
     """
 
     index: int
@@ -300,10 +301,11 @@ class FrameResult:
     static: StaticFrame | None = field(default=None, repr=False)
     discontinuity: Discontinuity | None = None
 
-    def reported(self) -> list[tuple[int, Track]]:
+    @property
+    def reported(self) -> tuple[tuple[int, Track], ...]:
         """``(frame index, track)`` rows this frame adds to a tracks file: its tracks, then the
         tracks confirmed in it at their earlier, tentative frames (:attr:`earlier`)."""
-        return [*((self.index, t) for t in self.tracks), *self.earlier]
+        return (*((self.index, t) for t in self.tracks), *self.earlier)
 
 
 #: frame numbers, ids and classes are int64 columns: readers refuse values at or beyond this

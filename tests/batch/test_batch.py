@@ -405,9 +405,9 @@ def test_progress_reports_frames_and_the_clusters_frame_rate_while_videos_run(tm
 
 @pytest.mark.slow
 def test_ctrl_c_stops_the_batch_within_seconds_and_the_index_says_which_videos_are_done(
-        tmp_path):
+        tmp_path, loaded_machine):
     """SIGINT to the whole process group, as a terminal's Ctrl-C sends it (the local cluster's
-    workers get it too)."""
+    workers get it too), with every core busy."""
     import signal
     import subprocess
     import sys
@@ -474,3 +474,23 @@ def test_cut_copies_of_the_pets_clip_give_the_tracks_of_track_alone(tmp_path, cl
         tracks = (results / n / "tracks.txt").read_bytes()
         assert tracks == (tmp_path / f"alone-{n}" / "tracks.txt").read_bytes()
         assert tracks.count(b"\n") > 60   # people were tracked
+
+
+def test_a_suite_started_with_ctrl_c_ignored_starts_its_processes_with_ctrl_c_enabled():
+    """A suite run in the background of a shell (``make test &``) starts with SIGINT ignored,
+    which its subprocesses would inherit: the Ctrl-C tests' SIGINT would then do nothing."""
+    import signal
+    import subprocess
+    import sys
+
+    from helpers import enable_ctrl_c
+
+    probe = [sys.executable, "-c", "import signal, sys; "
+             "sys.exit(signal.getsignal(signal.SIGINT) is not signal.default_int_handler)"]
+    before = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        assert subprocess.run(probe).returncode == 1   # what a child inherits: ignored
+        enable_ctrl_c()
+        assert subprocess.run(probe).returncode == 0
+    finally:
+        signal.signal(signal.SIGINT, before)

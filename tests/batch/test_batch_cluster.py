@@ -84,9 +84,11 @@ def test_batch_on_an_external_scheduler_matches_track_alone(tmp_path, scheduler_
 
 @pytest.mark.slow
 def test_an_interrupted_batch_frees_the_clusters_workers_within_seconds(tmp_path,
-                                                                         scheduler_address):
+                                                                         scheduler_address,
+                                                                         loaded_machine):
     """Ctrl-C reaches only the client's process on a cluster of its own; Dask cannot stop a
-    running task, so the videos running stop themselves on the batch's stop event."""
+    running task, so the videos running stop themselves on the batch's stop event. Every
+    core is busy meanwhile."""
     import os
     import signal
 

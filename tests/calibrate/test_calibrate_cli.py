@@ -189,3 +189,29 @@ def test_bad_input_is_one_line_error(tmp_path, capsys, argv, message):
     lines = [ln for ln in err.splitlines() if ln.startswith("motiontrack: error:")]
     assert len(lines) == 1 and message in lines[0]
     assert "Traceback" not in err
+
+
+@pytest.mark.data
+def test_chessboard_takes_a_quoted_glob_as_the_files_it_matches(data, tmp_path, capsys):
+    folder = data("chessboard-left")
+    listed = sorted(folder.glob("left0[1-4].jpg"))
+    code, out_listed, err = run(capsys, "calibrate", "chessboard", *listed,
+                                "-o", tmp_path / "listed.yml")
+    assert code == 0, err
+    # the pattern as a shell that does not expand it (or quotes) passes it on
+    code, out_glob, err = run(capsys, "calibrate", "chessboard", folder / "left0[1-4].jpg",
+                              "-o", tmp_path / "glob.yml")
+    assert code == 0, err
+    assert "views used: 4 of 4" in out_glob
+    assert out_glob.replace("glob.yml", "") == out_listed.replace("listed.yml", "")
+    np.testing.assert_array_equal(load_camera(tmp_path / "glob.yml").K,
+                                  load_camera(tmp_path / "listed.yml").K)
+
+
+def test_a_glob_that_matches_no_photo_is_one_line(tmp_path, capsys):
+    code, _, err = run(capsys, "calibrate", "chessboard", tmp_path / "right*.jpg",
+                       "-o", tmp_path / "camera.yml")
+    assert code == 2
+    assert err.strip().splitlines() == [f"motiontrack: error: no images match "
+                                        f"{tmp_path / 'right*.jpg'}"]
+    assert not (tmp_path / "camera.yml").exists()

@@ -266,3 +266,22 @@ def test_pets_recommendation_keeps_the_people_the_thesis_model_drops(data, tmp_p
     assert hota_rec >= hota_default - 0.02
     assert recall_rec >= recall_default - 0.005
     assert recall_thesis < 0.5 * recall_default and hota_thesis < 0.5 * hota_default
+
+
+def test_cli_pools_the_files_a_quoted_glob_matches(tmp_path, capsys):
+    from motiontrack.cli import main
+
+    (tmp_path / "gt").mkdir()
+    (tmp_path / "gt" / "a.txt").write_text("1,1,0,0,10,10,1,-1,-1,-1\n")
+    (tmp_path / "gt" / "b.txt").write_text("1,2,5,5,10,30,1,-1,-1,-1\n")
+    listed, pattern = tmp_path / "listed.json", tmp_path / "pattern.json"
+    assert main(["gt-stats", str(tmp_path / "gt" / "a.txt"), str(tmp_path / "gt" / "b.txt"),
+                 "--image-size", "100x50", "--json", str(listed)]) == 0
+    assert main(["gt-stats", str(tmp_path / "gt" / "*.txt"), "--image-size", "100x50",
+                 "--json", str(pattern)]) == 0
+    assert json.loads(pattern.read_text()) == json.loads(listed.read_text())
+    assert json.loads(pattern.read_text())["n_boxes"] == 2
+    capsys.readouterr()
+    assert main(["gt-stats", str(tmp_path / "gt" / "*.xml"), "--image-size", "100x50"]) == 2
+    assert capsys.readouterr().err.strip() == (f"motiontrack: error: no ground-truth files "
+                                               f"match {tmp_path / 'gt' / '*.xml'}")

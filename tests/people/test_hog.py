@@ -105,3 +105,52 @@ def test_hog_restricted_to_regions_finds_the_people(data):
     for d in dets:
         cx, cy = d.box.center
         assert any(b[0] - b[3] <= cx <= b[0] + b[2] + b[3] for b in gt)
+
+
+class _OneBoxHOG:
+    """A HOG stand-in that finds one person at a fixed place and counts its scans."""
+
+    def __init__(self, box: Box) -> None:
+        self.box, self.scans = box, 0
+
+    def _found(self) -> list[Region]:
+        self.scans += 1
+        return [Region(box=self.box, centroid=self.box.center, area=self.box.area, score=1.0)]
+
+    def detect(self, image):
+        return self._found()
+
+    def detect_in_regions(self, image, regions):
+        return self._found()
+
+
+def _region(x: float) -> Region:
+    box = Box(x, 100.0, 30.0, 80.0)
+    return Region(box=box, centroid=box.center, area=box.area)
+
+
+@pytest.mark.parametrize("mode, between", [
+    # regions: the frames between two HOG scans keep their own motion region
+    ("regions", [(45.0, 100.0, 30.0, 80.0), (50.0, 100.0, 30.0, 80.0)]),
+    # alone: the detections are all there is, so the last ones stand in between
+    ("alone", [(44.0, 104.0, 20.0, 70.0)] * 2),
+])
+def test_hog_every_n_frames_never_puts_a_moving_region_where_its_person_was(mode, between):
+    from motiontrack.config import PeopleConfig
+    from motiontrack.people import PeopleStage
+
+    stage = PeopleStage(PeopleConfig(enabled=True, heads=False, split=False, shapes=False,
+                                     hog=mode, hog_every=3))
+    stage.hog = hog = _OneBoxHOG(Box(44.0, 104.0, 20.0, 70.0))   # the person at frame 0
+    image = np.zeros((300, 400, 3), np.uint8)
+    boxes = []
+    for k in range(4):   # the person walks 5 px a frame; HOG scans at frames 0 and 3
+        out, found = stage.process(image, None, None, [_region(40.0 + 5.0 * k)], [])
+        boxes.append([tuple(float(v) for v in r.box.as_array()) for r in out])
+    assert hog.scans == 2
+    assert boxes[0] == [(44.0, 104.0, 20.0, 70.0)]
+    # frames 1 and 2: the old box's centre (54, 139) is still inside the moved region
+    assert [b[0] for b in boxes[1:3]] == between
+    # frame 3: a new scan; its box's centre is outside the region at x 55..85
+    expected_3 = (55.0, 100.0, 30.0, 80.0) if mode == "regions" else (44.0, 104.0, 20.0, 70.0)
+    assert boxes[3] == [expected_3]

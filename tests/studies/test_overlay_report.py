@@ -135,3 +135,26 @@ def test_report_of_a_non_study_folder_is_an_error(tmp_path, capsys):
 
     assert main(["report", str(tmp_path)]) != 0
     assert "not a sweep output folder" in capsys.readouterr().err
+
+
+def test_cli_overlay_takes_a_glob_of_runs_as_one_run_per_file(tmp_path, monkeypatch):
+    import motiontrack.run
+    from motiontrack.cli import main
+
+    for run in ("r001", "r002", "r010"):
+        pred = tmp_path / run / "walker" / "tracks.txt"
+        pred.parent.mkdir(parents=True)
+        pred.write_text("5,1,100,100,30,60,1,-1,-1,-1\n")
+    given = []
+
+    def overlay_job(source, out, runs, gt, **kw):
+        given.extend(name for name, _ in runs)
+        raise KeyboardInterrupt   # what was asked is all this test needs
+
+    monkeypatch.setattr(motiontrack.run, "overlay_job", overlay_job)
+    code = main(["-q", "overlay", "synth:walker?n_frames=8", "--pred",
+                 str(tmp_path / "r*" / "walker" / "tracks.txt"), "--pred",
+                 f"mine={tmp_path / 'r001' / 'walker' / 'tracks.txt'}", "-o",
+                 str(tmp_path / "ov.avi")])
+    assert code == 130
+    assert given == ["r001/walker", "r002/walker", "r010/walker", "mine"]

@@ -70,7 +70,7 @@ def test_best_run_is_marked_in_both_tables(tmp_path):
 
 def _parameters(html: str) -> set[str]:
     start = html.index("<h2>Base tracker parameters")
-    return set(re.findall(r"<tr><th>([^<]+)</th>", html[start:html.index("<h2>Software", start)]))
+    return set(re.findall(r"<tr[^>]*><th>([^<]+)</th>", html[start:html.index("<h2>Software", start)]))
 
 
 def test_parameter_dump_shows_only_stages_and_methods_that_ran(tmp_path):
@@ -102,3 +102,17 @@ def test_study_without_tracking_metrics_says_so(tmp_path):
     (folder / "summary.csv").unlink()
     html = build_report(folder)
     assert "No tracking metrics" in html and 'class="best"' not in html
+
+
+def test_base_parameters_mark_the_swept_key_and_write_whole_numbers_as_integers(tmp_path):
+    html = build_report(make_study(tmp_path / "s", ["motion.knn.dist2_threshold=200,400"],
+                                   ["motion.method=knn"], [(200, .5, .5, .5), (400, .6, .6, .6)]))
+    start = html.index("<h2>Base tracker parameters")
+    block = html[start:html.index("<h2>Software", start)]
+    swept = re.findall(r'<tr class="swept"><th>([^<]+)</th><td class="t">(.*?)</td></tr>', block)
+    assert [(k, re.sub(r"<[^>]+>", "", v)) for k, v in swept] == [
+        ("motion.knn.dist2_threshold", "swept: 200, 400 (base 300, used by no run)")]
+    # a float field with a whole value reads as the integer; others keep their digits
+    assert '<th>regions.min_area</th><td class="t">100</td>' in block
+    assert '<th>regions.min_size</th><td class="t">0.001</td>' in block
+    assert "300.0" not in block and "100.0" not in block

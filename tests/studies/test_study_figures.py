@@ -137,3 +137,34 @@ def test_the_star_takes_no_colour_of_the_curves(captured):
     curves = [to_hex(ln.get_color()) for ln in ax.get_lines() if ln.get_marker() == "o"]
     assert curves == ["#1f77b4", "#ff7f0e", "#2ca02c"]       # C0, C1, C2: the cycle in order
     assert [t.get_text() for t in ax.get_legend().get_texts()][-1] == "best HOTA"
+
+
+def _titles(captured, written, tmp_path):
+    """Figure name → its title (suptitle)."""
+    return {str(w)[len(str(tmp_path)) + 1:]: fig._suptitle.get_text()
+            for w, fig in zip(written, captured)}
+
+
+@pytest.mark.parametrize("keys, averaged", [
+    (("thr", "min"), {"tracking": "(mean over min)"}),
+    (("thr", "min", "k"), {"tracking": "(mean over min, k)", "hota_map": "(mean over k)",
+                           "pr_map_regions": "(mean over k)", "pr_map_tracks": "(mean over k)",
+                           "pr_regions": "(mean over k)"}),
+])
+def test_every_figure_has_its_own_title_and_names_the_parameters_it_averages_over(
+        captured, tmp_path, keys, averaged):
+    rows = []
+    third = (3, 4) if len(keys) == 3 else (None,)
+    for run, point in enumerate(itertools.product((0.1, 0.2), (0, 1), third), start=1):
+        rows.append(_row(run, "walker", dict(zip(keys, point)), 0.5, 0.5, 0.3 + 0.1 * run))
+    written = plots.study_figures(rows, SimpleNamespace(keys=keys), tmp_path)
+    titles = _titles(captured, written, tmp_path)
+    assert len(set(titles.values())) == len(titles)          # no two figures share a title
+    assert "motion regions" in titles["pr_map_regions"] and "tracks" in titles["pr_map_tracks"]
+    for name, title in titles.items():
+        assert (averaged[name] in title) if name in averaged else "mean over" not in title, name
+
+
+def test_a_one_parameter_study_averages_over_nothing_and_says_nothing(captured, tmp_path):
+    written = plots.study_figures(_crowded_rows(), SimpleNamespace(keys=("thr",)), tmp_path)
+    assert not any("mean over" in t for t in _titles(captured, written, tmp_path).values())

@@ -345,3 +345,37 @@ def test_sweep_scores_what_track_writes_with_fill_motion(tmp_path):
     # backfill off: fewer rows, so the sweep really scores the completed file
     assert len(read_mot(tmp_path / "sweep" / "runs" / "r002" / "crossing" / "tracks.txt")) \
         == len(read_mot(tmp_path / "track" / "tracks.txt")) - summary["backfilled_rows"]
+
+
+def test_the_console_table_shows_whole_parameter_names_and_idf1():
+    from motiontrack.studies.table import format_summary
+
+    keys = ["motion.knn.dist2_threshold", "motion.knn.history"]
+    summary = [{"run": 1, "sequences": 1, keys[0]: 300, keys[1]: 100, "det_pixel_precision": 0.8872,
+                "det_pixel_recall": 0.9694, "det_object_f1": 0.8877, "HOTA": 0.672,
+                "MOTA": 0.86667, "IDF1": 0.92857},
+               {"run": 2, "sequences": 1, keys[0]: 600, keys[1]: 100, "det_pixel_precision": 0.9,
+                "det_pixel_recall": 0.9, "det_object_f1": 0.9, "HOTA": 0.5, "MOTA": 0.5,
+                "IDF1": 0.25}]
+    head, one, two = format_summary(summary, keys).splitlines()
+    assert head.split() == ["run", *keys, "det_pixel_precision", "det_pixel_recall",
+                            "det_object_f1", "HOTA", "MOTA", "IDF1"]
+    assert one.split() == ["1", "300", "100", "0.8872", "0.9694", "0.8877", "0.672", "0.8667",
+                           "0.9286"]
+    assert two.split()[-1] == "0.25"
+    # right-aligned under each heading
+    assert len(head) == len(one) == len(two) and head.index("IDF1") + 4 == len(head)
+
+
+def test_summary_keeps_whole_counts_as_integers(tmp_path):
+    rows = [{"run": 1, "sequence": "a", "group": "", "p": 300, "frames": 40, "n_tracks": 1},
+            {"run": 1, "sequence": "b", "group": "", "p": 300, "frames": 30, "n_tracks": 3},
+            {"run": 2, "sequence": "a", "group": "", "p": 600, "frames": 40, "n_tracks": 2},
+            {"run": 2, "sequence": "b", "group": "", "p": 600, "frames": 30, "n_tracks": 2}]
+    summ = summarise_runs(rows, ["p"])
+    assert [(s["p"], s["frames"], s["n_tracks"]) for s in summ] == [(300, 35, 2), (600, 35, 2)]
+    assert all(type(s["frames"]) is int for s in summ)
+    write_table(summ, tmp_path / "summary.csv")
+    assert (tmp_path / "summary.csv").read_text().splitlines()[1] == "1,2,300,35,2"
+    odd = summarise_runs(rows[:1] + [{**rows[1], "frames": 31}], ["p"])
+    assert odd[0]["frames"] == 35.5           # a mean that is no whole number stays a float

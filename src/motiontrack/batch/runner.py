@@ -27,6 +27,7 @@ from ..run.executor import dask_client, map_tasks
 from ..run.folder import RunFolder
 from ..version import __version__
 from .combined import write_combined
+from .counts import write_counts
 from .sources import Video, expand_sources, with_files
 
 log = logging.getLogger(__name__)
@@ -490,8 +491,10 @@ def _run_tasks(manager: Any, tasks: Sequence[BatchTask], index: _Index, *, retri
 
 
 def _finish(out: Path, rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
-    """The final rows, after writing the combined metrics of the videos with ground truth."""
+    """The final rows, after writing the combined metrics of the videos with ground truth and
+    the event counts of those with a scene."""
     write_combined(out, rows)
+    write_counts(out, rows)
     return rows
 
 

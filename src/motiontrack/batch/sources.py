@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import glob
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -11,6 +10,7 @@ from typing import Iterable, Sequence
 from ..errors import ConfigError, printable
 from ..run.folders import source_name
 from ..io.manifest import read_manifest_entries
+from ..io.paths import expand_paths, is_pattern
 
 __all__ = ["Video", "VIDEO_SUFFIXES", "expand_sources", "with_files"]
 
@@ -50,11 +50,8 @@ def _expand_one(spec: str) -> list[Video]:
             raise ConfigError(f"no video files ({', '.join(VIDEO_SUFFIXES)}) in folder "
                               f"{printable(spec)}")
         return [Video(source_name(f), str(Path(f).resolve())) for f in found]
-    if any(ch in spec for ch in "*?[") and not p.exists():
-        found = sorted(f for f in glob.glob(spec, recursive=True) if os.path.isfile(f))
-        if not found:
-            raise ConfigError(f"no files match {printable(spec)}")
-        return [Video(source_name(f), str(Path(f).resolve())) for f in found]
+    if is_pattern(spec):
+        return [Video(source_name(str(f)), str(f.resolve())) for f in expand_paths([spec])]
     # a file, or a path that does not exist: the latter becomes a failed row, not a refusal
     return [Video(Path(spec).stem or "video", str(p.resolve()))]
 

@@ -55,6 +55,7 @@ def cmd_batch(args) -> int:
 
     from ..batch import run_batch
     from ..batch.combined import COMBINED_FILE
+    from ..batch.counts import COUNTS_FILE, TOTALS_FILE
     from ..config import load_config
     from ._common import sigterm_as_interrupt
 
@@ -87,6 +88,11 @@ def cmd_batch(args) -> int:
         print(f"combined over {len(c['sequences'])} videos with ground truth: "
               + "  ".join(f"{k} {m[k]:.4f}" for k in ("HOTA", "MOTA", "IDF1") if k in m)
               + f"; {combined}")
+    totals = Path(args.out) / TOTALS_FILE
+    if totals.is_file():
+        t = json.loads(totals.read_text(encoding="utf-8"))
+        print(f"events of {len(t['videos'])} videos with a scene: "
+              f"{Path(args.out) / COUNTS_FILE} (per video), {totals} (totals)")
     for r in failed:
         print(f"  {r['name']}: {r.get('error', '')}", file=sys.stderr)
     return 1 if failed else 0

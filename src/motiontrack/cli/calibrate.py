@@ -26,7 +26,9 @@ def register(subparsers) -> None:
     p.set_defaults(func=lambda args: (p.print_help(), 2)[1])
 
     c = sub.add_parser("chessboard", help="OpenCV calibration from chessboard photos")
-    c.add_argument("images", nargs="+", type=Path, help="photos of the chessboard")
+    c.add_argument("images", nargs="+", type=Path,
+                   help="photos of the chessboard: files or glob patterns ('left*.jpg', "
+                        "quoted or not)")
     c.add_argument("--pattern", default="9x6", help="inner corners per row x per column (9x6)")
     c.add_argument("--square", type=float, default=0.025, help="square side in metres (0.025)")
     c.add_argument("--free-aspect", action="store_true",
@@ -155,10 +157,13 @@ def cmd_chessboard(args: argparse.Namespace) -> int:
 
     from ..calibrate.chessboard import calibrate_chessboard, parse_pattern, write_opencv_yaml
 
+    from ..io.paths import expand_paths
+
     pattern = parse_pattern(args.pattern)
     _positive(args.square, "--square", 10.0, "metres")
     _check_out(args.output, args.force)
     most = _check_max_pixels(args)
+    args.images = expand_paths(args.images, "images")
     images = [_read_image(p, most) for p in args.images]
     flags = 0 if args.free_aspect else cv2.CALIB_FIX_ASPECT_RATIO
     res = calibrate_chessboard(images, pattern, args.square, [str(p) for p in args.images], flags)

@@ -19,7 +19,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "recommended regions.min_size/max_size/min_hw_ratio/max_hw_ratio: percentiles "
                     "of the people's boxes and of the groups they form, widened for segmentation "
                     "noise, as --set strings or a config file for `track --config`.")
-    p.add_argument("gt", nargs="+", help="ground-truth file(s), any supported format (pooled)")
+    p.add_argument("gt", nargs="+", help="ground-truth file(s) or glob patterns "
+                                         "('gt/*.txt'), any supported format (pooled)")
     p.add_argument("--image-size", required=True, metavar="WxH", help="frame size, e.g. 768x576")
     p.add_argument("--sample-std", action="store_true", help="use the sample std (N-1) instead of N")
     p.add_argument("--percentile", type=float, action=_PercentileOption, metavar="Q")
@@ -84,7 +85,10 @@ def cmd_gt_stats(args) -> int:
 
     size = parse_image_size(args.image_size)
     check_percentile(args.percentile)
-    stats = gt_statistics([read_gt(g) for g in args.gt], size, ddof=1 if args.sample_std else 0,
+    from ..io.paths import expand_paths
+
+    stats = gt_statistics([read_gt(str(g)) for g in expand_paths(args.gt, "ground-truth files")],
+                          size, ddof=1 if args.sample_std else 0,
                           percentile=args.percentile)
     if args.write_config and not stats["recommended_overrides"]:
         raise InputError("--write-config: the ground truth has no boxes to count (none, or all "

@@ -16,7 +16,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--gt", help="ground truth (any supported format; default: a synth: scene's own)")
     p.add_argument("--pred", action="append", default=[], metavar="[NAME=]FILE",
                    help="a run's tracks (any supported format; a sweep run folder's tracks.txt); "
-                        "repeatable; NAME is the legend text (default: the file's folder name)")
+                        "repeatable; NAME is the legend text (default: the file's folder name); "
+                        "without NAME= a glob pattern ('study/runs/*/*/tracks.txt') gives one "
+                        "run per file")
     p.add_argument("-o", "--out", help="output video (e.g. overlay.webm)")
     p.add_argument("--frames", metavar="A:B", help="1-based inclusive frame range")
     p.add_argument("--fps", type=float, help=FPS_HELP)
@@ -53,7 +55,12 @@ def cmd_overlay(args) -> int:
     from ..run import overlay_job
     from ._common import frame_loop, frame_range, read_gt
 
-    runs = [_pred(p) for p in args.pred]
+    from ..io.paths import expand_paths
+
+    # a --pred without NAME= may be a glob pattern: one run per file it matches
+    runs = [_pred(str(f)) for item in args.pred
+            for f in ([item] if "=" in item and not Path(item).exists()
+                      else expand_paths([item], "track files"))]
     gt = read_gt(args.gt) if args.gt else None
     try:
         pngs = [int(x) for x in args.png_frames.split(",") if x.strip()]

@@ -104,11 +104,6 @@ def cmd_sweep(args) -> int:
 
 
 def _print_best(rows, keys) -> None:
-    from ..studies.table import summarise_runs
+    from ..studies.table import format_summary, summarise_runs
 
-    summary = summarise_runs(rows, keys)
-    hdr = ["run"] + list(keys) + ["det_pixel_precision", "det_pixel_recall", "det_object_f1", "HOTA", "MOTA"]
-    hdr = [h for h in hdr if not summary or h in summary[0]]
-    print("  ".join(f"{h:>12.12}" for h in hdr))
-    for r in summary:
-        print("  ".join(f"{r[h]:>12.4g}" if isinstance(r[h], float) else f"{str(r[h]):>12.12}" for h in hdr))
+    print(format_summary(summarise_runs(rows, keys), keys), end="")

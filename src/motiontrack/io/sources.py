@@ -30,6 +30,7 @@ from ..errors import ConfigError, InputError, SourceError
 from ..registry import Registry
 from ..types import Annotations, Discontinuity, Frame
 from .imagesize import DEFAULT_MAX_PIXELS, check_frame_size, check_image
+from .paths import natural_key
 
 log = logging.getLogger(__name__)
 
@@ -677,10 +678,6 @@ class LiveSource(Source):
             self._busy_until = 0.0
 
 
-def _natural_key(s: str) -> list[Any]:
-    return [int(t) if t.isdigit() else t.lower() for t in re.split(r"(\d+)", s)]
-
-
 class ImageSequenceSource(_DecodedAhead):
     """Frames from an image folder or a glob pattern (e.g. ``input/*.jpg``), in natural order."""
 
@@ -697,7 +694,7 @@ class ImageSequenceSource(_DecodedAhead):
             name = str(pattern)
         if not files:
             raise SourceError(f"no images found in {name} (extensions: {', '.join(IMAGE_EXTENSIONS)})")
-        self.files = sorted(files, key=_natural_key)
+        self.files = sorted(files, key=natural_key)
         check_image(self.files[0], max_pixels)
         first = cv2.imread(self.files[0], cv2.IMREAD_COLOR)
         if first is None:

@@ -127,17 +127,23 @@ class PeopleStage:
 
     def _hog(self, frame_img: np.ndarray, regions: list[Region], out: list[Region],
              found: dict[str, Any]) -> list[Region]:
-        """Step 2: HOG people (detected every ``hog_every`` frames, reused in between) replace
-        all regions (``hog="alone"``) or the motion regions holding their centres."""
+        """Step 2: HOG people, detected every ``hog_every`` frames, replace all regions
+        (``hog="alone"``: the last detections are reused in between, they are all there is) or
+        the motion regions holding their centres (``hog="regions"``: only on the frames HOG ran;
+        in between the frame's own motion regions stand, as boxes detected frames ago would put
+        moving people where they were, not where they are)."""
         c = self.cfg
-        if self._frame % c.hog_every == 0:
+        fresh = self._frame % c.hog_every == 0
+        if fresh:
             self._hog_cache = (self.hog.detect(frame_img) if c.hog == "alone"
                                else self.hog.detect_in_regions(frame_img, regions))
-        dets = self._hog_cache
-        found["hog"] = tuple(dets)
         if c.hog == "alone":
-            return list(dets)
-        return _replace_with_detections(out, dets)
+            found["hog"] = tuple(self._hog_cache)
+            return list(self._hog_cache)
+        if not fresh:
+            return out
+        found["hog"] = tuple(self._hog_cache)
+        return _replace_with_detections(out, self._hog_cache)
 
     def _shapes(self, frame_img: np.ndarray, background: np.ndarray | None,
                 mask: np.ndarray | None, work: np.ndarray | None, out: list[Region],

@@ -65,7 +65,7 @@ class TracksWriter(Writer):
         self._file = AtomicFile(self.paths["tracks"])
 
     def write(self, result: FrameResult) -> None:
-        rows = result.reported()
+        rows = result.reported
         self.backfilled += len(result.earlier)
         if not rows:
             return

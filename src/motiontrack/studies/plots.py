@@ -65,6 +65,11 @@ def _fmt(v: Any) -> str:
     return f"{v:g}" if isinstance(v, (int, float)) and not isinstance(v, bool) else str(v)
 
 
+def _averaged(over: Sequence[str]) -> str:
+    """The title's note of the parameters a figure averages over (none: empty)."""
+    return f" (mean over {', '.join(over)})" if over else ""
+
+
 def save_figure(fig: Any, stem: str | Path) -> list[str]:
     """Write ``stem.png`` (90 dpi) and ``stem.svg`` atomically; close the figure."""
     stem = Path(stem)
@@ -180,7 +185,7 @@ def place_labels(ax: Any, xs: Sequence[float], ys: Sequence[float], texts: Seque
 
 def pr_curves(rows: Sequence[Mapping[str, Any]], key: str, stem: str | Path, *, prefix: str = "det_",
               title: str = "", series: str | None = None,
-              best: Mapping[str, Any] | None = None) -> list[str]:
+              best: Mapping[str, Any] | None = None, averaged: Sequence[str] = ()) -> list[str]:
     """Precision–recall curves of the three framewise metric families against parameter ``key``.
 
     Parameters
@@ -192,6 +197,8 @@ def pr_curves(rows: Sequence[Mapping[str, Any]], key: str, stem: str | Path, *, 
     series : optional second parameter: one curve per value of it instead of per sequence
         (averaged over sequences).
     best : the best grid point (:func:`best_point`), marked with a star on its curve.
+    averaged : the study's other parameters, which each point averages over (named in the
+        title).
 
     Returns the written paths.
     """
@@ -241,7 +248,7 @@ def pr_curves(rows: Sequence[Mapping[str, Any]], key: str, stem: str | Path, *, 
         for xs, ys, texts, color in reversed(to_label):   # the thick average first: its labels win
             place_labels(ax, xs, ys, texts, color=color, taken=taken)
     what = "motion regions" if prefix == "det_" else "tracks"
-    fig.suptitle(title or f"precision–recall of the {what} as {key} varies")
+    fig.suptitle(title or f"precision–recall of the {what} as {key} varies" + _averaged(averaged))
     return save_figure(fig, stem)
 
 
@@ -259,10 +266,12 @@ def _outline_best(ax: Any, xs: Sequence[Any], ys: Sequence[Any], best: Mapping[s
 
 def pr_heatmaps(rows: Sequence[Mapping[str, Any]], key_x: str, key_y: str, stem: str | Path, *,
                 prefix: str = "det_", title: str = "",
-                best: Mapping[str, Any] | None = None) -> list[str]:
+                best: Mapping[str, Any] | None = None, averaged: Sequence[str] = ()) -> list[str]:
     """Precision (top row) and recall (bottom row) of the three metric families over a 2-D grid
-    of ``key_x`` × ``key_y`` (mean over sequences and over any further parameters), with the
-    numbers written in each cell (thesis figure 4.11); the ``best`` grid point outlined."""
+    of ``key_x`` × ``key_y`` (mean over sequences and over the further parameters ``averaged``,
+    named in the title), with the numbers written in each cell (thesis figure 4.11); the
+    ``best`` grid point outlined. The title names what is scored: the motion regions
+    (``det_``) or the tracks (``trk_``)."""
     plt = _plt()
     xs = _ordered([r[key_x] for r in rows])
     ys = _ordered([r[key_y] for r in rows])
@@ -272,7 +281,9 @@ def pr_heatmaps(rows: Sequence[Mapping[str, Any]], key_x: str, key_y: str, stem:
             grid = np.array([[_mean([float(r[prefix + col]) for r in rows
                                      if r[key_x] == xv and r[key_y] == yv]) for xv in xs] for yv in ys])
             _grid_panel(fig, axes[i, j], grid, xs, ys, key_x, key_y, f"{label}-based {what}", best)
-    fig.suptitle(title or f"precision and recall over {key_x} × {key_y}"
+    what = "motion regions" if prefix == "det_" else "tracks"
+    fig.suptitle(title or f"precision and recall of the {what} over {key_x} × {key_y}"
+                 + _averaged(averaged)
                  + (f" (outlined: best {BEST_METRIC})" if best is not None else ""))
     fig.tight_layout()
     return save_figure(fig, stem)
@@ -299,10 +310,11 @@ def _grid_panel(fig, ax, grid: np.ndarray, xs: Sequence, ys: Sequence, key_x: st
 
 def metric_heatmaps(rows: Sequence[Mapping[str, Any]], key_x: str, key_y: str, stem: str | Path, *,
                     metric: str = BEST_METRIC, best: Mapping[str, Any] | None = None,
-                    title: str = "") -> list[str]:
+                    title: str = "", averaged: Sequence[str] = ()) -> list[str]:
     """``metric`` over the grid ``key_x`` × ``key_y``: one map per sequence and, with several
-    sequences, their mean (averaged over any further parameters), numbers written in the cells
-    and the ``best`` grid point outlined. Returns the written paths ([] without ``metric``)."""
+    sequences, their mean (averaged over the further parameters ``averaged``, named in the
+    title), numbers written in the cells and the ``best`` grid point outlined. Returns the
+    written paths ([] without ``metric``)."""
     if not rows or metric not in rows[0]:
         return []
     plt = _plt()
@@ -322,7 +334,7 @@ def metric_heatmaps(rows: Sequence[Mapping[str, Any]], key_x: str, key_y: str, s
         grid = np.array([[_mean([float(r[metric]) for r in rs if r[key_x] == xv and r[key_y] == yv])
                           for xv in xs] for yv in ys])
         _grid_panel(fig, ax, grid, xs, ys, key_x, key_y, f"{metric}: {name}", best)
-    fig.suptitle(title or f"{metric} over {key_x} × {key_y}"
+    fig.suptitle(title or f"{metric} over {key_x} × {key_y}" + _averaged(averaged)
                  + (f" (outlined: best mean {BEST_METRIC})" if best is not None else ""))
     fig.tight_layout()
     return save_figure(fig, stem)
@@ -330,9 +342,11 @@ def metric_heatmaps(rows: Sequence[Mapping[str, Any]], key_x: str, key_y: str, s
 
 def metric_curves(rows: Sequence[Mapping[str, Any]], key: str, stem: str | Path,
                   metrics: Sequence[str] = ("HOTA", "MOTA", "IDF1"), title: str = "",
-                  best: Mapping[str, Any] | None = None) -> list[str]:
+                  best: Mapping[str, Any] | None = None, averaged: Sequence[str] = ()
+                  ) -> list[str]:
     """Tracking metrics against ``key``: thin per-sequence lines, thick average; the ``best``
-    grid point's value of ``key`` starred on every average curve."""
+    grid point's value of ``key`` starred on every average curve. Each point is the mean over
+    the study's other parameters ``averaged``, named in the title."""
     plt = _plt()
     values = _ordered([r[key] for r in rows])
     seqs = _ordered([r["sequence"] for r in rows])
@@ -357,7 +371,7 @@ def metric_curves(rows: Sequence[Mapping[str, Any]], key: str, stem: str | Path,
         ax.set(xlabel=key, ylabel=m, title=m)
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=7)
-    fig.suptitle(title or f"tracking metrics as {key} varies")
+    fig.suptitle(title or f"tracking metrics as {key} varies" + _averaged(averaged))
     fig.tight_layout()
     return save_figure(fig, stem)
 
@@ -379,9 +393,14 @@ def study_figures(rows: Sequence[Mapping[str, Any]], study: Any, out_dir: str | 
         # with more than two parameters the maps average over the others: the best point is
         # marked only where it is one cell
         best2 = best if len(keys) == 2 else None
-        paths += pr_heatmaps(rows, k1, k2, out / "pr_map_regions", prefix="det_", best=best2)
-        paths += pr_curves(rows, k1, out / "pr_regions", prefix="det_", series=k2, best=best2)
-        paths += pr_heatmaps(rows, k1, k2, out / "pr_map_tracks", prefix="trk_", best=best2)
-        paths += metric_heatmaps(rows, k1, k2, out / "hota_map", best=best2)
-    paths += metric_curves(rows, k1, out / "tracking", best=best if len(keys) == 1 else None)
+        rest = keys[2:]
+        paths += pr_heatmaps(rows, k1, k2, out / "pr_map_regions", prefix="det_", best=best2,
+                             averaged=rest)
+        paths += pr_curves(rows, k1, out / "pr_regions", prefix="det_", series=k2, best=best2,
+                           averaged=rest)
+        paths += pr_heatmaps(rows, k1, k2, out / "pr_map_tracks", prefix="trk_", best=best2,
+                             averaged=rest)
+        paths += metric_heatmaps(rows, k1, k2, out / "hota_map", best=best2, averaged=rest)
+    paths += metric_curves(rows, k1, out / "tracking", best=best if len(keys) == 1 else None,
+                           averaged=keys[1:])
     return paths

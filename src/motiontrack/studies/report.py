@@ -50,6 +50,7 @@ figure{margin:1em 0}figure svg,figure img{max-width:100%;height:auto}
 code,pre{background:#f6f6f6;padding:.1em .3em}pre{padding:.6em;overflow:auto}
 .small{color:#666;font-size:.85em}
 tr.best td{background:#fdecea;font-weight:600}
+tr.swept th,tr.swept td{background:#eef4fb;font-weight:600}
 #key-metrics td,#key-metrics th{font-size:1.15em}
 """
 
@@ -153,9 +154,32 @@ def _active_parameters(meta: Mapping[str, Any]) -> tuple[dict[str, Any], int]:
     return shown, len(flat) - len(shown)
 
 
+def _value(v: Any) -> str:
+    """A parameter value as written in a config: a whole float without its ``.0`` (300, not
+    300.0), other floats in full (``repr``), anything else as text."""
+    if isinstance(v, float) and math.isfinite(v) and v == int(v) and abs(v) < 1e15:
+        return str(int(v))
+    return repr(v) if isinstance(v, float) else str(v)
+
+
 def _kv(d: Mapping[str, Any]) -> str:
-    return "<table>" + "".join(f"<tr><th>{_e(k)}</th><td class=\"t\">{_e(v)}</td></tr>"
+    return "<table>" + "".join(f"<tr><th>{_e(k)}</th><td class=\"t\">{_e(_value(v))}</td></tr>"
                                for k, v in d.items()) + "</table>"
+
+
+def _base_table(params: Mapping[str, Any], domains: Mapping[str, Sequence[Any]]) -> str:
+    """The base parameters; a swept key's row is marked (class ``swept``) and gives the values
+    the runs took, its base value being in effect in none of them."""
+    rows = []
+    for k, v in params.items():
+        if k in domains:
+            swept = ", ".join(_value(x) for x in domains[k])
+            rows.append(f"<tr class=\"swept\"><th>{_e(k)}</th><td class=\"t\">swept: "
+                        f"{_e(swept)} <span class=\"small\">(base {_e(_value(v))}, used by no "
+                        "run)</span></td></tr>")
+        else:
+            rows.append(f"<tr><th>{_e(k)}</th><td class=\"t\">{_e(_value(v))}</td></tr>")
+    return "<table id=\"base-parameters\">" + "".join(rows) + "</table>"
 
 
 def _flat(d: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
@@ -239,7 +263,7 @@ def build_report(folder: str | Path, report_path: str | Path | None = None) -> s
     keys = [g["key"] for g in meta.get("grid", [])]
     report_dir = Path(report_path).resolve().parent if report_path else folder.resolve()
     seqs = meta.get("sequences", [])
-    grid_rows = [{"parameter": g["key"], "values": ", ".join(map(str, g["values"]))}
+    grid_rows = [{"parameter": g["key"], "values": ", ".join(map(_value, g["values"]))}
                  for g in meta.get("grid", [])]
     ev = dict(meta.get("evaluation", {}))
     sum_cols = ["run"] + keys + [c for c in SUMMARY_COLUMNS if summary and c in summary[0]]
@@ -269,7 +293,8 @@ def build_report(folder: str | Path, report_path: str | Path | None = None) -> s
         "<h2>Annotated clips</h2>", _clips(folder, report_dir),
         "<h2>Base tracker parameters</h2>",
         f"<p class=\"small\">Those of the stages in use; {left_out} parameter(s) of stages "
-        "and methods no run used are left out.</p>" if left_out else "", _kv(params),
+        "and methods no run used are left out.</p>" if left_out else "",
+        _base_table(params, {g["key"]: list(g["values"]) for g in meta.get("grid", [])}),
         "<h2>Software</h2>", _kv(meta.get("versions", {})),
         "</body></html>",
     ]

@@ -116,7 +116,8 @@ def read_table(path: str | Path, required: Sequence[str] = ()) -> list[dict[str,
 
 def summarise_runs(rows: Sequence[Mapping[str, Any]], keys: Sequence[str]) -> list[dict[str, Any]]:
     """Average every metric over the sequences of each run (nan-aware): one row per run, with
-    ``sequences`` = how many were averaged."""
+    ``sequences`` = how many were averaged. A column of integers whose mean is a whole number
+    (frames, tracks; always with one sequence) stays an integer."""
     out: list[dict[str, Any]] = []
     by_run: dict[int, list[Mapping[str, Any]]] = {}
     for r in rows:
@@ -128,8 +129,35 @@ def summarise_runs(rows: Sequence[Mapping[str, Any]], keys: Sequence[str]) -> li
         for c in rs[0]:
             if c in ("run", "sequence", "group") or c in keys:
                 continue
+            whole = [x[c] for x in rs]
+            if all(isinstance(v, int) and not isinstance(v, bool) for v in whole) \
+                    and sum(whole) % len(whole) == 0:
+                row[c] = sum(whole) // len(whole)   # counts stay integers: 40, not 40.0
+                continue
             vals = np.array([float(x[c]) for x in rs], dtype=np.float64)
             finite = vals[~np.isnan(vals)]
             row[c] = float(finite.mean()) if len(finite) else float("nan")
         out.append(row)
     return out
+
+
+#: the metrics of the console table of a sweep, after the run and its parameters
+SUMMARY_METRICS = ("det_pixel_precision", "det_pixel_recall", "det_object_f1", "HOTA", "MOTA",
+                   "IDF1")
+
+
+def format_summary(summary: Sequence[Mapping[str, Any]], keys: Sequence[str],
+                   metrics: Sequence[str] = SUMMARY_METRICS) -> str:
+    """The per-run summary as a text table: ``run``, each parameter of ``keys`` and the
+    ``metrics`` the rows hold, every column as wide as its longest cell (names are never
+    cut), numbers right-aligned (floats to 4 significant digits)."""
+    cols = ["run", *keys, *(m for m in metrics if not summary or m in summary[0])]
+
+    def cell(v: Any) -> str:
+        return f"{v:.4g}" if isinstance(v, float) else str(v)
+
+    body = [[cell(r.get(c, "")) for c in cols] for r in summary]
+    widths = [max([len(c)] + [len(b[i]) for b in body]) for i, c in enumerate(cols)]
+    lines = ["  ".join(f"{c:>{w}}" for c, w in zip(cols, widths))]
+    lines += ["  ".join(f"{v:>{w}}" for v, w in zip(b, widths)) for b in body]
+    return "\n".join(lines) + "\n"
