@@ -1,5 +1,6 @@
 """``track --show`` with OpenCV's headless build: the serve page of the one source on 127.0.0.1,
-fed by the track job, which keeps its outputs and its Ctrl-C rules."""
+fed by the track job, which keeps its outputs and its Ctrl-C rules, answering only to the host
+names of 127.0.0.1 and of ``--allowed-host``."""
 
 from __future__ import annotations
 
@@ -35,7 +36,7 @@ pytestmark = pytest.mark.skipif(not _headless(), reason="OpenCV's GUI build show
 class Track:
     """``motiontrack track SOURCE --show --port P`` in a subprocess without a display."""
 
-    def __init__(self, tmp_path: Path, source: str) -> None:
+    def __init__(self, tmp_path: Path, source: str, *args: str) -> None:
         self.port, self.out = free_port(), tmp_path / "run"
         self.err = open(tmp_path / "stderr.txt", "w+")
         env = {**os.environ, "PYTHONUNBUFFERED": "1"}
@@ -43,7 +44,7 @@ class Track:
             env.pop(k, None)
         self.proc = subprocess.Popen(
             [sys.executable, "-m", "motiontrack", "track", source, "--show", "--port",
-             str(self.port), "--no-video", "-o", str(self.out)],
+             str(self.port), "--no-video", "-o", str(self.out), *args],
             stdout=subprocess.PIPE, stderr=self.err, env=env, text=True)
         self.client = httpx.Client(base_url=f"http://127.0.0.1:{self.port}", timeout=5)
 
@@ -85,8 +86,8 @@ class Track:
 def track(tmp_path):
     runs = []
 
-    def start(source: str) -> Track:
-        runs.append(Track(tmp_path, source))
+    def start(source: str, *args: str) -> Track:
+        runs.append(Track(tmp_path, source, *args))
         return runs[-1]
 
     yield start
@@ -96,7 +97,7 @@ def track(tmp_path):
 
 @pytest.mark.slow
 def test_headless_show_serves_the_page_of_the_running_source(track):
-    t = track("synth:walker?n_frames=5000")
+    t = track("synth:walker?n_frames=5000", "--allowed-host", "cams.lan")
     cam = t.poll(lambda: (lambda c: c if c["status"] == "running" and c["frames"] > 10 else None)
                  (t.camera()), 60, "the camera running")
     assert cam["name"] == "synth-walker" and cam["fps"] > 0 and cam["scene"] is False
@@ -108,6 +109,10 @@ def test_headless_show_serves_the_page_of_the_running_source(track):
     page = t.client.get("/")
     assert page.status_code == 200 and "text/html" in page.headers["content-type"]
     assert f"live view: http://127.0.0.1:{t.port}/" in t.stderr()
+    # the names of 127.0.0.1 and --allowed-host's, not a name rebound to 127.0.0.1
+    for host, status in ((f"localhost:{t.port}", 200), (f"cams.lan:{t.port}", 200),
+                         (f"evil.example:{t.port}", 403)):
+        assert t.client.get("/api/cameras", headers={"Host": host}).status_code == status, host
     frames_then = t.camera()["frames"]
     t.poll(lambda: t.camera()["frames"] > frames_then, 10, "frames still counting")
 

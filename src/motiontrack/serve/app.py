@@ -11,12 +11,10 @@ from __future__ import annotations
 
 import asyncio
 import hashlib
-import hmac
 import json
 from importlib import resources
 from pathlib import Path
 from typing import Any, AsyncIterator, Callable, Mapping
-from urllib.parse import parse_qs
 
 from starlette.applications import Starlette
 from starlette.requests import Request
@@ -26,6 +24,7 @@ from starlette.routing import Route
 from ..analytics.scene import scene_json_schema
 from ..errors import MotionTrackError
 from .cameras import cameras_json_schema
+from .guard import LOOPBACK_NAMES, HostCheck, OriginCheck, TokenCheck
 from .hub import CameraState, Cursor, Hub
 from .scenes import SceneFiles
 
@@ -46,32 +45,6 @@ def _error(status: int, message: str) -> JSONResponse:
     return JSONResponse({"error": message}, status_code=status)
 
 
-class _TokenCheck:
-    """ASGI middleware: every HTTP request needs ``Authorization: Bearer TOKEN`` or
-    ``?token=TOKEN`` (an ``<img>`` or ``EventSource`` cannot set headers), else 401."""
-
-    def __init__(self, app: Any, token: str) -> None:
-        self.app, self.token = app, token.encode()
-
-    def _allowed(self, scope: dict) -> bool:
-        for k, v in scope.get("headers", ()):
-            if k == b"authorization" and v[:7].lower() == b"bearer ":
-                if hmac.compare_digest(v[7:].strip(), self.token):
-                    return True
-        qs = parse_qs(scope.get("query_string", b"").decode("latin-1"))
-        return any(hmac.compare_digest(t.encode("latin-1", "replace"), self.token)
-                   for t in qs.get("token", []))
-
-    async def __call__(self, scope: dict, receive: Callable, send: Callable) -> None:
-        if scope["type"] == "http" and not self._allowed(scope):
-            resp = JSONResponse({"error": "a token is required: Authorization: Bearer TOKEN or "
-                                          "?token=TOKEN"}, status_code=401,
-                                headers={"WWW-Authenticate": "Bearer"})
-            await resp(scope, receive, send)
-            return
-        await self.app(scope, receive, send)
-
-
 async def _body(request: Request) -> bytes | Response:
     """The request body, or a 413 response when it is larger than :data:`MAX_BODY`."""
     length = request.headers.get("content-length")
@@ -87,15 +60,20 @@ async def _body(request: Request) -> bytes | Response:
 
 def create_app(hub: Hub, token: str | None = None,
                scenes: Mapping[str, Path | None] | SceneFiles | None = None,
-               stopping: Callable[[], bool] = lambda: False) -> Any:
+               stopping: Callable[[], bool] = lambda: False,
+               hosts: frozenset[str] | None = LOOPBACK_NAMES) -> Any:
     """The ASGI app over ``hub``. ``scenes``: each camera's scene file (None: the camera has
     none; the editor's PUT then answers 409). ``stopping`` tells the streams to end (the server
-    is shutting down)."""
+    is shutting down). ``hosts``: the host names the app answers to
+    (:func:`~.guard.allowed_hosts`; None: any), ``token``: the token every request needs
+    (:mod:`.guard`)."""
     files = scenes if isinstance(scenes, SceneFiles) else SceneFiles(scenes or {})
     routes = [*_page_routes(), *_api_routes(hub), *_stream_routes(hub, stopping),
               *_editor_routes(hub, files), *_schema_routes()]
-    app: Any = Starlette(routes=routes)
-    return _TokenCheck(app, token) if token else app
+    app: Any = OriginCheck(Starlette(routes=routes))
+    if token:
+        app = TokenCheck(app, token)
+    return HostCheck(app, hosts) if hosts is not None else app
 
 
 def _camera(hub: Hub, request: Request) -> CameraState | Response:

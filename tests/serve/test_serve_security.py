@@ -1,0 +1,202 @@
+"""``motiontrack serve`` and ``track --show`` against hostile pages and clients.
+
+* DNS rebinding and cross-site writes: the ``Host`` names a server answers to and the
+  ``Origin`` of writes (``serve/guard.py``).
+
+The rules are tested in process (the app over httpx's ASGI transport, the track job's scene
+function) and, where they are about HTTP, against real servers on 127.0.0.1: the
+``track --show`` page in a thread (:class:`~motiontrack.serve.view.LiveView`), and a
+``motiontrack serve`` process with one camera.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import socket
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("starlette")
+pytest.importorskip("uvicorn")
+httpx = pytest.importorskip("httpx")
+
+from motiontrack.cli import main  # noqa: E402
+from motiontrack.errors import ConfigError  # noqa: E402
+from motiontrack.io.tomlfile import read_toml  # noqa: E402
+from motiontrack.serve.app import create_app  # noqa: E402
+from motiontrack.serve.guard import LOOPBACK_NAMES, allowed_hosts  # noqa: E402
+from motiontrack.serve.hub import Hub  # noqa: E402
+from helpers.serve_process import ServeProcess  # noqa: E402
+
+LOOPBACK = "http://127.0.0.1:8080"
+SCENE = '[[line]]\nname = "gate"\npoints = [[320, 0], [320, 480]]\n'
+#: a scene edit the editor would send: the gate and one more line
+EDIT = {"lines": [{"name": "gate", "points": [[320, 0], [320, 480]]},
+                  {"name": "door", "points": [[0, 240], [640, 240]]}]}
+
+
+def _app(tmp_path: Path, files=None, **kw):
+    """The app over a hub with the camera ``cam`` and its scene file; (app, scene file)."""
+    scene = tmp_path / "scene.toml"
+    scene.write_text(SCENE)
+    files = files(scene) if files is not None else {"cam": scene}
+    return create_app(Hub([("cam", True)]), scenes=files, **kw), scene
+
+
+def _requests(app, *calls):
+    """Send ``(method, url, kwargs)`` requests to ``app`` in order, on one event loop; their
+    responses."""
+    async def go():
+        transport = httpx.ASGITransport(app=app)
+        async with httpx.AsyncClient(transport=transport, base_url=LOOPBACK) as c:
+            return [await c.request(m, url, **kw) for m, url, kw in calls]
+
+    return asyncio.run(go())
+
+
+# ---------------------------------------------------------------------- host names, origins
+@pytest.mark.parametrize("bind, extra, hosts", [
+    ("127.0.0.1", (), LOOPBACK_NAMES),
+    ("::1", (), LOOPBACK_NAMES),
+    ("localhost", (), LOOPBACK_NAMES),
+    ("127.0.0.2", (), LOOPBACK_NAMES | {"127.0.0.2"}),
+    ("127.0.0.1", ("Cams.LAN", "[FE80::1]", "10.0.0.7"),
+     LOOPBACK_NAMES | {"cams.lan", "fe80::1", "10.0.0.7"}),
+    ("192.168.1.5", (), {"192.168.1.5"}),                  # not reachable as localhost
+    ("0.0.0.0", (), None),                                  # any: a token guards it
+    ("::", (), None),
+    ("0.0.0.0", ("cams.lan",), LOOPBACK_NAMES | {"cams.lan"}),
+])
+def test_a_server_answers_to_the_names_of_its_address(bind, extra, hosts):
+    assert allowed_hosts(bind, extra) == (frozenset(hosts) if hosts is not None else None)
+
+
+@pytest.mark.parametrize("name", ["cams.lan:8080", "http://cams.lan", "cams.lan/x", "", "[::1",
+                                  "a b", "[::1]:80", "fe80::zz"])
+def test_an_allowed_host_with_a_port_scheme_or_path_is_refused(name):
+    with pytest.raises(ConfigError, match=r"--allowed-host must be a host name or an IP address"):
+        allowed_hosts("127.0.0.1", [name])
+
+
+@pytest.mark.parametrize("host, status", [
+    ("127.0.0.1:8080", 200), ("127.0.0.1", 200), ("localhost:8080", 200), ("LocalHost", 200),
+    ("[::1]:8080", 200), ("[::1]", 200), ("[0:0:0:0:0:0:0:1]:8080", 200),
+    ("cams.lan:8080", 200),                                  # given with --allowed-host
+    ("evil.example:8080", 403), ("evil.example", 403), ("127.0.0.1.evil.example", 403),
+    ("localhost.evil.example:8080", 403), ("evil.example@127.0.0.1", 403), ("[::1", 403),
+    ("127.0.0.1:8080:80", 403), ("::1", 403), ("", 403), ("cams.lan.:8080", 403),
+])
+def test_a_request_naming_another_host_is_refused(tmp_path, host, status):
+    app, _ = _app(tmp_path, hosts=allowed_hosts("127.0.0.1", ["cams.lan"]))
+    (r,) = _requests(app, ("GET", "/api/cameras", {"headers": {"Host": host}}))
+    assert r.status_code == status, r.text
+    if status == 403:
+        assert "--allowed-host" in r.json()["error"]
+
+
+def test_a_rebound_page_can_neither_read_nor_write(tmp_path):
+    """What a page of evil.example sends once its name resolves to 127.0.0.1: its own name as
+    Host, on every route, with or without the token."""
+    app, scene = _app(tmp_path, hosts=LOOPBACK_NAMES, token="t0k")
+    evil = {"Host": "evil.example:8080", "Authorization": "Bearer t0k"}
+    rs = _requests(app, *[("GET", route, {"headers": evil}) for route in (
+        "/", "/static/app.js", "/api/cameras", "/api/cameras/cam/scene",
+        "/api/cameras/cam/snapshot.jpg", "/api/cameras/cam/stream.mjpg", "/api/events")],
+        ("PUT", "/api/cameras/cam/scene", {"headers": evil, "json": EDIT}))
+    assert [r.status_code for r in rs] == [403] * len(rs)
+    assert scene.read_text() == SCENE
+
+
+@pytest.mark.parametrize("origin, status", [
+    (None, 200),                                  # curl, a script: no Origin
+    ("http://127.0.0.1:8080", 200),               # the page itself
+    ("http://evil.example", 403), ("https://evil.example:8080", 403),
+    ("http://127.0.0.1:9999", 403),               # another server on this machine
+    ("http://localhost:8080", 403),               # another origin, even if the same machine
+    ("null", 403), ("", 403), ("file://", 403), ("http://127.0.0.1:8080/x", 403),
+])
+def test_a_write_from_another_sites_page_is_refused(tmp_path, origin, status):
+    app, scene = _app(tmp_path)
+    headers = {"Origin": origin} if origin is not None else {}
+    (r, read) = _requests(app, ("PUT", "/api/cameras/cam/scene", {"json": EDIT,
+                                                                "headers": headers}),
+                          ("GET", "/api/cameras", {"headers": headers}))
+    assert r.status_code == status, r.text
+    assert read.status_code == 200                 # reads: a browser keeps them from the page
+    names = [ln["name"] for ln in read_toml(scene)["line"]]
+    assert names == (["gate", "door"] if status == 200 else ["gate"])
+    if status == 403:
+        assert "Origin" in r.json()["error"]
+
+
+def test_a_page_behind_a_proxy_with_the_default_port_is_its_own_origin(tmp_path):
+    app, _ = _app(tmp_path, hosts=allowed_hosts("127.0.0.1", ["cams.example.com"]))
+    for origin, host in (("https://cams.example.com", "cams.example.com"),
+                         ("https://cams.example.com", "cams.example.com:443"),
+                         ("http://[::1]:8080", "[::1]:8080")):
+        (r,) = _requests(app, ("PUT", "/api/cameras/cam/scene",
+                               {"json": EDIT, "headers": {"Origin": origin, "Host": host}}))
+        assert r.status_code == 200, (origin, host, r.text)
+
+
+# ------------------------------------------------------------------- track --show's page
+def test_the_show_page_answers_only_to_its_own_host_names():
+    """The live page of ``track --show`` is a real server on 127.0.0.1 in a thread."""
+    from motiontrack.serve.view import LiveView
+
+    view = LiveView("cam", allowed=["cams.lan"])
+    try:
+        with httpx.Client(base_url=view.url, timeout=5) as c:
+            for host, status in (("evil.example:%d", 403), ("127.0.0.1:%d", 200),
+                                 ("localhost:%d", 200), ("[::1]:%d", 200), ("cams.lan:%d", 200),
+                                 ("cams.lan.evil.example:%d", 403)):
+                r = c.get("/api/cameras", headers={"Host": host % view.port})
+                assert r.status_code == status, (host, r.text)
+            assert c.get("/", headers={"Host": "evil.example"}).status_code == 403
+    finally:
+        view.close()
+    with pytest.raises(ConfigError, match="--allowed-host"):
+        LiveView("cam", allowed=["cams.lan:80"])
+
+
+# ------------------------------------------------------------------------ the command line
+def test_serve_refuses_an_allowed_host_with_a_port(tmp_path, capsys):
+    cams = tmp_path / "cameras.toml"
+    cams.write_text('[[camera]]\nname = "gate"\nsource = "synth:walker"\n')
+    with socket.socket() as busy:   # a port in use: a server that got further would stop there
+        busy.bind(("127.0.0.1", 0))
+        busy.listen()
+        port = str(busy.getsockname()[1])
+        assert main(["serve", str(cams), "--port", port, "--allowed-host", "cams.lan:8080"]) == 2
+    err = capsys.readouterr().err
+    assert "--allowed-host must be a host name" in err and "Traceback" not in err
+
+
+# --------------------------------------------------------------------------- a live server
+@pytest.fixture(scope="module")
+def served(tmp_path_factory):
+    """``motiontrack serve`` with the looping camera ``c`` (synth:walker at 10 fps) and its
+    scene file, answering to ``cams.lan`` too."""
+    root = tmp_path_factory.mktemp("security")
+    (root / "scene.toml").write_text(SCENE)
+    cameras = {"c": {"source": "synth:walker", "scene": "scene.toml", "loop": True, "fps": 10}}
+    with ServeProcess(root, cameras, "--allowed-host", "cams.lan") as srv:
+        srv.wait_running(frames=2, timeout=60)
+        yield srv
+
+
+@pytest.mark.slow
+def test_live_a_rebound_name_is_refused_and_the_scene_is_not_rewritten(served):
+    """``curl -X PUT -H 'Host: evil.example:PORT' --data '{"lines": ...}' .../scene``."""
+    c, port, scene = served.client, served.port, served.root / "scene.toml"
+    r = c.put("/api/cameras/c/scene", json=EDIT, headers={"Host": f"evil.example:{port}"})
+    assert r.status_code == 403 and "--allowed-host" in r.json()["error"]
+    for route in ("/api/cameras", "/api/cameras/c/snapshot.jpg", "/"):
+        assert c.get(route, headers={"Host": f"evil.example:{port}"}).status_code == 403
+    r = c.put("/api/cameras/c/scene", json=EDIT,
+              headers={"Origin": "http://evil.example", "Host": f"localhost:{port}"})
+    assert r.status_code == 403 and "Origin" in r.json()["error"]
+    assert scene.read_text() == SCENE
+    for host in (f"localhost:{port}", f"[::1]:{port}", f"cams.lan:{port}", "127.0.0.1"):
+        assert c.get("/api/cameras", headers={"Host": host}).status_code == 200, host
