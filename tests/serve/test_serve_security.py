@@ -1,7 +1,10 @@
 """``motiontrack serve`` and ``track --show`` against hostile pages and clients.
 
 * DNS rebinding and cross-site writes: the ``Host`` names a server answers to and the
-  ``Origin`` of writes (``serve/guard.py``).
+  ``Origin`` of writes (``serve/guard.py``);
+* the editor's PUT: a slow scene check leaves the other requests answered, hostile JSON bodies
+  (huge integers, deep nesting) get a 400 with a message, a client that leaves mid-upload
+  leaves no traceback.
 
 The rules are tested in process (the app over httpx's ASGI transport, the track job's scene
 function) and, where they are about HTTP, against real servers on 127.0.0.1: the
@@ -13,6 +16,8 @@ from __future__ import annotations
 
 import asyncio
 import socket
+import threading
+import time
 from pathlib import Path
 
 import pytest
@@ -24,9 +29,10 @@ httpx = pytest.importorskip("httpx")
 from motiontrack.cli import main  # noqa: E402
 from motiontrack.errors import ConfigError  # noqa: E402
 from motiontrack.io.tomlfile import read_toml  # noqa: E402
-from motiontrack.serve.app import create_app  # noqa: E402
+from motiontrack.serve.app import MAX_BODY, create_app  # noqa: E402
 from motiontrack.serve.guard import LOOPBACK_NAMES, allowed_hosts  # noqa: E402
 from motiontrack.serve.hub import Hub  # noqa: E402
+from motiontrack.serve.scenes import SceneFiles  # noqa: E402
 from helpers.serve_process import ServeProcess  # noqa: E402
 
 LOOPBACK = "http://127.0.0.1:8080"
@@ -140,6 +146,74 @@ def test_a_page_behind_a_proxy_with_the_default_port_is_its_own_origin(tmp_path)
         assert r.status_code == 200, (origin, host, r.text)
 
 
+# ------------------------------------------------------------------------ the editor's PUT
+def test_a_slow_scene_check_leaves_other_requests_answered(tmp_path):
+    """The scene check runs off the event loop: while one takes long (here it waits for the
+    test), the API and the streams keep answering."""
+    started, release = threading.Event(), threading.Event()
+
+    class SlowCheck(SceneFiles):
+        def write(self, name, payload, size=None):
+            started.set()
+            release.wait(3)            # a long check (a scene of thousands of points)
+            return super().write(name, payload, size)
+
+    app, scene = _app(tmp_path, files=lambda s: SlowCheck({"cam": s}))
+
+    async def go():
+        transport = httpx.ASGITransport(app=app)
+        async with httpx.AsyncClient(transport=transport, base_url=LOOPBACK) as c:
+            put = asyncio.create_task(c.put("/api/cameras/cam/scene", json=EDIT))
+            for _ in range(200):
+                if started.is_set():
+                    break
+                await asyncio.sleep(0.01)
+            t0 = time.monotonic()
+            other = await c.get("/api/cameras")
+            answered = time.monotonic() - t0
+            still_checking = not put.done()
+            release.set()
+            return other, answered, still_checking, await put
+
+    other, answered, still_checking, put = asyncio.run(go())
+    assert started.is_set() and other.status_code == 200
+    assert still_checking and answered < 1.0, answered
+    assert put.status_code == 200
+    assert [ln["name"] for ln in read_toml(scene)["line"]] == ["gate", "door"]
+
+
+def _points(n: int) -> str:
+    return ", ".join(f"[{i}, {i}]" for i in range(n))
+
+
+@pytest.mark.parametrize("body, message", [
+    # 400 digits: more than a float holds
+    ('{"lines": [{"name": "x", "points": [[0, 0], [%s, 1]]}]}' % ("1" * 400),
+     "the body holds an integer of 400 digits; integers must be within +-9223372036854775807"),
+    ('{"zones": [{"name": "z", "polygon": [[0, 0], [9, 0], [9, 9]], "loiter_s": -%s}]}'
+     % ("9" * 30), "the body holds an integer of 30 digits"),
+    ('{"lines": [{"name": "x", "points": [[0, 0], [%s, 1]]}]}' % ("1" * 5000),
+     "numbers of at most 19 digits"),                       # over Python's own 4300
+    ('{"lines": ' + "[" * 30_000 + "]" * 30_000 + "}", "nested deeper than 16 levels"),
+    ('{"lines": [{"name": "x", "points": [[0, 0], [1, 1]], "w": %s}]}'
+     % ("[" * 900 + "]" * 900), "nested deeper than 16 levels"),
+    ('{"lines": [', "the body must be a JSON object: Expecting value at line 1 column 12"),
+])
+def test_a_hostile_scene_body_gets_a_message_not_a_500(tmp_path, body, message):
+    app, scene = _app(tmp_path)
+    assert len(body) <= MAX_BODY
+    (r,) = _requests(app, ("PUT", "/api/cameras/cam/scene", {"content": body.encode()}))
+    assert r.status_code == 400, r.text
+    assert message in r.json()["error"]
+    assert scene.read_text() == SCENE
+
+
+def test_a_body_not_in_utf8_gets_a_message(tmp_path):
+    app, _ = _app(tmp_path)
+    (r,) = _requests(app, ("PUT", "/api/cameras/cam/scene", {"content": b'{"lines": "\xff"}'}))
+    assert r.status_code == 400 and "UTF-8" in r.json()["error"]
+
+
 # ------------------------------------------------------------------- track --show's page
 def test_the_show_page_answers_only_to_its_own_host_names():
     """The live page of ``track --show`` is a real server on 127.0.0.1 in a thread."""
@@ -186,6 +260,10 @@ def served(tmp_path_factory):
         yield srv
 
 
+def _log(srv: ServeProcess) -> str:
+    return (srv.root / "serve.log").read_text(errors="replace")
+
+
 @pytest.mark.slow
 def test_live_a_rebound_name_is_refused_and_the_scene_is_not_rewritten(served):
     """``curl -X PUT -H 'Host: evil.example:PORT' --data '{"lines": ...}' .../scene``."""
@@ -200,3 +278,26 @@ def test_live_a_rebound_name_is_refused_and_the_scene_is_not_rewritten(served):
     assert scene.read_text() == SCENE
     for host in (f"localhost:{port}", f"[::1]:{port}", f"cams.lan:{port}", "127.0.0.1"):
         assert c.get("/api/cameras", headers={"Host": host}).status_code == 200, host
+
+
+@pytest.mark.slow
+def test_live_an_oversized_body_is_refused_before_it_is_sent(served):
+    with socket.create_connection(("127.0.0.1", served.port), timeout=5) as s:
+        s.sendall(f"PUT /api/cameras/c/scene HTTP/1.1\r\nHost: 127.0.0.1:{served.port}\r\n"
+                  f"Content-Type: application/json\r\nContent-Length: 100000000\r\n\r\n{{"
+                  .encode())
+        assert s.recv(4096).startswith(b"HTTP/1.1 413 ")   # without the other 99.99 MB
+
+
+@pytest.mark.slow
+def test_live_a_client_leaving_mid_upload_leaves_no_traceback(served):
+    for _ in range(2):
+        with socket.create_connection(("127.0.0.1", served.port), timeout=5) as s:
+            s.sendall(f"PUT /api/cameras/c/scene HTTP/1.1\r\nHost: 127.0.0.1:{served.port}\r\n"
+                      f"Content-Type: application/json\r\nContent-Length: 5000\r\n\r\n"
+                      f'{{"lines": ['.encode())
+            time.sleep(0.2)                        # the app waits for the rest of the body
+    assert served.camera("c")["status"] == "running"   # the server answers and goes on
+    time.sleep(0.3)
+    log = _log(served)
+    assert "Traceback" not in log and "Exception" not in log, served.logs()
