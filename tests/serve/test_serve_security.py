@@ -1,10 +1,13 @@
-"""``motiontrack serve`` and ``track --show`` against hostile pages and clients.
+"""``motiontrack serve`` and ``track --show`` against hostile pages and clients, and against
+hand-edited files.
 
 * DNS rebinding and cross-site writes: the ``Host`` names a server answers to and the
   ``Origin`` of writes (``serve/guard.py``);
 * the editor's PUT: a slow scene check leaves the other requests answered, hostile JSON bodies
   (huge integers, deep nesting) get a 400 with a message, a client that leaves mid-upload
-  leaves no traceback.
+  leaves no traceback;
+* a scene file edited by hand with a mistake: the camera keeps its last valid scene and keeps
+  recording; a bad ``camera =`` calibration is refused before anything starts.
 
 The rules are tested in process (the app over httpx's ASGI transport, the track job's scene
 function) and, where they are about HTTP, against real servers on 127.0.0.1: the
@@ -15,6 +18,8 @@ function) and, where they are about HTTP, against real servers on 127.0.0.1: the
 from __future__ import annotations
 
 import asyncio
+import json
+import re
 import socket
 import threading
 import time
@@ -234,7 +239,31 @@ def test_the_show_page_answers_only_to_its_own_host_names():
         LiveView("cam", allowed=["cams.lan:80"])
 
 
-# ------------------------------------------------------------------------ the command line
+# ------------------------------------------------------------------------ the cameras file
+@pytest.mark.parametrize("calibration, message", [
+    ("missing.xml", r"^motiontrack: error: camera\[1\] \(gate\): camera = missing.xml: camera "
+                    r"file not found: .*missing.xml$"),
+    ("bad.xml", r"^motiontrack: error: camera\[1\] \(gate\): camera = bad.xml: malformed Tsai "
+                r"camera XML .*bad.xml: syntax error: line 1, column 0$"),
+])
+def test_a_bad_calibration_in_the_cameras_file_is_refused_before_anything_starts(
+        tmp_path, capsys, monkeypatch, calibration, message):
+    monkeypatch.delenv("MOTIONTRACK_TOKEN", raising=False)
+    (tmp_path / "bad.xml").write_text("not xml <<<")
+    cams = tmp_path / "cameras.toml"
+    cams.write_text(f'[[camera]]\nname = "gate"\nsource = "synth:walker"\n'
+                    f'camera = "{calibration}"\n')
+    out = tmp_path / "out"
+    with socket.socket() as busy:   # a port in use: a server that got further would stop there
+        busy.bind(("127.0.0.1", 0))
+        busy.listen()
+        port = str(busy.getsockname()[1])
+        assert main(["serve", str(cams), "--port", port, "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert re.match(message, err), err
+    assert len(err.splitlines()) == 1 and not out.exists()
+
+
 def test_serve_refuses_an_allowed_host_with_a_port(tmp_path, capsys):
     cams = tmp_path / "cameras.toml"
     cams.write_text('[[camera]]\nname = "gate"\nsource = "synth:walker"\n')
@@ -247,15 +276,46 @@ def test_serve_refuses_an_allowed_host_with_a_port(tmp_path, capsys):
     assert "--allowed-host must be a host name" in err and "Traceback" not in err
 
 
+# ------------------------------------------------------------- a scene file edited by hand
+def test_a_bad_scene_file_keeps_the_last_valid_scene_until_it_is_valid_again(tmp_path, caplog):
+    from motiontrack.serve.worker import SceneKeeper
+
+    path = tmp_path / "scene.toml"
+    path.write_text(SCENE)
+    keeper = SceneKeeper("gate", path)
+    first = keeper.load(None)
+    assert [ln.name for ln in first.lines] == ["gate"] and keeper.error is None
+    for bad in ('[[line]]\nname = "gate"\npoints = [[320, 0]]\n',      # one point
+                '[[line]\nname = "gate"\n'):                            # not TOML
+        path.write_text(bad)
+        with caplog.at_level("ERROR", logger="motiontrack.serve.worker"):
+            caplog.clear()
+            assert keeper.load(None) is first and keeper.load(None) is first
+        assert keeper.error.endswith("the camera keeps its last valid scene until the file is "
+                                     "valid")
+        assert "scene file" in keeper.error
+        assert len(caplog.records) == 1            # once per problem, not once per segment
+    path.unlink()
+    assert keeper.load(None) is first and "not found" in keeper.error
+    path.write_text(SCENE.replace("gate", "door"))
+    again = keeper.load(None)
+    assert [ln.name for ln in again.lines] == ["door"] and keeper.error is None
+    # a camera process started while the file is bad has no scene to keep
+    path.write_text("[[line]]\n")
+    fresh = SceneKeeper("gate", path)
+    assert fresh.load(None) is None
+    assert fresh.error.endswith("the camera runs without lines and zones until the file is valid")
+
+
 # --------------------------------------------------------------------------- a live server
 @pytest.fixture(scope="module")
 def served(tmp_path_factory):
-    """``motiontrack serve`` with the looping camera ``c`` (synth:walker at 10 fps) and its
-    scene file, answering to ``cams.lan`` too."""
+    """``motiontrack serve`` with the looping camera ``c`` (synth:walker at 10 fps, segments
+    of 1 s) and its scene file, answering to ``cams.lan`` too."""
     root = tmp_path_factory.mktemp("security")
     (root / "scene.toml").write_text(SCENE)
     cameras = {"c": {"source": "synth:walker", "scene": "scene.toml", "loop": True, "fps": 10}}
-    with ServeProcess(root, cameras, "--allowed-host", "cams.lan") as srv:
+    with ServeProcess(root, cameras, "--allowed-host", "cams.lan", "--rotate-s", "1") as srv:
         srv.wait_running(frames=2, timeout=60)
         yield srv
 
@@ -301,3 +361,33 @@ def test_live_a_client_leaving_mid_upload_leaves_no_traceback(served):
     time.sleep(0.3)
     log = _log(served)
     assert "Traceback" not in log and "Exception" not in log, served.logs()
+
+
+@pytest.mark.slow
+def test_live_a_bad_hand_edit_of_the_scene_keeps_the_camera_recording(served):
+    c, scene = served.client, served.root / "scene.toml"
+    before = served.camera("c")
+    assert before["scene_error"] is None
+    scene.write_text('[[line]]\nname = "gate"\npoints = [[320, 0]]\n')    # one point
+    cam = served.wait("the scene file's problem in the camera's status",
+                      lambda: (lambda x: x if x["scene_error"] else None)(served.camera("c")), 20)
+    assert "scene file scene.toml: line[1].points" in cam["scene_error"]
+    assert "keeps its last valid scene" in cam["scene_error"]
+    # segments go on (one a second) with the last valid scene, in the same process
+    served.wait("two more segments", lambda: served.camera("c")["segment"] != cam["segment"]
+                and served.camera("c")["frames"] > cam["frames"] + 10, 20)
+    now = served.camera("c")
+    assert (now["status"], now["pid"], now["restarts"]) == ("running", before["pid"], 0)
+    assert now["scene_error"] == cam["scene_error"]
+    assert list(c.get("/api/cameras/c/counts").json()["lines"]) == ["gate"]
+    assert _log(served).count("line[1].points") == 1          # said once, not per segment
+    segment = served.out / "c" / now["segment"]
+    scene.write_text(SCENE + '[[line]]\nname = "door"\npoints = [[0, 240], [640, 240]]\n')
+    served.wait("the valid file applied", lambda: served.camera("c")["scene_error"] is None
+                and "door" in c.get("/api/cameras/c/counts").json()["lines"], 20)
+    assert served.camera("c")["pid"] == before["pid"]
+    # the segments run with the kept scene recorded their events with it
+    served.wait("a segment with the kept scene committed",
+                lambda: (segment / "summary.json").is_file(), 10)
+    header = json.loads((segment / "events.jsonl").read_text().splitlines()[0])
+    assert header["scene"].endswith("scene.toml")

@@ -23,7 +23,7 @@ from pathlib import Path
 from typing import Any, Sequence
 
 from ..config import load_config
-from ..errors import ConfigError
+from ..errors import ConfigError, MotionTrackError
 from ..run.folder import RunFolder
 from .app import create_app
 from .cameras import CameraSpec, load_cameras
@@ -186,6 +186,21 @@ def _check_configs(specs: tuple[CameraSpec, ...]) -> None:
             raise ConfigError(f"camera[{i}] ({s.name}): {exc}") from None
 
 
+def _check_calibrations(specs: tuple[CameraSpec, ...]) -> None:
+    """Every ``camera =`` calibration file of the cameras file readable and valid before any
+    camera starts (a camera process that cannot read it would fail at every start)."""
+    from ..calibrate import load_camera
+
+    for i, s in enumerate(specs, 1):
+        if s.camera is None:
+            continue
+        try:
+            load_camera(s.camera)
+        except MotionTrackError as exc:
+            raise ConfigError(f"camera[{i}] ({s.name}): camera = {s.camera.name}: {exc}"
+                              ) from None
+
+
 def serve(cameras_file: str | Path, host: str = "127.0.0.1", port: int = 8080,
           out: str | Path | None = None, token: str | None = None, *,
           rotate_s: float = 3600.0, rotate_mb: float = 0.0,
@@ -197,6 +212,7 @@ def serve(cameras_file: str | Path, host: str = "127.0.0.1", port: int = 8080,
     hosts = allowed_hosts(host, allowed)
     specs = load_cameras(cameras_file)
     _check_configs(specs)
+    _check_calibrations(specs)
     scenes = {s.name: s.scene for s in specs}
     calibrations = {s.name: s.camera for s in specs}
     check_scene_files(scenes, calibrations)
