@@ -213,6 +213,16 @@ def test_a_hostile_scene_body_gets_a_message_not_a_500(tmp_path, body, message):
     assert scene.read_text() == SCENE
 
 
+def test_a_scene_file_that_cannot_be_read_is_a_conflict_with_its_message(tmp_path):
+    app, scene = _app(tmp_path)
+    scene.write_text("[[line]\n")                     # edited by hand: not TOML
+    (got, put) = _requests(app, ("GET", "/api/cameras/cam/scene", {}),
+                           ("PUT", "/api/cameras/cam/scene", {"json": EDIT}))
+    assert got.status_code == 409 and "malformed scene file" in got.json()["error"]
+    assert put.status_code == 400 and "malformed scene file" in put.json()["error"]
+    assert scene.read_text() == "[[line]\n"
+
+
 def test_a_body_not_in_utf8_gets_a_message(tmp_path):
     app, _ = _app(tmp_path)
     (r,) = _requests(app, ("PUT", "/api/cameras/cam/scene", {"content": b'{"lines": "\xff"}'}))

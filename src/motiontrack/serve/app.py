@@ -272,8 +272,8 @@ def _editor_routes(hub: Hub, files: SceneFiles) -> list[Route]:
             return cam
         try:
             data = await anyio.to_thread.run_sync(files.read, cam.name)
-        except MotionTrackError as exc:
-            return _error(409 if files.path(cam.name) is None else 500, str(exc))
+        except MotionTrackError as exc:   # no scene file, or one that cannot be read: a state
+            return _error(409, str(exc))   # of the files, not a fault of the server
         with cam.lock:
             data["width"] = cam.status.get("width")
             data["height"] = cam.status.get("height")

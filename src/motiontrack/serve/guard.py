@@ -14,10 +14,10 @@ Three ASGI middlewares wrap the app of :mod:`.app` (outermost first):
 * :class:`TokenCheck` — with a token, every request needs ``Authorization: Bearer TOKEN`` or
   ``?token=TOKEN``, else 401.
 
-Starlette's ``TrustedHostMiddleware`` answers 400 in plain text and splits the ``Host`` header
-at its first colon in the Starlette versions ``serve`` supports (an IPv6 literal such as
-``[::1]:8080`` never matches), hence a check of its own here, with 403 and the app's JSON error
-shape. The model is documented in ``docs/serve.md`` ("Security model").
+Starlette's ``TrustedHostMiddleware`` answers 400 in plain text, and the older Starlette
+versions the ``serve`` extra allows (from 0.37) split the ``Host`` header at its first colon
+(an IPv6 literal such as ``[::1]:8080`` never matches), hence a check of its own here, with 403
+and the app's JSON error shape. The model is documented in ``docs/serve.md`` ("Security model").
 """
 
 from __future__ import annotations
