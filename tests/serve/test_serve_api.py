@@ -32,6 +32,8 @@ from motiontrack.serve.cameras import parse_cameras  # noqa: E402
 from helpers.serve_process import ServeProcess, synth_cameras  # noqa: E402
 
 CAMERAS = ("walker", "crossing")
+#: the base URL of in-process requests: a Host the app answers to
+LOOPBACK = "http://127.0.0.1:8080"
 
 
 # ----------------------------------------------------------------------------- cameras file
@@ -113,7 +115,8 @@ class _Client:
 
         async def go():
             transport = httpx.ASGITransport(app=self.app)
-            async with httpx.AsyncClient(transport=transport, base_url="http://test") as c:
+            # the app answers to the names of a loopback address (Host: 127.0.0.1:8080)
+            async with httpx.AsyncClient(transport=transport, base_url=LOOPBACK) as c:
                 return await c.request(method, url, **kw)
 
         return asyncio.run(go())

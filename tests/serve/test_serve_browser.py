@@ -385,3 +385,24 @@ def test_items_in_metres_are_listed_and_saved_back_as_they_are(server, page):
     assert sent["zones"] == scene["zones"] + [yard]
     logged = [e["message"] for e in page.get_log("browser") if e["level"] == "SEVERE"]
     assert logged == [], logged
+
+
+def test_a_scene_file_the_camera_cannot_apply_is_shown_on_its_tile(server, page):
+    """A hand edit of a scene file with a mistake: the camera keeps running with its last valid
+    scene, and its tile says what is wrong until the file is valid again."""
+    name = "north"
+    path = server.root / name / "scene.toml"
+    good = path.read_text()
+    shown = f'[data-testid="camera-scene-error-{name}"]'
+    assert not page.find_element("css selector", shown).is_displayed()
+    path.write_text(good + "\n[[line]]\nname = 'door'\n")        # a line without points
+    try:
+        text = server.wait("the problem on the tile",
+                           lambda: (e := page.find_element("css selector", shown)).is_displayed()
+                           and e.text, timeout=15)
+        assert text.startswith("scene not applied: scene file scene.toml: line[")
+        assert "points" in text and "keeps its last valid scene" in text
+    finally:
+        path.write_text(good)
+    server.wait("the problem gone from the tile",
+                lambda: not page.find_element("css selector", shown).is_displayed(), timeout=15)

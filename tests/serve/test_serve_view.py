@@ -1,5 +1,6 @@
 """``track --show`` with OpenCV's headless build: the serve page of the one source on 127.0.0.1,
-fed by the track job, which keeps its outputs and its Ctrl-C rules."""
+fed by the track job, which keeps its outputs and its Ctrl-C rules, answering only to the host
+names of 127.0.0.1 and of ``--allowed-host``."""
 
 from __future__ import annotations
 
@@ -96,7 +97,7 @@ def track(tmp_path):
 
 @pytest.mark.slow
 def test_headless_show_serves_the_page_of_the_running_source(track):
-    t = track("synth:walker?n_frames=5000")
+    t = track("synth:walker?n_frames=5000", "--allowed-host", "cams.lan")
     cam = t.poll(lambda: (lambda c: c if c["status"] == "running" and c["frames"] > 10 else None)
                  (t.camera()), 60, "the camera running")
     assert cam["name"] == "synth-walker" and cam["fps"] > 0 and cam["scene"] is False
@@ -108,6 +109,10 @@ def test_headless_show_serves_the_page_of_the_running_source(track):
     page = t.client.get("/")
     assert page.status_code == 200 and "text/html" in page.headers["content-type"]
     assert f"live view: http://127.0.0.1:{t.port}/" in t.stderr()
+    # the names of 127.0.0.1 and --allowed-host's, not a name rebound to 127.0.0.1
+    for host, status in ((f"localhost:{t.port}", 200), (f"cams.lan:{t.port}", 200),
+                         (f"evil.example:{t.port}", 403)):
+        assert t.client.get("/api/cameras", headers={"Host": host}).status_code == status, host
     frames_then = t.camera()["frames"]
     t.poll(lambda: t.camera()["frames"] > frames_then, 10, "frames still counting")
 

@@ -27,6 +27,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--port", type=int, default=8080, help="port (default 8080)")
     p.add_argument("--out", help="output folder, one subfolder per camera (default "
                                  "runs/serve/<cameras file name>)")
+    p.add_argument("--allowed-host", action="append", default=[], metavar="NAME",
+                   help="one more host name the server answers to (repeatable): the name of "
+                        "this machine or of a reverse proxy in front of it; by default only "
+                        "the --host address (and localhost for a loopback one) is answered, "
+                        "which keeps other sites' pages out (docs/serve.md, Security model)")
     p.add_argument("--token", help=f"require this token on every request (Authorization: Bearer "
                                    f"or ?token=); default: the environment variable {TOKEN_ENV}")
     p.add_argument("--rotate-s", type=float, default=3600.0,
@@ -61,4 +66,5 @@ def cmd_serve(args) -> int:
         raise ConfigError(f"serve needs the web extras ({exc.name} is missing): pip install "
                           "'motiontrack[serve]'") from None
     return serve(args.cameras, args.host, args.port, args.out, token, rotate_s=args.rotate_s,
-                 rotate_mb=args.rotate_mb, log_level=log.getEffectiveLevel())
+                 rotate_mb=args.rotate_mb, log_level=log.getEffectiveLevel(),
+                 allowed=args.allowed_host)

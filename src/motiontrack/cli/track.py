@@ -57,6 +57,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "--scene), kept open after the run until Ctrl-C")
     p.add_argument("--port", type=int, default=0,
                    help="with --show and headless OpenCV: the page's port (default: a free one)")
+    p.add_argument("--allowed-host", action="append", default=[], metavar="NAME",
+                   help="with --show and headless OpenCV: one more host name the page answers "
+                        "to (repeatable; default: localhost, 127.0.0.1 and [::1] only)")
     add_sink_options(p, "the source's name, as the run folder's")
     p.add_argument("--force", action="store_true", help="overwrite existing outputs")
     p.set_defaults(func=cmd_track)
@@ -94,7 +97,8 @@ def _live_view(args):
     except ImportError as exc:
         raise ConfigError(f"--show needs a GUI build of OpenCV or the web extras ({exc.name} is "
                           "missing): pip install 'motiontrack[serve]'") from None
-    view = LiveView(view_name(source_name(args.source)), port=args.port, scene=args.scene)
+    view = LiveView(view_name(source_name(args.source)), port=args.port, scene=args.scene,
+                    allowed=args.allowed_host)
     print(f"live view: {view.url}  (Ctrl-C stops)", file=sys.stderr, flush=True)
     view.open_browser()
     return view

@@ -58,7 +58,8 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
               gt: Annotations | None = None, detections: Annotations | None = None,
               show: Callable[[np.ndarray], bool] | None = None,
               save: Iterable[str] | str = (), mask_images: str | Path | None = None,
-              scoring: str = DEFAULT_SCORING, scene: str | Path | None = None,
+              scoring: str = DEFAULT_SCORING,
+              scene: str | Path | Callable[[Any], Any] | None = None,
               bin_s: float = 60.0, sinks: Sequence[Any] = (),
               camera_name: str | None = None, sink_settings: Any = None,
               writers: Sequence[Writer] = (), pace: bool = False) -> Job:
@@ -69,7 +70,10 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
     ``config.toml``. ``scoring`` names how zero-marked ground truth counts
     (:data:`~motiontrack.evaluate.scoring.SCORING`). A ``scene`` file runs scene analytics on
     the tracks of each frame: ``events.jsonl`` and ``counts.csv`` (rows of ``bin_s`` seconds),
-    the lines and zones with their counts on the annotated video. ``sinks`` (webhook and MQTT
+    the lines and zones with their counts on the annotated video; ``scene`` may also be a
+    function of the camera model fitted to the source (None without one) that returns the
+    :class:`~motiontrack.analytics.Scene` to run, or None for none (``serve`` keeps a camera's
+    last valid scene this way). ``sinks`` (webhook and MQTT
     targets, :mod:`motiontrack.io.sinks`) receive every event too, named ``camera_name``
     (default: the source's name, :func:`~motiontrack.run.folders.source_name`), sent as
     ``sink_settings`` say (a :class:`~motiontrack.io.sinks.SinkSettings`). ``writers``
@@ -103,11 +107,7 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
             from ..calibrate import fit_to_image
 
             fitted = fit_to_image(camera, src.info.width, src.info.height, cfg.measure.camera)
-        analytics = None
-        if scene is not None:
-            from ..analytics import Analytics, load_scene
-
-            analytics = Analytics(load_scene(scene, fitted), src.info.fps or 25.0, fitted)
+        analytics = _analytics(scene, fitted, src.info.fps) if scene is not None else None
         proc = TrackProcessor(cfg, src.info, detections,
                               needs_background="background" in streams, analytics=analytics)
         if not external:
@@ -133,6 +133,16 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
         return Job(src, proc, [*writers, *more], out, force=force, config=(save_config, cfg))
 
     return _opened(source, cfg.source, build)
+
+
+def _analytics(scene: str | Path | Callable[[Any], Any], camera: Any, fps: float | None
+               ) -> Any:
+    """The scene analytics of ``scene`` (a file, or a function of ``camera`` that returns the
+    scene or None) on a source of ``fps`` frames a second; None when there is no scene."""
+    from ..analytics import Analytics, load_scene
+
+    sc = scene(camera) if callable(scene) else load_scene(scene, camera)
+    return Analytics(sc, fps or 25.0, camera) if sc is not None else None
 
 
 def _sink_camera_name(sinks: Sequence[Any], scene: Any, camera_name: str | None,

@@ -11,28 +11,33 @@ from __future__ import annotations
 
 import asyncio
 import hashlib
-import hmac
 import json
 from importlib import resources
 from pathlib import Path
 from typing import Any, AsyncIterator, Callable, Mapping
-from urllib.parse import parse_qs
 
+import anyio
 from starlette.applications import Starlette
-from starlette.requests import Request
+from starlette.requests import ClientDisconnect, Request
 from starlette.responses import JSONResponse, Response, StreamingResponse
 from starlette.routing import Route
 
 from ..analytics.scene import scene_json_schema
-from ..errors import MotionTrackError
+from ..errors import ConfigError, MotionTrackError
 from .cameras import cameras_json_schema
+from .guard import LOOPBACK_NAMES, HostCheck, OriginCheck, TokenCheck
 from .hub import CameraState, Cursor, Hub
 from .scenes import SceneFiles
 
-__all__ = ["create_app", "MAX_BODY"]
+__all__ = ["create_app", "json_body", "MAX_BODY", "MAX_DEPTH"]
 
 #: largest request body accepted (a scene of hundreds of lines and zones fits)
 MAX_BODY = 64 * 1024
+#: deepest nesting of a request's JSON (the editor's scene is 5 levels deep: object, lines,
+#: line, points, point)
+MAX_DEPTH = 16
+#: largest integer a request's JSON may hold: TOML's integers are 64-bit
+_MAX_INT = 2**63 - 1
 _ASSETS = {"index.html": "text/html; charset=utf-8", "app.js": "text/javascript; charset=utf-8",
            "style.css": "text/css; charset=utf-8"}
 #: seconds between keep-alive comments on an idle event stream
@@ -46,56 +51,73 @@ def _error(status: int, message: str) -> JSONResponse:
     return JSONResponse({"error": message}, status_code=status)
 
 
-class _TokenCheck:
-    """ASGI middleware: every HTTP request needs ``Authorization: Bearer TOKEN`` or
-    ``?token=TOKEN`` (an ``<img>`` or ``EventSource`` cannot set headers), else 401."""
-
-    def __init__(self, app: Any, token: str) -> None:
-        self.app, self.token = app, token.encode()
-
-    def _allowed(self, scope: dict) -> bool:
-        for k, v in scope.get("headers", ()):
-            if k == b"authorization" and v[:7].lower() == b"bearer ":
-                if hmac.compare_digest(v[7:].strip(), self.token):
-                    return True
-        qs = parse_qs(scope.get("query_string", b"").decode("latin-1"))
-        return any(hmac.compare_digest(t.encode("latin-1", "replace"), self.token)
-                   for t in qs.get("token", []))
-
-    async def __call__(self, scope: dict, receive: Callable, send: Callable) -> None:
-        if scope["type"] == "http" and not self._allowed(scope):
-            resp = JSONResponse({"error": "a token is required: Authorization: Bearer TOKEN or "
-                                          "?token=TOKEN"}, status_code=401,
-                                headers={"WWW-Authenticate": "Bearer"})
-            await resp(scope, receive, send)
-            return
-        await self.app(scope, receive, send)
-
-
 async def _body(request: Request) -> bytes | Response:
-    """The request body, or a 413 response when it is larger than :data:`MAX_BODY`."""
+    """The request body, or a 413 response when it is larger than :data:`MAX_BODY` (said by
+    its ``Content-Length`` before any of it is read, or found while reading it), or a 400
+    response, which nobody receives, when the client left before sending all of it."""
     length = request.headers.get("content-length")
     if length is not None and (not length.isdigit() or int(length) > MAX_BODY):
         return _error(413, f"request body larger than {MAX_BODY} bytes")
     data = bytearray()
-    async for chunk in request.stream():
-        data += chunk
-        if len(data) > MAX_BODY:
-            return _error(413, f"request body larger than {MAX_BODY} bytes")
+    try:
+        async for chunk in request.stream():
+            data += chunk
+            if len(data) > MAX_BODY:
+                return _error(413, f"request body larger than {MAX_BODY} bytes")
+    except ClientDisconnect:
+        return _error(400, "the client left before sending the whole body")
     return bytes(data)
+
+
+def json_body(body: bytes) -> Any:
+    """``body`` parsed as JSON, no deeper than :data:`MAX_DEPTH` and with integers TOML can
+    hold.
+
+    Raises
+    ------
+    ConfigError
+        The body is not JSON, is nested deeper, or holds a longer integer; one line.
+    """
+    try:
+        data = json.loads(body)
+    except RecursionError:   # Python's parser recurses per level: thousands of '[' end it
+        raise ConfigError(f"the body is nested deeper than {MAX_DEPTH} levels") from None
+    except json.JSONDecodeError as exc:
+        raise ConfigError(f"the body must be a JSON object: {exc.msg} at line {exc.lineno} "
+                          f"column {exc.colno}") from None
+    except ValueError:       # an integer over Python's 4300 digits, or bytes not UTF-8
+        raise ConfigError("the body must be a JSON object in UTF-8 with numbers of at most "
+                          "19 digits") from None
+    stack = [(data, 1)]
+    while stack:
+        value, depth = stack.pop()
+        if isinstance(value, (dict, list)):
+            if depth > MAX_DEPTH:
+                raise ConfigError(f"the body is nested deeper than {MAX_DEPTH} levels")
+            stack += [(v, depth + 1) for v in (value.values() if isinstance(value, dict)
+                                                else value)]
+        elif isinstance(value, int) and not isinstance(value, bool) and abs(value) > _MAX_INT:
+            raise ConfigError(f"the body holds an integer of {len(str(abs(value)))} digits; "
+                              f"integers must be within +-{_MAX_INT} (64 bits, as in TOML)")
+    return data
 
 
 def create_app(hub: Hub, token: str | None = None,
                scenes: Mapping[str, Path | None] | SceneFiles | None = None,
-               stopping: Callable[[], bool] = lambda: False) -> Any:
+               stopping: Callable[[], bool] = lambda: False,
+               hosts: frozenset[str] | None = LOOPBACK_NAMES) -> Any:
     """The ASGI app over ``hub``. ``scenes``: each camera's scene file (None: the camera has
     none; the editor's PUT then answers 409). ``stopping`` tells the streams to end (the server
-    is shutting down)."""
+    is shutting down). ``hosts``: the host names the app answers to
+    (:func:`~.guard.allowed_hosts`; None: any), ``token``: the token every request needs
+    (:mod:`.guard`)."""
     files = scenes if isinstance(scenes, SceneFiles) else SceneFiles(scenes or {})
     routes = [*_page_routes(), *_api_routes(hub), *_stream_routes(hub, stopping),
               *_editor_routes(hub, files), *_schema_routes()]
-    app: Any = Starlette(routes=routes)
-    return _TokenCheck(app, token) if token else app
+    app: Any = OriginCheck(Starlette(routes=routes))
+    if token:
+        app = TokenCheck(app, token)
+    return HostCheck(app, hosts) if hosts is not None else app
 
 
 def _camera(hub: Hub, request: Request) -> CameraState | Response:
@@ -236,20 +258,29 @@ async def _event_lines(hub: Hub, after: Cursor | None,
 
 
 def _editor_routes(hub: Hub, files: SceneFiles) -> list[Route]:
-    """The scene editor: a camera's scene file read (with the picture size) and written."""
+    """The scene editor: a camera's scene file read (with the picture size) and written.
+
+    Reading, parsing and checking a scene run in worker threads: a large scene takes long to
+    check, and the event loop meanwhile keeps serving every other request and stream. Writes
+    are checked one at a time (a scene file is written by one request at a time anyway), so
+    that many of them occupy one thread, not the pool."""
+    writers: list[anyio.CapacityLimiter] = []   # made on the event loop, by the first write
 
     async def get_scene(request: Request) -> Response:
         cam = _camera(hub, request)
         if isinstance(cam, Response):
             return cam
         try:
-            data = files.read(cam.name)
-        except MotionTrackError as exc:
-            return _error(409 if files.path(cam.name) is None else 500, str(exc))
+            data = await anyio.to_thread.run_sync(files.read, cam.name)
+        except MotionTrackError as exc:   # no scene file, or one that cannot be read: a state
+            return _error(409, str(exc))   # of the files, not a fault of the server
         with cam.lock:
             data["width"] = cam.status.get("width")
             data["height"] = cam.status.get("height")
         return JSONResponse(data)
+
+    def write(name: str, body: bytes, size: tuple[int, int] | None) -> dict:
+        return files.write(name, json_body(body), size)
 
     async def put_scene(request: Request) -> Response:
         cam = _camera(hub, request)
@@ -260,14 +291,14 @@ def _editor_routes(hub: Hub, files: SceneFiles) -> list[Route]:
             return body
         if files.path(cam.name) is None:
             return _error(409, f"camera {cam.name} has no scene file in the cameras file")
-        try:
-            payload = json.loads(body)
-        except (ValueError, UnicodeDecodeError):
-            return _error(400, "the body must be a JSON object")
         with cam.lock:
             w, h = cam.status.get("width"), cam.status.get("height")
+        if not writers:
+            writers.append(anyio.CapacityLimiter(1))
         try:
-            saved = files.write(cam.name, payload, (w, h) if w and h else None)
+            saved = await anyio.to_thread.run_sync(write, cam.name, body,
+                                                   (w, h) if w and h else None,
+                                                   limiter=writers[0])
         except MotionTrackError as exc:
             return _error(400, str(exc))
         return JSONResponse(saved)

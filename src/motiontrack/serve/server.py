@@ -20,14 +20,15 @@ import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, Sequence
 
 from ..config import load_config
-from ..errors import ConfigError
+from ..errors import ConfigError, MotionTrackError
 from ..run.folder import RunFolder
 from .app import create_app
 from .cameras import CameraSpec, load_cameras
 from .channel import Channel
+from .guard import allowed_hosts
 from .hub import Hub
 from .scenes import SceneFiles, check_scene_files
 from .worker import camera_main
@@ -185,15 +186,33 @@ def _check_configs(specs: tuple[CameraSpec, ...]) -> None:
             raise ConfigError(f"camera[{i}] ({s.name}): {exc}") from None
 
 
+def _check_calibrations(specs: tuple[CameraSpec, ...]) -> None:
+    """Every ``camera =`` calibration file of the cameras file readable and valid before any
+    camera starts (a camera process that cannot read it would fail at every start)."""
+    from ..calibrate import load_camera
+
+    for i, s in enumerate(specs, 1):
+        if s.camera is None:
+            continue
+        try:
+            load_camera(s.camera)
+        except MotionTrackError as exc:
+            raise ConfigError(f"camera[{i}] ({s.name}): camera = {s.camera.name}: {exc}"
+                              ) from None
+
+
 def serve(cameras_file: str | Path, host: str = "127.0.0.1", port: int = 8080,
           out: str | Path | None = None, token: str | None = None, *,
           rotate_s: float = 3600.0, rotate_mb: float = 0.0,
-          log_level: int = logging.INFO) -> int:
-    """Run the cameras of ``cameras_file`` and the web app until SIGTERM or SIGINT; 0."""
+          log_level: int = logging.INFO, allowed: Sequence[str] = ()) -> int:
+    """Run the cameras of ``cameras_file`` and the web app until SIGTERM or SIGINT; 0.
+    ``allowed``: more host names the app answers to (:func:`~.guard.allowed_hosts`)."""
     import uvicorn
 
+    hosts = allowed_hosts(host, allowed)
     specs = load_cameras(cameras_file)
     _check_configs(specs)
+    _check_calibrations(specs)
     scenes = {s.name: s.scene for s in specs}
     calibrations = {s.name: s.camera for s in specs}
     check_scene_files(scenes, calibrations)
@@ -207,7 +226,8 @@ def serve(cameras_file: str | Path, host: str = "127.0.0.1", port: int = 8080,
     hub = Hub([(s.name, s.scene is not None) for s in specs])
     sup = Supervisor(specs, out_dir, hub, rotate_s=rotate_s, rotate_mb=rotate_mb,
                      log_level=log_level)
-    app = create_app(hub, token, SceneFiles(scenes, calibrations), stopping=sup.stopping.is_set)
+    app = create_app(hub, token, SceneFiles(scenes, calibrations), stopping=sup.stopping.is_set,
+                     hosts=hosts)
 
     class _Server(uvicorn.Server):
         def handle_exit(self, sig: int, frame: Any) -> None:

@@ -20,6 +20,7 @@ import sys
 import threading
 import time
 from pathlib import Path
+from typing import Sequence
 
 import cv2
 
@@ -28,6 +29,7 @@ from ..run.job import JobContext, JobSummary, Writer
 from ..types import FrameResult
 from .app import create_app
 from .cameras import CameraSpec
+from .guard import allowed_hosts
 from .hub import CameraState, Hub
 from .worker import JPEG_QUALITY, STATUS_EVERY, VIEW_FPS, _Camera
 
@@ -107,19 +109,22 @@ class _ViewWriter(Writer):
 
 class LiveView:
     """The page of one source on ``http://host:port/`` (port 0: a free one), served from a
-    thread until :meth:`close`; ``scene``: the run's scene file, which the page's editor
-    edits."""
+    thread until :meth:`close`, answering to the host names of
+    :func:`~.guard.allowed_hosts` (``host``'s and ``allowed``); ``scene``: the run's scene file,
+    which the page's editor edits."""
 
     def __init__(self, name: str, host: str = "127.0.0.1", port: int = 0,
-                 scene: str | Path | None = None) -> None:
+                 scene: str | Path | None = None, allowed: Sequence[str] = ()) -> None:
         import uvicorn
 
         self.name = name
+        hosts = allowed_hosts(host, allowed)   # the names it answers to (bad ones: ConfigError)
         scene_path = Path(scene) if scene is not None else None
         self.hub = Hub([(name, scene_path is not None)])
         self.state = self.hub.get(name)
         self._stopping = threading.Event()
-        app = create_app(self.hub, None, {name: scene_path}, stopping=self._stopping.is_set)
+        app = create_app(self.hub, None, {name: scene_path}, stopping=self._stopping.is_set,
+                         hosts=hosts)
         try:
             self._sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
             self._sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)

@@ -14,6 +14,9 @@ annotated picture, events, counts and status through a :class:`~.channel.Channel
   output rules; a segment ends after ``rotate_s`` seconds, when its folder reaches
   ``rotate_mb`` megabytes, or when the scene file changes (the next segment runs the new
   scene, the camera keeps running);
+* a scene file that becomes invalid (a hand edit with a mistake, a deleted file) does not stop
+  the camera: it keeps its last valid scene (:class:`SceneKeeper`), logs the problem once and
+  reports it in its status (``scene_error``) until the file is valid again;
 * SIGTERM or SIGINT ends the current segment after the frame in hand, its outputs committed.
 
 The picture is JPEG-encoded here, at most :data:`VIEW_FPS` times a second, so the server only
@@ -37,6 +40,7 @@ from typing import Any, Iterator
 
 import cv2
 
+from ..analytics import load_scene
 from ..config import load_config
 from ..config_flags import flag_overrides
 from ..errors import MotionTrackError
@@ -51,7 +55,7 @@ from .channel import Channel
 
 log = logging.getLogger(__name__)
 
-__all__ = ["camera_main", "Segments", "VIEW_FPS", "JPEG_QUALITY"]
+__all__ = ["camera_main", "Segments", "SceneKeeper", "VIEW_FPS", "JPEG_QUALITY"]
 
 #: pictures a second sent to viewers at most
 VIEW_FPS = 15.0
@@ -203,6 +207,43 @@ class LiveWriter(Writer):
         return None
 
 
+class SceneKeeper:
+    """A camera's scene: its scene file's while the file is valid, else the last valid one.
+
+    :meth:`load` is the track job's ``scene`` (a function of the fitted camera): each segment
+    reads the file again. A file that cannot be read or checked (a hand edit with a mistake, a
+    deleted file) leaves the camera running with the scene it had and sets :attr:`error`, which
+    the camera's status reports; each new problem is logged once, and the first valid version
+    of the file is used again. A camera process started while the file is invalid has no scene
+    to keep: it runs without lines and zones until the file is valid.
+    """
+
+    def __init__(self, camera: str, path: Path) -> None:
+        self.camera, self.path = camera, path
+        #: the last valid scene (None before the first)
+        self.scene: Any = None
+        #: what is wrong with the file and what the camera does meanwhile; None when valid
+        self.error: str | None = None
+
+    def load(self, fitted: Any) -> Any:
+        """The scene to run, with the camera model ``fitted`` to the source (or None)."""
+        try:
+            scene = load_scene(self.path, fitted)
+        except MotionTrackError as exc:
+            kept = ("the camera keeps its last valid scene" if self.scene is not None else
+                    "the camera runs without lines and zones")
+            error = f"{exc}; {kept} until the file is valid"
+            if error != self.error:
+                log.error("camera %s: %s", self.camera, error)
+            self.error = error
+            return self.scene
+        if self.error is not None:
+            log.info("camera %s: scene file %s is valid again: it is applied", self.camera,
+                     self.path.name)
+        self.scene, self.error = scene, None
+        return scene
+
+
 def _folder_bytes(folder: Path) -> int:
     """Bytes of the files in ``folder``, temporary ones (outputs being written) included."""
     total = 0
@@ -237,6 +278,7 @@ class _Camera:
         self.lines: dict[str, dict[str, int]] = {}
         self.zones: dict[str, dict[str, int]] = {}
         self.scene_mtime = _mtime(spec.scene)
+        self.scenes = SceneKeeper(spec.name, spec.scene) if spec.scene is not None else None
         self._times: list[float] = []
         self.source: _Frames | None = None
         self.lock = threading.Lock()
@@ -312,6 +354,7 @@ class _Camera:
                 "width": self.source.info.width if self.source is not None else None,
                 "height": self.source.info.height if self.source is not None else None,
                 "source_fps": self.source.info.fps if self.source is not None else None,
+                "scene_error": self.scenes.error if self.scenes is not None else None,
             })
 
 
@@ -360,7 +403,8 @@ def run_camera(spec: CameraSpec, out_dir: Path, channel: Channel, stop: _Flag,
                 cam.scene_mtime = _mtime(spec.scene)
                 seg = Segments(frames)
                 cam.segment = _segment_name(out_dir)
-                job = track_job(seg, cfg, out_dir / cam.segment, scene=spec.scene,
+                scene = cam.scenes.load if cam.scenes is not None else None
+                job = track_job(seg, cfg, out_dir / cam.segment, scene=scene,
                                 writers=[LiveWriter(cam, seg, rotate_s, rotate_bytes)])
                 try:
                     job.run(should_stop=stop)

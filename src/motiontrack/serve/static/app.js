@@ -84,10 +84,13 @@ function makeTile(cam) {
     fields[key] = el("dd", { "data-testid": "camera-" + key + "-" + name });
     stats.append(el("dt", { text: label }), fields[key]);
   }
+  // a scene file the camera cannot apply (a hand edit with a mistake): the camera's message
+  const sceneError = el("p", { class: "error scene-error", role: "alert", "data-testid": "camera-scene-error-" + name });
+  sceneError.hidden = true;
   const tile = el("article", { class: "tile", "data-testid": "camera-tile-" + name, "aria-label": "Camera " + name },
-    el("h3", { text: name }), el("div", { class: "picture" }, img), stats);
+    el("h3", { text: name }), el("div", { class: "picture" }, img), stats, sceneError);
   document.getElementById("cameras").append(tile);
-  return { tile, img, fields };
+  return { tile, img, fields, sceneError };
 }
 
 function updateTile(cam) {
@@ -108,6 +111,8 @@ function updateTile(cam) {
     t.ended = ended;
     t.img.src = ended ? snapshotUrl(cam.name) : streamUrl(cam.name);
   }
+  t.sceneError.textContent = cam.scene_error ? "scene not applied: " + cam.scene_error : "";
+  t.sceneError.hidden = !cam.scene_error;
 }
 
 let cameras = [];
