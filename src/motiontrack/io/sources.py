@@ -29,8 +29,12 @@ import numpy as np
 from ..errors import ConfigError, InputError, SourceError
 from ..registry import Registry
 from ..types import Annotations, Frame
+from . import native_logs
 
 log = logging.getLogger(__name__)
+
+# before any video is opened: FFmpeg's own lines would stand beside our one-line messages
+native_logs.quiet()
 
 __all__ = ["SourceInfo", "Source", "VideoFileSource", "LiveSource", "ImageSequenceSource",
            "ArraySource", "SCHEMES", "open_source", "IMAGE_EXTENSIONS", "blocked_live_sources"]
