@@ -165,3 +165,24 @@ def test_a_pool_sweep_meeting_a_full_disk_exits_2_with_one_line(tmp_path, capfd)
         rows = read_table(out / "results.csv") if summary["runs_done"] else []
         assert len(rows) == summary["runs_done"]
         assert all(_finished_run(out, r["run"], "walker").is_file() for r in rows)
+
+
+def test_a_serial_sweep_stops_its_run_after_the_current_frame(tmp_path):
+    from motiontrack.config import load_config
+    from motiontrack.studies.sweep import run_sweep, study_from_args
+
+    study = study_from_args(["synth:walker?n_frames=40"], None,
+                            ["motion.median.threshold=0.1,0.2,0.3"],
+                            load_config(None, ["motion.method=median"]))
+    out = tmp_path / "study"
+    polls = []
+
+    def stop_in_second_run():
+        polls.append(_finished_run(out, 1, "walker").exists())
+        return polls.count(True) >= 5       # the fifth frame of run 2
+
+    with pytest.raises(KeyboardInterrupt):
+        run_sweep(study, out, figures=False, should_stop=stop_in_second_run)
+    assert json.loads((out / "summary.json").read_text())["runs_done"] == 1
+    assert polls.count(True) == 5           # run 2 ended at that frame; run 3 never started
+    assert not (out / "runs" / "r002").exists()
