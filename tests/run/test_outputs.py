@@ -15,6 +15,7 @@ import time
 
 import pytest
 
+from helpers.disk import small_disk as mount_small_disk
 from motiontrack.cli import main
 from motiontrack.config import load_config
 from motiontrack.errors import InputError
@@ -46,22 +47,8 @@ def _error_lines(err: str) -> list[str]:
 @pytest.fixture
 def small_disk(tmp_path):
     """A 2 MB file system (tmpfs, mounted as root), unmounted after the test."""
-    disk = tmp_path / "disk"
-    disk.mkdir()
-    mount = shutil.which("mount")
-    proc = (subprocess.run([mount, "-t", "tmpfs", "-o", "size=2m", "tmpfs", str(disk)],
-                           capture_output=True, text=True) if mount else None)
-    if proc is None or proc.returncode != 0:
-        msg = ("cannot mount a 2 MB tmpfs (needs root): "
-               + (proc.stderr.strip() if proc else "no mount command"))
-        if os.environ.get("MOTIONTRACK_REQUIRE_DATA") == "1":
-            pytest.fail(msg + " and MOTIONTRACK_REQUIRE_DATA=1")
-        pytest.skip(msg)
-    try:
+    with mount_small_disk(tmp_path / "disk") as disk:
         yield disk
-    finally:  # lazily when a file on it is still open (a failed test's), so that it always goes
-        if subprocess.run(["umount", str(disk)], capture_output=True).returncode != 0:
-            subprocess.run(["umount", "-l", str(disk)], capture_output=True)
 
 
 def _track_onto_full_disk(disk, capsys, codec, n):

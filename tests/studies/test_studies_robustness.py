@@ -14,6 +14,7 @@ import motiontrack.studies.sweep as sw
 from motiontrack.cli import main
 from motiontrack.config import load_config
 from motiontrack.errors import ConfigError, InputError
+from motiontrack.io.atomic import DiskFullError
 from motiontrack.io.manifest import read_manifest
 from motiontrack.studies.report import build_report
 from motiontrack.studies.sweep import MAX_RUNS, load_study, study_from_args, versions
@@ -41,16 +42,21 @@ def fake_run(spec):
 
 
 class Runs:
-    """The runs executed (run, sequence), and an optional Ctrl-C at the ``stop_at``-th."""
+    """The runs executed (run, sequence), and an optional Ctrl-C at the ``stop_at``-th or a full
+    disk at the ``full_at``-th."""
 
     def __init__(self) -> None:
         self.calls: list[tuple[int, str]] = []
         self.stop_at: int | None = None
+        self.full_at: int | None = None
 
-    def __call__(self, spec):
+    def __call__(self, spec, should_stop=None):
         self.calls.append((spec.run, spec.sequence.name))
         if self.stop_at is not None and len(self.calls) == self.stop_at:
             raise KeyboardInterrupt
+        if self.full_at is not None and len(self.calls) == self.full_at:
+            raise DiskFullError(f"{spec.out_dir}/{spec.run_dir()}/motion.webm",
+                                "No space left on device")
         return fake_run(spec)
 
 
@@ -88,12 +94,31 @@ def test_resume_runs_only_the_unfinished_runs_and_writes_the_same_table(tmp_path
                  "runs/r003/crossing/regions.txt"):
         assert (part / name).read_bytes() == (full / name).read_bytes(), name
     assert json.loads((part / "summary.json").read_text()) == {
-        "interrupted": False, "runs_done": 6, "runs": 6}
+        "status": "complete", "interrupted": False, "runs_done": 6, "runs": 6}
 
     runs.calls.clear()                                # a finished study: nothing left to run
     assert main(SWEEP + ["--resume", "-o", str(part)]) == 0
     assert runs.calls == []
     assert (part / "results.csv").read_bytes() == (full / "results.csv").read_bytes()
+
+
+def test_a_full_disk_ends_the_sweep_with_one_line_keeping_the_finished_runs(tmp_path, runs,
+                                                                           capsys):
+    part = tmp_path / "part"
+    runs.full_at = 3                                  # r2 walker meets a full disk
+    assert main(SWEEP + ["-o", str(part)]) == 2
+    line = one_error_line(capsys)
+    assert "disk full writing" in line and "runs/r002/walker/motion.webm" in line
+    summary = json.loads((part / "summary.json").read_text())
+    assert summary == {"status": f"disk full writing {part.resolve()}/runs/r002/walker/motion.webm: "
+                                 "No space left on device",
+                       "interrupted": False, "runs_done": 2, "runs": 6}
+    assert [(r["run"], r["sequence"]) for r in read_table(part / "results.csv")] == ALL_RUNS[:2]
+
+    runs.calls.clear()
+    runs.full_at = None                               # room again: --resume does the rest
+    assert main(SWEEP + ["--resume", "-o", str(part)]) == 0
+    assert runs.calls == ALL_RUNS[2:]
 
 
 def test_resume_reruns_runs_whose_files_are_incomplete(tmp_path, runs):
@@ -167,11 +192,11 @@ def test_resumed_real_sweep_equals_an_uninterrupted_one(tmp_path, monkeypatch):
     real = sw.execute_run
     calls = []
 
-    def stop_second(spec):
+    def stop_second(spec, should_stop=None):
         calls.append(spec.run)
         if len(calls) == 2:
             raise KeyboardInterrupt
-        return real(spec)
+        return real(spec, should_stop)
 
     args = ["-q", "sweep", WALKER, "--set", "motion.method=median",
             "--param", "motion.median.threshold=0.05,0.2,0.35", "--no-figures"]

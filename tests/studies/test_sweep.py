@@ -302,11 +302,11 @@ def test_interrupted_sweep_keeps_finished_runs(tmp_path, monkeypatch, capsys):
     real = sw.execute_run
     calls = []
 
-    def flaky(spec):
+    def flaky(spec, should_stop=None):
         calls.append(spec.run)
         if len(calls) == 3:           # Ctrl-C while the third run is going
             raise KeyboardInterrupt
-        return real(spec)
+        return real(spec, should_stop)
 
     monkeypatch.setattr(sw, "execute_run", flaky)
     out = tmp_path / "study"
@@ -314,7 +314,7 @@ def test_interrupted_sweep_keeps_finished_runs(tmp_path, monkeypatch, capsys):
                  "--set", "motion.method=median", "--no-figures", "-o", str(out)])
     assert code == 130
     summary = _json.loads((out / "summary.json").read_text())
-    assert summary == {"interrupted": True, "runs_done": 2, "runs": 4}
+    assert summary == {"status": "interrupted", "interrupted": True, "runs_done": 2, "runs": 4}
     rows = read_table(out / "results.csv")
     assert [r["motion.median.threshold"] for r in rows] == [0.1, 0.2]
     assert (out / "runs" / "r001" / "walker" / "tracks.txt").is_file()

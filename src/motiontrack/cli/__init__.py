@@ -96,6 +96,10 @@ def _configure_logging(debug: bool, quiet: bool) -> None:
     root.handlers[:] = [handler]
     root.setLevel(level)
     root.propagate = False
+    if debug:   # FFmpeg's and OpenCV's own messages too (only here: it imports cv2)
+        from ..io.native_logs import verbose
+
+        verbose()
 
 
 #: failed file operations that are the machine's state, not a bug, even without a file name

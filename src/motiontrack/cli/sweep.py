@@ -55,7 +55,7 @@ def cmd_sweep(args) -> int:
     from ..errors import ConfigError, printable
     from ..studies.sweep import TABLE_FILE, load_study, run_sweep, study_from_args, versions
     from ..render.streams import parse_streams
-    from ._common import given, sigterm_as_interrupt
+    from ._common import GracefulStop, given, sigterm_as_interrupt
 
     # options that need no file: refused before anything is read or written
     if args.jobs < 1:
@@ -83,10 +83,14 @@ def cmd_sweep(args) -> int:
     n = study.n_runs
     log.info("%d runs (%d grid points x %d sequences)%s", n, n // len(study.sequences), len(study.sequences),
              f" on {args.cluster}" if args.cluster else (f" with {args.jobs} processes" if args.jobs > 1 else ""))
-    with sigterm_as_interrupt(), tqdm(total=n, unit="run", disable=None, file=sys.stderr,
-                                      dynamic_ncols=True) as bar:
+    # local runs stop after their current frame (the pool's workers are told); the runs of a
+    # Dask cluster cannot be told, so there a signal cancels them at once
+    signals = sigterm_as_interrupt() if args.cluster else GracefulStop()
+    with signals as stop, tqdm(total=n, unit="run", disable=None, file=sys.stderr,
+                               dynamic_ncols=True) as bar:
         res = run_sweep(study, args.out, jobs=args.jobs, cluster=args.cluster, progress=bar.update,
-                        figures=not args.no_figures, force=args.force, resume=args.resume)
+                        figures=not args.no_figures, force=args.force, resume=args.resume,
+                        should_stop=stop.stop if stop is not None else None)
     _print_best(res.rows, study.keys)
     print(f"scoring   {study.scoring} (HOTA, MOTA and the other tracking metrics)")
     if args.replay:

@@ -56,6 +56,10 @@ class DiskFullError(MotionTrackError):
         self.reason = reason
         super().__init__(f"disk full writing {path}: {reason}")
 
+    def __reduce__(self) -> tuple:
+        # rebuilt from its arguments: the error of a run in a pool worker reaches the parent
+        return (type(self), (self.path, self.reason))
+
 
 def is_disk_full(exc: BaseException) -> bool:
     """Whether ``exc`` says that the device is full (ENOSPC, EDQUOT)."""

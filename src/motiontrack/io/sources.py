@@ -29,10 +29,14 @@ import numpy as np
 from ..errors import ConfigError, InputError, SourceError
 from ..registry import Registry
 from ..types import Annotations, Discontinuity, Frame
+from . import native_logs
 from .imagesize import DEFAULT_MAX_PIXELS, check_frame_size, check_image
 from .paths import natural_key
 
 log = logging.getLogger(__name__)
+
+# before any video is opened: FFmpeg's own lines would stand beside our one-line messages
+native_logs.quiet()
 
 __all__ = ["SourceInfo", "Source", "VideoFileSource", "LiveSource", "ImageSequenceSource",
            "ArraySource", "SCHEMES", "open_source", "IMAGE_EXTENSIONS", "blocked_live_sources"]

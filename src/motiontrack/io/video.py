@@ -39,8 +39,11 @@ from ..errors import InputError, MotionTrackError, printable
 from .atomic import (DiskFullError, commit_temp, free_bytes, is_disk_full, output_error,
                      temp_path_for)
 from .frame_queue import FrameQueue
+from .native_logs import quiet as _quiet_native_logs
 
 log = logging.getLogger(__name__)
+
+_quiet_native_logs()   # before the first video is written (see io.native_logs)
 
 #: codec name → (OpenCV fourcc, file extension, what it is)
 CODECS = {

@@ -397,8 +397,11 @@ class Job:
                 if p.is_file() and not p.is_symlink():
                     p.unlink(missing_ok=True)
                 removed.append(p.name)
-        log.warning("the device is full after %d frames: no %s; writing the other outputs",
-                    frames, ", ".join(removed) or "large outputs")
+        # a job without summary.json (overlay, a sweep's run in a temporary folder) keeps
+        # nothing for the user: the error alone reports the full device
+        (log.warning if "summary" in self.paths else log.debug)(
+            "the device is full after %d frames: no %s; writing the other outputs",
+            frames, ", ".join(removed) or "large outputs")
 
     def _clear_folder(self) -> None:
         """Before the first output appears: remove the temporary files a killed run left and,

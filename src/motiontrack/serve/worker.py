@@ -19,6 +19,11 @@ annotated picture, events, counts and status through a :class:`~.channel.Channel
   reports it in its status (``scene_error``) until the file is valid again;
 * SIGTERM or SIGINT ends the current segment after the frame in hand, its outputs committed.
 
+A looping file that is damaged part-way fails the same way on every loop: identical log records
+(:class:`RepeatFilter`) are logged once, then once more with their count at most every
+:data:`REPEAT_EVERY_S` seconds and when the camera ends. FFmpeg's own lines are silenced as in
+every process that opens a video (:mod:`motiontrack.io.native_logs`).
+
 The picture is JPEG-encoded here, at most :data:`VIEW_FPS` times a second, so the server only
 copies bytes.
 """
@@ -55,7 +60,8 @@ from .channel import Channel
 
 log = logging.getLogger(__name__)
 
-__all__ = ["camera_main", "Segments", "SceneKeeper", "VIEW_FPS", "JPEG_QUALITY"]
+__all__ = ["camera_main", "Segments", "SceneKeeper", "RepeatFilter", "VIEW_FPS", "JPEG_QUALITY",
+           "REPEAT_EVERY_S"]
 
 #: pictures a second sent to viewers at most
 VIEW_FPS = 15.0
@@ -64,6 +70,54 @@ JPEG_QUALITY = 80
 STATUS_EVERY = 0.5
 #: a live source silent this long is reported as reconnecting
 SILENT_S = 2.0
+#: a repeated log record is logged again, with its count, at most this often (seconds)
+REPEAT_EVERY_S = 60.0
+
+
+class RepeatFilter(logging.Filter):
+    """Log a record identical to an earlier one (same logger, level and message) only when
+    ``every`` seconds have passed since that message was last logged, with the number of
+    repeats in between; :meth:`flush` logs the repeats not reported yet. At most ``size``
+    messages are remembered (the least recent are forgotten)."""
+
+    def __init__(self, every: float = REPEAT_EVERY_S, clock: Any = time.monotonic,
+                 size: int = 256) -> None:
+        super().__init__()
+        self.every, self.clock, self.size = every, clock, size
+        #: (logger, level, message) -> [repeats not logged, when last logged]
+        self.seen: collections.OrderedDict = collections.OrderedDict()
+        self.lock = threading.Lock()
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        key = (record.name, record.levelno, record.getMessage())
+        now = self.clock()
+        with self.lock:
+            entry = self.seen.get(key)
+            if entry is None:
+                self.seen[key] = [0, now]
+                if len(self.seen) > self.size:
+                    self.seen.popitem(last=False)
+                return True
+            self.seen.move_to_end(key)
+            entry[0] += 1
+            if now - entry[1] < self.every:
+                return False
+            repeats, since = entry[0], now - entry[1]
+            entry[:] = [0, now]
+        record.msg, record.args = f"{key[2]} (repeated {_times(repeats)} in {since:.0f} s)", None
+        return True
+
+    def flush(self) -> None:
+        """Log each message repeated since it was last logged once more, with the count."""
+        with self.lock:
+            pending = [(k, n) for k, (n, _) in self.seen.items() if n]
+            self.seen.clear()
+        for (name, level, message), n in pending:
+            logging.getLogger(name).log(level, "%s (repeated %s more)", message, _times(n))
+
+
+def _times(n: int) -> str:
+    return "once" if n == 1 else f"{n} times"
 
 
 class _Flag:
@@ -445,7 +499,13 @@ def camera_main(spec: CameraSpec, out_dir: str | Path, channel: Channel,
     signal.signal(signal.SIGINT, on_signal)
     logging.basicConfig(level=log_level, format=f"motiontrack[{spec.name}]: %(levelname)s: "
                                                 "%(message)s")
-    code = run_camera(spec, Path(out_dir), channel, stop, rotate_s, rotate_mb)
+    repeats = RepeatFilter()
+    for handler in logging.getLogger().handlers:
+        handler.addFilter(repeats)
+    try:
+        code = run_camera(spec, Path(out_dir), channel, stop, rotate_s, rotate_mb)
+    finally:
+        repeats.flush()
     channel.close()
     if code:
         sys.exit(code)

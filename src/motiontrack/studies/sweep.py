@@ -35,11 +35,9 @@ import itertools
 import json
 import logging
 import math
-import multiprocessing
 import os
 import platform
 import tempfile
-from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Iterable, Mapping, Sequence
@@ -55,13 +53,14 @@ from ..evaluate.mot import evaluate_tracking
 from ..evaluate.score import scored_frames
 from ..evaluate.scoring import DEFAULT_SCORING, ignores_zero_marked
 from ..io.annotations import read_ground_truth
-from ..io.atomic import (OutputLock, atomic_write_text, check_writable, remove_leftover_temps,
-                         remove_outputs)
+from ..io.atomic import (DiskFullError, OutputLock, atomic_write_text, check_writable,
+                         remove_leftover_temps, remove_outputs)
 from ..io.manifest import SequenceSpec, absolute_path, default_sequence_name, read_manifest
 from ..io.mot import read_mot
 from ..pipeline import completes_tracks, fill_gap_frames, open_configured_source
 from ..run.executor import dask_client, map_tasks
 from ..run.job import Job
+from ..run.pool import pool_map
 from ..run.processors import TrackProcessor
 from ..run.writers import IntermediateWriter, RegionsWriter, TracksWriter
 from ..synth import parse_synth_spec
@@ -266,9 +265,12 @@ def _load_gt(seq: SequenceSpec):
     return read_ground_truth(seq.gt)
 
 
-def execute_run(spec: RunSpec) -> dict[str, Any]:
+def execute_run(spec: RunSpec, should_stop: Callable[[], bool] | None = None) -> dict[str, Any]:
     """Run the pipeline for one run × sequence and score it (pure apart from optional
     intermediate videos written under ``spec.out_dir``).
+
+    ``should_stop`` is polled after each frame: once it says stop, the run ends there and
+    ``KeyboardInterrupt`` is raised (the run is not finished, nothing of it is returned).
 
     The run is a :class:`~motiontrack.run.job.Job` writing its tracks (as ``motiontrack track``
     writes them) and its regions to a temporary folder of the worker; they are scored from there.
@@ -285,7 +287,7 @@ def execute_run(spec: RunSpec) -> dict[str, Any]:
     gt = _load_gt(seq)
     with tempfile.TemporaryDirectory(prefix="motiontrack-run-") as tmp:
         job = _run_job(spec, cfg, Path(tmp))
-        summary = job.run()
+        summary = job.run(should_stop=should_stop)
         tracks = read_mot(job.paths["tracks"], kind="results")
         regions = read_mot(job.paths["regions"], kind="results")
         files = {f"{spec.run_dir()}/{name}.txt": job.paths[name].read_text(encoding="utf-8")
@@ -325,7 +327,8 @@ def _run_job(spec: RunSpec, cfg: PipelineConfig, tmp: Path) -> Job:
             writers.append(IntermediateWriter(Path(spec.out_dir) / spec.run_dir(), spec.save,
                                               cfg.output.codec))
         proc = TrackProcessor(cfg, src.info, needs_background="background" in spec.save)
-        return Job(src, proc, writers, tmp, force=True)
+        # no summary.json: the sweep records the run (row.json) when it has scored it
+        return Job(src, proc, writers, tmp, force=True, summary=False)
     except BaseException:
         src.close()
         raise
@@ -351,15 +354,16 @@ def _execute_attempt(spec: RunSpec, attempt: int) -> dict[str, Any]:
 
 def execute(specs: Sequence[RunSpec], jobs: int = 1, cluster: str | None = None,
             progress: Callable[[int], None] | None = None,
-            on_result: Callable[[int, dict[str, Any]], None] | None = None) -> list[dict[str, Any]]:
+            on_result: Callable[[int, dict[str, Any]], None] | None = None,
+            should_stop: Callable[[], bool] | None = None) -> list[dict[str, Any]]:
     """Execute ``specs`` and return their results **in spec order**.
 
     Parameters
     ----------
     jobs : int
         1 = serial in this process; N > 1 = a pool of N spawned processes
-        (``concurrent.futures.ProcessPoolExecutor``, spawn start method, safe on every OS; as with
-        any spawned pool, a calling *script* must guard its entry point with
+        (:func:`~motiontrack.run.pool.pool_map`: its workers stop when asked and die with this
+        process; as with any spawned pool, a calling *script* must guard its entry point with
         ``if __name__ == "__main__":``).
     cluster : str, optional
         Address of a Dask distributed scheduler (``tcp://host:8786``); needs ``dask[distributed]``
@@ -368,8 +372,13 @@ def execute(specs: Sequence[RunSpec], jobs: int = 1, cluster: str | None = None,
         Called with the number of runs finished (1) each time one finishes.
     on_result : callable, optional
         Called as ``on_result(index, result)`` as soon as each run finishes (in completion order),
-        so a caller can save finished runs before an interruption. On ``KeyboardInterrupt``
-        pending runs are cancelled and the interrupt is re-raised.
+        so a caller can save finished runs before an interruption.
+    should_stop : callable, optional
+        Polled during the runs (serial and pool): once it says stop, the runs in progress end
+        after their current frame, no other run starts, and ``KeyboardInterrupt`` is raised
+        after every run that finished meanwhile was passed to ``on_result``. On a Dask cluster
+        it is not polled (the caller raises ``KeyboardInterrupt``; the runs are cancelled). On
+        ``KeyboardInterrupt`` pending runs are cancelled and the interrupt is re-raised.
     """
     if jobs < 1:
         raise ConfigError(f"-j must be >= 1, got {jobs}")
@@ -390,19 +399,12 @@ def execute(specs: Sequence[RunSpec], jobs: int = 1, cluster: str | None = None,
                       on_result=lambda i, res, _attempts: done(i, res), key="motiontrack-sweep")
     elif jobs == 1:
         for i, s in enumerate(specs):
-            done(i, execute_run(s))
+            if should_stop is not None and should_stop():
+                raise KeyboardInterrupt
+            done(i, execute_run(s, should_stop))
     else:
-        ctx = multiprocessing.get_context("spawn")
-        pool = ProcessPoolExecutor(max_workers=min(jobs, len(specs)), mp_context=ctx,
-                                   initializer=_worker_init)
-        try:
-            futs = {pool.submit(execute_run, s): i for i, s in enumerate(specs)}
-            for fut in as_completed(futs):
-                done(futs[fut], fut.result())
-        except BaseException:  # interrupt or a failed run: cancel what has not started
-            pool.shutdown(wait=False, cancel_futures=True)
-            raise
-        pool.shutdown()
+        pool_map(execute_run, specs, jobs, on_result=done, should_stop=should_stop,
+                 init=_worker_init)
     return results  # type: ignore[return-value]
 
 
@@ -490,13 +492,19 @@ def _owning_folder(sweep: Callable[..., SweepResult]) -> Callable[..., SweepResu
 @_owning_folder
 def run_sweep(study: Study, out_dir: str | Path, *, jobs: int = 1, cluster: str | None = None,
               progress: Callable[[int], None] | None = None, figures: bool = True,
-              force: bool = False, resume: bool = False) -> SweepResult:
+              force: bool = False, resume: bool = False,
+              should_stop: Callable[[], bool] | None = None) -> SweepResult:
     """Run ``study`` and write its folder: ``study.json``, ``config.toml`` (base config),
     ``results.csv`` (+ ``.parquet``), ``summary.csv`` (per-run averages over sequences),
-    ``summary.json`` (``"interrupted"``, runs done; on an interrupt the table holds the finished
-    runs),
+    ``summary.json`` (``"status"``, ``"interrupted"``, runs done; when the sweep is stopped or
+    the disk fills, the table holds the finished runs),
     ``runs/rNNN/<sequence>/{tracks,regions}.txt`` and ``row.json`` (the run's table row, written
     last) and, with ``figures``, ``figures/*.png|svg``.
+
+    ``should_stop`` (the CLI's SIGINT/SIGTERM handlers) is polled during the runs: once it says
+    stop, the runs in progress end after their current frame, every finished run is kept and
+    ``KeyboardInterrupt`` is raised (:func:`execute`). A full device
+    (:class:`~motiontrack.io.atomic.DiskFullError`) also keeps the finished runs, then is raised.
 
     One sweep at a time owns the folder (a second one is refused at once). With ``force`` an
     old study in it (:data:`STUDY_OUTPUTS`, ``runs/``, ``figures/``) is removed before anything
@@ -522,7 +530,7 @@ def run_sweep(study: Study, out_dir: str | Path, *, jobs: int = 1, cluster: str 
     key = study_key(study)
     finished = _resumed_runs(out, specs, key, progress) if resuming else {}
     finished = _run_remaining(specs, finished, out, key, jobs=jobs, cluster=cluster,
-                              progress=progress)
+                              progress=progress, should_stop=should_stop)
     rows = [finished[i]["row"] for i in range(len(specs))]
     return SweepResult(rows=rows, out_dir=out, outputs=_write_results(rows, study, out, figures))
 
@@ -560,10 +568,12 @@ def _resumed_runs(out: Path, specs: Sequence[RunSpec], key: str,
 
 def _run_remaining(specs: Sequence[RunSpec], finished: Mapping[int, dict[str, Any]], out: Path,
                    key: str, *, jobs: int, cluster: str | None,
-                   progress: Callable[[int], None] | None) -> dict[int, dict[str, Any]]:
+                   progress: Callable[[int], None] | None,
+                   should_stop: Callable[[], bool] | None = None) -> dict[int, dict[str, Any]]:
     """Run the specs not in ``finished`` and return the results of all specs by index, with
-    ``summary.json`` written. Interrupted, the table of the finished runs and ``summary.json``
-    are written before the interruption propagates."""
+    ``summary.json`` written. Interrupted or on a full device, the table of the finished runs
+    and ``summary.json`` are written (as far as the device allows) before the error
+    propagates."""
     done = dict(finished)
     todo = [i for i in range(len(specs)) if i not in done]
 
@@ -578,28 +588,46 @@ def _run_remaining(specs: Sequence[RunSpec], finished: Mapping[int, dict[str, An
 
     try:
         execute([specs[i] for i in todo], jobs=jobs, cluster=cluster, progress=progress,
-                on_result=save_run)
+                on_result=save_run, should_stop=should_stop)
     except KeyboardInterrupt:
         _write_interrupted(out, done, len(specs))
         raise
-    _write_status(out, interrupted=False, runs_done=len(done), runs=len(specs))
+    except DiskFullError as exc:
+        _write_partial(out, done, len(specs), str(exc))
+        raise
+    _write_status(out, status="complete", runs_done=len(done), runs=len(specs))
     return done
 
 
-def _write_status(out: Path, *, interrupted: bool, runs_done: int, runs: int) -> None:
-    """``summary.json``: whether the sweep was interrupted and how many runs it finished."""
+def _write_status(out: Path, *, status: str, runs_done: int, runs: int) -> None:
+    """``summary.json``: how the sweep ended (``"complete"``, ``"interrupted"``, ``"disk full
+    writing …"``) and how many runs it finished."""
     atomic_write_text(out / "summary.json", json.dumps(
-        {"interrupted": interrupted, "runs_done": runs_done, "runs": runs}, indent=2) + "\n")
+        {"status": status, "interrupted": status == "interrupted", "runs_done": runs_done,
+         "runs": runs}, indent=2) + "\n")
+
+
+def _write_partial(out: Path, done: Mapping[int, dict[str, Any]], runs: int,
+                   status: str) -> bool:
+    """The table of the runs finished before the sweep ended early, and ``summary.json`` with
+    ``status``; whether the table was written (on a full device it may not fit, and the runs'
+    records, which ``--resume`` reads, are what counts)."""
+    rows = [done[i]["row"] for i in sorted(done)]
+    try:
+        if rows:
+            write_table(rows, out / TABLE_FILE)
+        _write_status(out, status=status, runs_done=len(done), runs=runs)
+    except DiskFullError as exc:
+        log.debug("no table of the finished runs: %s", exc)
+        return False
+    return bool(rows)
 
 
 def _write_interrupted(out: Path, done: Mapping[int, dict[str, Any]], runs: int) -> None:
     """The table of the runs finished before an interruption, and ``summary.json`` saying so."""
-    rows = [done[i]["row"] for i in sorted(done)]
-    if rows:
-        write_table(rows, out / TABLE_FILE)
-    _write_status(out, interrupted=True, runs_done=len(done), runs=runs)
-    log.warning("sweep interrupted after %d of %d runs%s (continue with --resume)",
-                len(done), runs, f"; their table is in {printable(out / TABLE_FILE)}" if rows else "")
+    table = _write_partial(out, done, runs, "interrupted")
+    log.warning("sweep stopped: %d of %d runs finished%s (continue with --resume)",
+                len(done), runs, f"; their table is in {printable(out / TABLE_FILE)}" if table else "")
 
 
 def _write_results(rows: list[dict[str, Any]], study: Study, out: Path,
