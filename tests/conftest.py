@@ -13,6 +13,29 @@ from helpers.procs import enable_ctrl_c
 enable_ctrl_c()
 
 
+@pytest.fixture(autouse=True)
+def native_logs_as_found():
+    """A test running a command with ``--debug`` in this process turns FFmpeg's and OpenCV's own
+    messages on in ``os.environ``; the processes later tests start inherit that environment, so
+    each test ends with the levels it found."""
+    import os
+
+    from motiontrack.io import native_logs
+
+    names = (native_logs.FFMPEG_ENV, native_logs.OPENCV_ENV)
+    before = {name: os.environ.get(name) for name in names}
+    verbose = native_logs._verbose
+    yield
+    if native_logs._verbose != verbose or any(os.environ.get(n) != v for n, v in before.items()):
+        for name, value in before.items():
+            if value is None:
+                os.environ.pop(name, None)
+            else:
+                os.environ[name] = value
+        native_logs._verbose = verbose
+        native_logs.quiet()
+
+
 @pytest.fixture
 def data():
     """``data("pets09-s2l1", "video.avi")`` → Path (skips or fails when absent)."""
