@@ -426,11 +426,18 @@ def _writers_into(out, tmp_path):
                             str(out / "metrics.json")],
         "evaluate --per-frame": ["evaluate", "--gt", str(tracks), "--pred", str(tracks),
                                  "--per-frame", str(out / "frames.csv")],
+        # tracks analysed with the scene on both sides
+        "evaluate-events --json": ["evaluate-events", "--gt", str(tracks), "--pred", str(tracks),
+                                   "--scene", str(scene), "--fps", "5", "--json",
+                                   str(out / "events-eval.json")],
+        "gt-stats --json": ["gt-stats", str(tracks), "--image-size", "64x48", "--json",
+                            str(out / "gt-stats.json")],
     }
 
 
 @pytest.mark.parametrize("command", ["analyze", "synth-events", "evaluate --json",
-                                     "evaluate --per-frame"])
+                                     "evaluate --per-frame", "evaluate-events --json",
+                                     "gt-stats --json"])
 def test_every_command_writing_into_a_run_folder_is_refused_while_a_run_holds_it(
         tmp_path, capsys, command):
     out = tmp_path / "run"
