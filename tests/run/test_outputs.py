@@ -432,12 +432,15 @@ def _writers_into(out, tmp_path):
                                    str(out / "events-eval.json")],
         "gt-stats --json": ["gt-stats", str(tracks), "--image-size", "64x48", "--json",
                             str(out / "gt-stats.json")],
+        "overlay": ["overlay", WALKER.format(n=2), "-o", str(out / "overlay.avi")],
+        "world": ["world", str(tracks), "--camera", str(_camera(tmp_path)), "-o",
+                  str(out / "world.txt")],
     }
 
 
 @pytest.mark.parametrize("command", ["analyze", "synth-events", "evaluate --json",
                                      "evaluate --per-frame", "evaluate-events --json",
-                                     "gt-stats --json"])
+                                     "gt-stats --json", "overlay", "world"])
 def test_every_command_writing_into_a_run_folder_is_refused_while_a_run_holds_it(
         tmp_path, capsys, command):
     out = tmp_path / "run"

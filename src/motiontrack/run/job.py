@@ -222,7 +222,7 @@ class Job:
     config : written to ``config.toml`` when the run ends (``(writer function, object)``), or None.
     summary : write ``summary.json`` (the summary is returned by :meth:`run` either way).
     own_folder : hold the folder's lock from now until the run ends (default: with ``summary``;
-        a job without it, such as ``overlay``, writes files into a folder it shares).
+        ``overlay`` writes no summary but holds the lock of its video's folder, a run's often).
     layout : what ``summary.json`` holds, made of the run's :class:`JobSummary` (default
         :meth:`JobSummary.as_dict`; ``analyze`` keeps the fields of a tracks file's analysis).
     replace_listed : with ``force``, also remove the outputs the folder's old ``summary.json``
