@@ -500,3 +500,12 @@ def test_analyze_onto_a_full_disk_keeps_all_its_outputs_or_none(small_disk, tmp_
         assert code == (0 if files else 2), err
         kept.add(bool(files))
     assert kept == {True, False}
+
+
+def test_force_over_a_summary_nested_100000_deep_replaces_it(tmp_path, capsys):
+    out = tmp_path / "o"
+    out.mkdir()
+    (out / "summary.json").write_text("[" * 100_000 + "]" * 100_000)
+    assert main(["track", WALKER.format(n=3), "--no-video", "--force", "-o", str(out)]) == 0
+    assert "internal error" not in capsys.readouterr().err
+    assert json.loads((out / "summary.json").read_text())["frames"] == 3
