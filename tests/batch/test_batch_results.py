@@ -207,3 +207,20 @@ def test_combined_metrics_count_truncated_videos_over_the_frames_they_hold(tmp_p
     _done(results, ("a", WALKER))
     rows = [{"name": "a", "status": "truncated"}]
     assert combined_metrics(results, rows)["sequences"] == ["a"]
+
+
+def test_a_video_whose_folder_goes_before_its_run_sees_the_stop_is_interrupted(tmp_path,
+                                                                              monkeypatch):
+    """The stop event is polled once a second: the folder may go before the run sees it."""
+    results = tmp_path / "results"
+
+    class SeenLate(_Frames):
+        def should_stop(self) -> bool:
+            shutil.rmtree(results / ".a.partial", ignore_errors=True)
+            self.stopped = self.stopped or self.next_check == 0.0   # set, seen when checked now
+            return self.stopped
+
+    monkeypatch.setattr(runner, "_Frames", SeenLate)
+    row = run_video(_task(results, "a", WALKER))
+    assert row["status"] == "interrupted", row
+    assert not (results / ".a.partial").exists() and not (results / "a").exists()

@@ -132,6 +132,13 @@ class _Frames:
                 self.stop_name = None
         return self.late or self.stopped
 
+    def batch_stopped(self) -> bool:
+        """Whether the batch asked its videos to stop, its event checked now (not a second
+        after the last check)."""
+        self.next_check = 0.0
+        self.should_stop()
+        return self.stopped
+
 
 def _one_line(exc: BaseException) -> str:
     text = printable(exc).splitlines()
@@ -161,8 +168,8 @@ def _run_track_job(task: BatchTask, partial: Path, t0: float) -> Any:
         raise
     except Exception:
         # the batch stopped: the client removes the partial folder of the videos not done,
-        # maybe while this run commits into it; the error that gives is the stop's
-        if frames.stopped:
+        # maybe while this run writes or commits into it; the error that gives is the stop's
+        if frames.stopped or frames.batch_stopped():
             raise BatchStopped("the batch stopped before this video finished") from None
         raise
 
