@@ -391,11 +391,12 @@ def run_batch(sources: str | Sequence[str], results: str | Path,
     scheduler at ``cluster``, else on a local cluster of ``jobs`` worker processes. ``scene``
     and ``camera`` files apply to every video without its own (from a manifest); ``gt_from`` is
     a manifest giving videos their ground truth (:func:`~motiontrack.batch.sources.with_files`).
-    With ``resume``, videos whose folder holds a complete run with this config keep it (and
-    their index row). A video still running after ``timeout_s`` seconds (None: no limit) stops
-    and is a ``timeout`` row. ``progress`` is called with counts ``done``, ``failed`` (timeouts
-    included), ``running``, ``total``, the ``frames`` tracked so far and the cluster's ``fps``
-    (over the last few seconds) whenever a video finishes and as workers report frames (every
+    With ``resume``, videos whose folder holds a complete run of theirs with this config, its
+    outputs as committed, keep it (and their index row). A video still running after
+    ``timeout_s`` seconds (None: no limit) stops and is a ``timeout`` row. ``progress`` is
+    called with counts ``done``, ``failed`` (timeouts and truncated videos included),
+    ``running``, ``total``, the ``frames`` tracked so far and the cluster's ``fps`` (over the
+    last few seconds) whenever a video finishes and as workers report frames (every
     :data:`REPORT_EVERY_S` seconds). Interrupted (``KeyboardInterrupt``), the batch cancels its
     tasks and writes the videos not finished as ``interrupted`` rows before the interruption
     propagates.
