@@ -397,3 +397,102 @@ def test_a_second_sweep_into_a_folder_is_refused(tmp_path):
         with pytest.raises(InputError, match="is in use by another motiontrack run"):
             _sweep(out, "0.1", force=True)
     assert _sweep(out, "0.1").rows
+
+
+# ------------------------------------------------------- every writer takes the folder's lock
+def _writers_into(out, tmp_path):
+    """The commands other than ``track`` that write into a run's folder ``out``."""
+    scene = tmp_path / "scene.toml"
+    scene.write_text('[[line]]\nname = "g"\npoints = [[0, 10], [20, 10]]\n')
+    tracks = tmp_path / "tracks.txt"
+    tracks.write_text("1,1,5,5,4,8,1,-1,-1,-1\n2,1,5,9,4,8,1,-1,-1,-1\n")
+    return {
+        "analyze": ["analyze", str(tracks), "--scene", str(scene), "--fps", "5", "-o", str(out)],
+        "synth-events": ["synth-events", "synth:leftbag?n_frames=40", "-o", str(out)],
+        "evaluate --json": ["evaluate", "--gt", str(tracks), "--pred", str(tracks), "--json",
+                            str(out / "metrics.json")],
+        "evaluate --per-frame": ["evaluate", "--gt", str(tracks), "--pred", str(tracks),
+                                 "--per-frame", str(out / "frames.csv")],
+        # tracks analysed with the scene on both sides
+        "evaluate-events --json": ["evaluate-events", "--gt", str(tracks), "--pred", str(tracks),
+                                   "--scene", str(scene), "--fps", "5", "--json",
+                                   str(out / "events-eval.json")],
+        "gt-stats --json": ["gt-stats", str(tracks), "--image-size", "64x48", "--json",
+                            str(out / "gt-stats.json")],
+        "overlay": ["overlay", WALKER.format(n=2), "-o", str(out / "overlay.avi")],
+        "world": ["world", str(tracks), "--camera", str(_camera(tmp_path)), "-o",
+                  str(out / "world.txt")],
+    }
+
+
+@pytest.mark.parametrize("command", ["analyze", "synth-events", "evaluate --json",
+                                     "evaluate --per-frame", "evaluate-events --json",
+                                     "gt-stats --json", "overlay", "world"])
+def test_every_command_writing_into_a_run_folder_is_refused_while_a_run_holds_it(
+        tmp_path, capsys, command):
+    out = tmp_path / "run"
+    argv = _writers_into(out, tmp_path)[command]
+    held = OutputLock(out)           # a track run writing into the folder
+    (out / "tracks.txt").write_text("the running track's\n")
+    try:
+        assert main(argv) == 2
+        errors = _error_lines(capsys.readouterr().err)
+        assert len(errors) == 1
+        assert (f"output folder {out} is in use by another motiontrack run "
+                f"(process {os.getpid()})") in errors[0]
+        assert _files(out) == [".motiontrack.lock", "tracks.txt"]      # nothing written
+    finally:
+        held.release()
+    assert main(argv) == 0                                             # free again: it writes
+    assert ".motiontrack.lock" not in _files(out) and len(_files(out)) > 1
+
+
+def test_a_run_removes_every_temporary_file_a_killed_run_left_whatever_it_writes(tmp_path):
+    out = tmp_path / "o"
+    out.mkdir()
+    # a killed `track` with a video, then a `--no-video --force` run into the folder
+    (out / ".annotated.k1ll3d00.part.webm").write_bytes(b"\x1aE\xdf\xa3" * 1000)
+    (out / ".heatmap.png.k1ll3d01.part").write_bytes(b"png")
+    (out / ".notes.txt").write_text("a hidden file of the user's")
+    assert main(["track", WALKER.format(n=3), "--no-video", "--force", "-o", str(out)]) == 0
+    assert _hidden(out) == [".notes.txt"]
+    assert _files(out) == [".notes.txt", "config.toml", "gt.txt", "summary.json", "tracks.txt"]
+
+
+def test_analyze_onto_a_full_disk_keeps_all_its_outputs_or_none(small_disk, tmp_path, capsys):
+    scene = tmp_path / "scene.toml"
+    scene.write_text('[[line]]\nname = "g"\npoints = [[0, 100], [200, 100]]\n'
+                     '[[zone]]\nname = "z"\npolygon = [[0, 0], [200, 0], [200, 60], [0, 60]]\n')
+    tracks = tmp_path / "tracks.txt"   # two tracks crossing the line every 5 frames
+    tracks.write_text("".join(f"{f},{i},95,{20 if (f // 5 + i) % 2 else 110},10,20,1,-1,-1,-1\n"
+                              for f in range(1, 401) for i in (1, 2)))
+    argv = ["analyze", str(tracks), "--scene", str(scene), "--fps", "25", "-o"]
+    assert main([*argv, str(tmp_path / "whole")]) == 0
+    whole = _files(tmp_path / "whole")
+    need = sum((tmp_path / "whole" / n).stat().st_size for n in whole)
+    page = 4096
+    kept = set()
+    for free in range(page, need + 4 * page, 3 * page):   # the disk fills at each output
+        out = small_disk / "o"
+        shutil.rmtree(out, ignore_errors=True)
+        filler = small_disk / "filler"
+        filler.unlink(missing_ok=True)
+        st = os.statvfs(small_disk)
+        filler.write_bytes(b"\0" * max(0, st.f_bavail * st.f_frsize - free))
+        code = main([*argv, str(out)])
+        err = capsys.readouterr().err
+        files = _files(out)
+        assert files in ([], whole), (free, files, err)   # all or nothing, as `track`
+        assert _hidden(small_disk) == []
+        assert code == (0 if files else 2), err
+        kept.add(bool(files))
+    assert kept == {True, False}
+
+
+def test_force_over_a_summary_nested_100000_deep_replaces_it(tmp_path, capsys):
+    out = tmp_path / "o"
+    out.mkdir()
+    (out / "summary.json").write_text("[" * 100_000 + "]" * 100_000)
+    assert main(["track", WALKER.format(n=3), "--no-video", "--force", "-o", str(out)]) == 0
+    assert "internal error" not in capsys.readouterr().err
+    assert json.loads((out / "summary.json").read_text())["frames"] == 3

@@ -24,6 +24,8 @@ from ..run.folder import RunFolder
 __all__ = ["COMBINED_FILE", "combined_metrics", "write_combined"]
 
 COMBINED_FILE = "combined.json"
+#: the index statuses of a video whose folder holds its run
+FINISHED = ("done", "truncated")
 
 
 def _sequence(folder: Path, summary: Mapping[str, Any]) -> dict[str, dict]:
@@ -41,12 +43,13 @@ def _sequence(folder: Path, summary: Mapping[str, Any]) -> dict[str, dict]:
 
 
 def combined_metrics(results: Path, rows: Sequence[Mapping[str, Any]]) -> dict[str, Any] | None:
-    """``{"sequences": [names], "metrics": {flat metrics}}`` over the ``done`` videos whose
-    folder holds ground truth, or None when none does."""
+    """``{"sequences": [names], "metrics": {flat metrics}}`` over the finished videos (``done``,
+    and ``truncated`` over the frames they hold) whose folder holds ground truth, or None when
+    none does."""
     per: dict[str, dict[str, dict]] = {}
     for r in sorted(rows, key=lambda r: r["name"]):
         folder = Path(results) / r["name"]
-        if r.get("status") != "done" or not RunFolder(folder).gt.is_file():
+        if r.get("status") not in FINISHED or not RunFolder(folder).gt.is_file():
             continue
         summary = RunFolder(folder).summary() or {}
         try:

@@ -8,12 +8,13 @@ Each finished video run with a scene has the scene's totals in its ``summary.jso
   video to video, so one column per line or zone would not fit them all):
   ``video,kind,name,measure,count`` with ``kind`` ``line`` (measures ``in``, ``out``) or
   ``zone`` (measures ``enters``, ``exits``), in the batch's video order, then the scene's order;
-* ``RESULTS/totals.json``, the same counts summed over the ``done`` videos by line and zone
+* ``RESULTS/totals.json``, the same counts summed over the finished videos by line and zone
   name, and the events of each type: ``{"videos": [names], "lines": {name: {"in", "out"}},
   "zones": {name: {"enters", "exits"}}, "events": {type: count}}``.
 
-Only ``done`` videos count; a batch without a video run with a scene writes neither file (and
-removes those of an earlier batch into the same folder).
+Only finished videos count (``done``, and ``truncated`` with the events up to where its source
+ended); a batch without a video run with a scene writes neither file (and removes those of an
+earlier batch into the same folder).
 """
 
 from __future__ import annotations
@@ -26,6 +27,7 @@ from typing import Any, Mapping, Sequence
 
 from ..io.atomic import atomic_write_text
 from ..run.folder import RunFolder
+from .combined import FINISHED
 
 __all__ = ["COUNTS_FILE", "TOTALS_FILE", "COUNT_COLUMNS", "MEASURES", "count_rows",
            "totals_of", "write_counts"]
@@ -39,8 +41,9 @@ _SECTIONS = {"line": "lines", "zone": "zones"}
 
 
 def _analytics(results: Path, row: Mapping[str, Any]) -> Mapping[str, Any] | None:
-    """The ``analytics`` section of a done video's ``summary.json``, or None (no scene)."""
-    if row.get("status") != "done":
+    """The ``analytics`` section of a finished (``done`` or ``truncated``: its events up to
+    where the source ended) video's ``summary.json``, or None (no scene)."""
+    if row.get("status") not in FINISHED:
         return None
     summary = RunFolder(Path(results) / str(row["name"])).summary()
     section = summary.get("analytics") if isinstance(summary, dict) else None
@@ -55,7 +58,7 @@ def _count(value: Any) -> int:
 
 
 def count_rows(results: Path, rows: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
-    """The rows of ``counts.csv`` for the ``done`` videos of ``rows`` run with a scene."""
+    """The rows of ``counts.csv`` for the finished (``done`` or ``truncated``) videos of ``rows`` run with a scene."""
     out: list[dict[str, Any]] = []
     for r in rows:
         section = _analytics(results, r)
@@ -71,7 +74,7 @@ def count_rows(results: Path, rows: Sequence[Mapping[str, Any]]) -> list[dict[st
 
 
 def totals_of(results: Path, rows: Sequence[Mapping[str, Any]]) -> dict[str, Any] | None:
-    """``totals.json``: the counts of every ``done`` video run with a scene summed by line and
+    """``totals.json``: the counts of every finished video run with a scene summed by line and
     zone name, and its events by type; None when no video was run with a scene."""
     videos: list[str] = []
     totals: dict[str, dict[str, dict[str, int]]] = {"lines": {}, "zones": {}}
@@ -94,7 +97,7 @@ def totals_of(results: Path, rows: Sequence[Mapping[str, Any]]) -> dict[str, Any
 
 def write_counts(results: Path, rows: Sequence[Mapping[str, Any]]) -> dict[str, Any] | None:
     """Write ``RESULTS/counts.csv`` and ``RESULTS/totals.json`` (atomically; both removed when
-    no ``done`` video was run with a scene); returns the totals."""
+    no finished video was run with a scene); returns the totals."""
     results = Path(results)
     totals = totals_of(results, rows)
     if totals is None:

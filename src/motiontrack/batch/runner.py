@@ -22,12 +22,13 @@ from typing import Any, Callable, Mapping, Sequence
 
 from ..config import PipelineConfig, apply_overrides, from_dict, load_config, to_dict
 from ..errors import ConfigError, printable
-from ..io.atomic import OutputLock, atomic_write_bytes, atomic_write_text
+from ..io.atomic import (DiskFullError, OutputLock, atomic_write_bytes, atomic_write_text,
+                         remove_folder_temps)
 from ..run.executor import dask_client, map_tasks
 from ..run.folder import RunFolder
 from ..version import __version__
-from .combined import write_combined
-from .counts import write_counts
+from .combined import COMBINED_FILE, write_combined
+from .counts import COUNTS_FILE, TOTALS_FILE, write_counts
 from .sources import Video, expand_sources, with_files
 
 log = logging.getLogger(__name__)
@@ -35,6 +36,9 @@ log = logging.getLogger(__name__)
 __all__ = ["INDEX_FILE", "INDEX_COLUMNS", "BatchTask", "run_video", "run_batch", "config_hash"]
 
 INDEX_FILE = "index.csv"
+PARQUET_FILE = "index.parquet"
+#: the files a batch writes at the root of RESULTS: no video may be named as one of them
+BATCH_FILES = (INDEX_FILE, PARQUET_FILE, COMBINED_FILE, COUNTS_FILE, TOTALS_FILE)
 INDEX_COLUMNS = ("name", "source", "status", "error", "frames", "fps", "tracks", "wall_s",
                  "worker", "attempts", "config_hash", "motiontrack_version", "opencv_version",
                  "HOTA", "MOTA", "IDF1")
@@ -129,6 +133,13 @@ class _Frames:
                 self.stop_name = None
         return self.late or self.stopped
 
+    def batch_stopped(self) -> bool:
+        """Whether the batch asked its videos to stop, its event checked now (not a second
+        after the last check)."""
+        self.next_check = 0.0
+        self.should_stop()
+        return self.stopped
+
 
 def _one_line(exc: BaseException) -> str:
     text = printable(exc).splitlines()
@@ -156,6 +167,12 @@ def _run_track_job(task: BatchTask, partial: Path, t0: float) -> Any:
         if frames.stopped:
             raise BatchStopped("the batch stopped before this video finished") from None
         raise
+    except Exception:
+        # the batch stopped: the client removes the partial folder of the videos not done,
+        # maybe while this run writes or commits into it; the error that gives is the stop's
+        if frames.stopped or frames.batch_stopped():
+            raise BatchStopped("the batch stopped before this video finished") from None
+        raise
 
 
 def run_video(task: BatchTask, attempt: int = 1) -> dict[str, Any]:
@@ -175,9 +192,15 @@ def run_video(task: BatchTask, attempt: int = 1) -> dict[str, Any]:
     try:
         partial.remove()   # of a killed attempt
         summary = _run_track_job(task, partial.path, t0)
-        final.commit_partial({"batch": {"name": v.name, "config_hash": task.config_hash}})
-        row.update(status="done", frames=summary.frames, fps=round(summary.fps, 3),
-                   tracks=summary.tracks)
+        # what --resume checks: the outputs as committed, and whose run they are
+        final.commit_partial({"batch": {"name": v.name, "source": v.source,
+                                        "config_hash": task.config_hash,
+                                        "files": partial.digests()}})
+        row.update(status="truncated" if summary.truncated else "done", frames=summary.frames,
+                   fps=round(summary.fps, 3), tracks=summary.tracks)
+        if summary.truncated:
+            row["error"] = (f"the source ended early, after {summary.frames} frames; the "
+                            "results hold them")
         row.update({k: summary.accuracy[k] for k in METRICS if k in (summary.accuracy or {})})
     except Exception as exc:   # noqa: BLE001 - one bad video never stops the batch
         partial.remove()
@@ -256,11 +279,30 @@ class _Rate:
         return (n1 - n0) / (t1 - t0) if t1 > t0 else 0.0
 
 
-def _complete(results: Path, name: str, chash: str) -> bool:
-    """Whether ``RESULTS/<name>`` holds a complete run made with the config ``chash``."""
-    meta = RunFolder(results / name).summary()
-    return (isinstance(meta, dict) and meta.get("status") == "complete"
-            and isinstance(meta.get("batch"), dict) and meta["batch"].get("config_hash") == chash)
+def _complete(results: Path, video: Video, chash: str) -> dict[str, Any] | None:
+    """The summary of ``RESULTS/<name>`` when it holds a complete, untruncated run of
+    ``video`` made with the config ``chash`` whose outputs are as the batch committed them;
+    None (with a warning when the folder was changed) when the video must run again."""
+    folder = RunFolder(results / video.name)
+    meta, problem = folder.read_summary()
+    if meta is None:
+        if problem:
+            log.warning("%s: %s; the video runs again", folder.summary_path, problem)
+        return None
+    batch = meta.get("batch")
+    if (meta.get("status") != "complete" or meta.get("truncated") is not False
+            or not isinstance(batch, dict) or batch.get("config_hash") != chash):
+        return None
+    if batch.get("name") != video.name or batch.get("source") != video.source:
+        log.warning("%s holds the run of %s, not of %s; the video runs again", folder.path,
+                    batch.get("source"), video.source)
+        return None
+    changed = folder.changed(batch.get("files"))
+    if changed:
+        log.warning("%s: %s since the batch wrote it; the video runs again", folder.path,
+                    changed)
+        return None
+    return meta
 
 
 def read_index(path: Path) -> dict[str, dict[str, str]]:
@@ -273,17 +315,27 @@ def read_index(path: Path) -> dict[str, dict[str, str]]:
 
 
 def write_index(rows: Sequence[Mapping[str, Any]], path: Path) -> None:
+    """Write ``rows`` to ``path`` (CSV) and beside it to ``index.parquet`` (with ``pyarrow``),
+    each atomically. A Parquet copy that cannot be written (a full disk, no ``pyarrow``) is
+    removed, so that the one beside the CSV is never an older index."""
     buf = io.StringIO()
     w = csv.DictWriter(buf, fieldnames=INDEX_COLUMNS, extrasaction="ignore", lineterminator="\n")
     w.writeheader()
     for r in rows:
         w.writerow({k: r.get(k, "") for k in INDEX_COLUMNS})
     atomic_write_text(path, buf.getvalue())
+    parquet = path.with_suffix(".parquet")
     try:
         import pyarrow  # noqa: F401 - the Parquet copy is optional
     except ImportError:
+        parquet.unlink(missing_ok=True)
         return
-    atomic_write_bytes(path.with_suffix(".parquet"), _parquet(rows))
+    try:
+        atomic_write_bytes(parquet, _parquet(rows))
+    except (OSError, DiskFullError) as exc:
+        parquet.unlink(missing_ok=True)
+        log.warning("%s not written (%s): removed, %s holds the index", parquet.name,
+                    printable(exc), path.name)
 
 
 _INTS = ("frames", "tracks", "attempts")
@@ -313,11 +365,15 @@ def _parquet(rows: Sequence[Mapping[str, Any]]) -> bytes:
 
 
 def _check_names(videos: Sequence[Video]) -> None:
+    reserved = {f.casefold() for f in BATCH_FILES}
     for v in videos:
         if (not v.name or v.name.startswith(".") or any(c in v.name for c in "/\\")
                 or not v.name.isprintable()):
             raise ConfigError(f"video name {v.name!r}: a results folder name must not start "
                               "with '.' nor hold slashes or control characters")
+        if v.name.casefold() in reserved:
+            raise ConfigError(f"video name {v.name!r} is the name of a file the batch writes in "
+                              f"RESULTS ({', '.join(BATCH_FILES)}): name the video otherwise")
 
 
 def run_batch(sources: str | Sequence[str], results: str | Path,
@@ -336,11 +392,12 @@ def run_batch(sources: str | Sequence[str], results: str | Path,
     scheduler at ``cluster``, else on a local cluster of ``jobs`` worker processes. ``scene``
     and ``camera`` files apply to every video without its own (from a manifest); ``gt_from`` is
     a manifest giving videos their ground truth (:func:`~motiontrack.batch.sources.with_files`).
-    With ``resume``, videos whose folder holds a complete run with this config keep it (and
-    their index row). A video still running after ``timeout_s`` seconds (None: no limit) stops
-    and is a ``timeout`` row. ``progress`` is called with counts ``done``, ``failed`` (timeouts
-    included), ``running``, ``total``, the ``frames`` tracked so far and the cluster's ``fps``
-    (over the last few seconds) whenever a video finishes and as workers report frames (every
+    With ``resume``, videos whose folder holds a complete run of theirs with this config, its
+    outputs as committed, keep it (and their index row). A video still running after
+    ``timeout_s`` seconds (None: no limit) stops and is a ``timeout`` row. ``progress`` is
+    called with counts ``done``, ``failed`` (timeouts and truncated videos included),
+    ``running``, ``total``, the ``frames`` tracked so far and the cluster's ``fps`` (over the
+    last few seconds) whenever a video finishes and as workers report frames (every
     :data:`REPORT_EVERY_S` seconds). Interrupted (``KeyboardInterrupt``), the batch cancels its
     tasks and writes the videos not finished as ``interrupted`` rows before the interruption
     propagates.
@@ -354,6 +411,7 @@ def run_batch(sources: str | Sequence[str], results: str | Path,
     out.mkdir(parents=True, exist_ok=True)
     chash = config_hash(cfg)
     with OutputLock(out):
+        remove_folder_temps(out)   # of the index files of a killed batch
         index = _Index(out, videos, _resumed_rows(out, videos, chash) if resume else {},
                        progress)
         index.save()
@@ -389,11 +447,30 @@ def _resumed_rows(out: Path, videos: Sequence[Video], chash: str) -> dict[str, d
     """The index rows, by name, of the videos whose folder holds a complete run made with the
     config ``chash``: the row of the old index, or a ``done`` row when it has none."""
     old = read_index(out / INDEX_FILE)
-    rows = {v.name: dict(old.get(v.name) or {"name": v.name, "source": v.source,
-                                             "status": "done", "config_hash": chash})
-            for v in videos if _complete(out, v.name, chash)}
+    rows = {}
+    for v in videos:
+        meta = _complete(out, v, chash)
+        if meta is not None:
+            rows[v.name] = _kept_row(v, meta, old.get(v.name), chash)
     log.info("resuming: %d of %d videos are done", len(rows), len(videos))
     return rows
+
+
+def _kept_row(video: Video, meta: Mapping[str, Any], old: Mapping[str, str] | None,
+              chash: str) -> dict[str, Any]:
+    """The index row of a video ``--resume`` keeps: its row of the old index when that row is
+    of this run (same source, config, frames and tracks), else one made from its summary."""
+    same = (old is not None and old.get("status") == "done" and old.get("source") == video.source
+            and old.get("config_hash") == chash
+            and old.get("frames") == str(meta.get("frames"))
+            and old.get("tracks") == str(meta.get("tracks")))
+    if same:
+        return dict(old)
+    acc = meta.get("accuracy") if isinstance(meta.get("accuracy"), dict) else {}
+    return {"name": video.name, "source": video.source, "status": "done",
+            "config_hash": chash, "frames": meta.get("frames", ""),
+            "fps": meta.get("fps", ""), "tracks": meta.get("tracks", ""),
+            **{k: acc[k] for k in METRICS if k in acc}}
 
 
 class _Index:

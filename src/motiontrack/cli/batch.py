@@ -80,7 +80,9 @@ def cmd_batch(args) -> int:
                   f"{args.out}/index.csv (--resume finishes them)", file=sys.stderr)
             raise
     failed = [r for r in rows if r.get("status") != "done"]
-    print(f"{len(rows) - len(failed)} done, {len(failed)} failed; index: {args.out}/index.csv")
+    cut = sum(r.get("status") == "truncated" for r in rows)
+    print(f"{len(rows) - len(failed)} done, " + (f"{cut} truncated, " if cut else "")
+          + f"{len(failed) - cut} failed; index: {args.out}/index.csv")
     combined = Path(args.out) / COMBINED_FILE
     if combined.is_file():
         c = json.loads(combined.read_text(encoding="utf-8"))

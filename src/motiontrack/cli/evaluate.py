@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from ..errors import ConfigError, InputError
-from ..io.atomic import atomic_write_text, check_writable, is_stdout
+from ..io.atomic import atomic_write_text, is_stdout, writing_outputs
 from ..evaluate.scoring import DEFAULT_SCORING, SCORING_SUMMARY, ignores_zero_marked
 from ._common import add_scoring_option, frame_range
 
@@ -260,9 +260,16 @@ def run(args: argparse.Namespace) -> int:
     outputs = [p for p in (args.json, args.per_frame) if p is not None]
     if sum(map(is_stdout, outputs)) > 1:
         raise ConfigError("--json and --per-frame cannot both be - (standard output)")
-    check_writable(outputs, args.force)
     if not 0.0 <= args.xi <= 1.0:
         raise ConfigError(f"--xi must be in [0, 1], got {args.xi}")
+    # the lock of each output's folder (a run's folder, often) from the check to the write
+    with writing_outputs(outputs, args.force):
+        return _evaluate_pred(args, metrics, outputs)
+
+
+def _evaluate_pred(args: argparse.Namespace, metrics: tuple[str, ...],
+                   outputs: list[Path]) -> int:
+    """``--gt`` against every ``--pred`` file: the table, ``--json`` and ``--per-frame``."""
     gt = _read(Path(args.gt), "ground-truth")
     if len(gt) == 0:
         raise InputError(f"ground-truth file has no annotations: {args.gt}")
@@ -324,7 +331,12 @@ def run_benchmark(args: argparse.Namespace) -> int:
         raise ConfigError("framewise metrics are not combined over sequences; with --gt-folder "
                           "choose from clear,identity,hota")
     outputs = [args.json] if args.json is not None else []
-    check_writable(outputs, args.force)
+    with writing_outputs(outputs, args.force):
+        return _evaluate_benchmark(args, metrics)
+
+
+def _evaluate_benchmark(args: argparse.Namespace, metrics: tuple[str, ...]) -> int:
+    """Every tracker of ``--trackers-folder`` on every sequence: the tables and ``--json``."""
     from ..evaluate.benchmark import COMBINED, evaluate_tracker, flatten_benchmark
     from ..io.mot import read_mot
     from ..io.mot_layout import split_sequences, tracker_file, tracker_names

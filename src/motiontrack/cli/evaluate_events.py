@@ -69,40 +69,39 @@ def format_table(result) -> str:
 def run(args: argparse.Namespace) -> int:
     from ..errors import ConfigError
     from ..evaluate.events import MAX_TOLERANCE_S, evaluate_events
-    from ..io.atomic import atomic_write_text, check_writable, is_stdout
+    from ..io.atomic import atomic_write_text, is_stdout, writing_outputs
 
     if not (math.isfinite(args.tolerance_s) and 0 <= args.tolerance_s <= MAX_TOLERANCE_S):
         raise ConfigError(f"--tolerance-s must be a number of seconds in "
                           f"[0, {MAX_TOLERANCE_S:.0f}], got {args.tolerance_s}")
     if args.fps is not None and not (math.isfinite(args.fps) and args.fps > 0):
         raise ConfigError(f"--fps must be > 0, got {args.fps}")
-    if args.json is not None:
-        check_writable([args.json], args.force)
-    camera = None
-    if args.camera is not None:
-        from ..calibrate import load_camera
+    with writing_outputs([args.json] if args.json is not None else [], args.force):
+        camera = None
+        if args.camera is not None:
+            from ..calibrate import load_camera
 
-        camera = load_camera(args.camera)
-    if args.scene is None and camera is None:
-        from ..io.events import EventsFile, is_events_file, read_events  # no analytics needed
+            camera = load_camera(args.camera)
+        if args.scene is None and camera is None:
+            from ..io.events import EventsFile, is_events_file, read_events  # no analytics needed
 
-        def load(path: Path, what: str) -> EventsFile:
-            if not is_events_file(path) and path.is_file():
-                raise ConfigError(f"{what} {path} is not an events file (its first line is not "
-                                  "the motiontrack.events header); give --scene to analyse it "
-                                  "as a tracks file")
-            return read_events(path)
-    else:
-        from ..run.evaluate_events import load_events
+            def load(path: Path, what: str) -> EventsFile:
+                if not is_events_file(path) and path.is_file():
+                    raise ConfigError(f"{what} {path} is not an events file (its first line is not "
+                                      "the motiontrack.events header); give --scene to analyse it "
+                                      "as a tracks file")
+                return read_events(path)
+        else:
+            from ..run.evaluate_events import load_events
 
-        def load(path: Path, what: str):
-            return load_events(path, args.scene, args.fps, camera, what)
+            def load(path: Path, what: str):
+                return load_events(path, args.scene, args.fps, camera, what)
 
-    gt = load(args.gt, "--gt")
-    pred = load(args.pred, "--pred")
-    result = evaluate_events(gt.events, pred.events, args.tolerance_s)
-    print(format_table(result), file=sys.stderr if is_stdout(args.json) else sys.stdout)
-    if args.json is not None:
-        out = {"gt": str(args.gt), "pred": str(args.pred), **result.to_json()}
-        atomic_write_text(args.json, json.dumps(out, indent=1) + "\n")
-    return 0
+        gt = load(args.gt, "--gt")
+        pred = load(args.pred, "--pred")
+        result = evaluate_events(gt.events, pred.events, args.tolerance_s)
+        print(format_table(result), file=sys.stderr if is_stdout(args.json) else sys.stdout)
+        if args.json is not None:
+            out = {"gt": str(args.gt), "pred": str(args.pred), **result.to_json()}
+            atomic_write_text(args.json, json.dumps(out, indent=1) + "\n")
+        return 0

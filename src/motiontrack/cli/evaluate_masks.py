@@ -68,16 +68,15 @@ def format_table(result) -> str:
 
 def run(args: argparse.Namespace) -> int:
     from ..evaluate.masks import evaluate_mask_folders
-    from ..io.atomic import atomic_write_text, check_writable, is_stdout
+    from ..io.atomic import atomic_write_text, is_stdout, writing_outputs
 
-    if args.json is not None:
-        check_writable([args.json], args.force)
-    result = evaluate_mask_folders(args.gt, args.pred, roi=args.roi,
-                                   temporal_roi=args.temporal_roi, frames=_frames(args.frames),
-                                   pred_prefix=args.pred_prefix)
-    print(format_table(result), file=sys.stderr if is_stdout(args.json) else sys.stdout)
-    if args.json is not None:
-        flat = {k: (None if isinstance(v, float) and math.isnan(v) else v)
-                for k, v in result.as_dict().items()}
-        atomic_write_text(args.json, json.dumps(flat, indent=1) + "\n")
-    return 0
+    with writing_outputs([args.json] if args.json is not None else [], args.force):
+        result = evaluate_mask_folders(args.gt, args.pred, roi=args.roi,
+                                       temporal_roi=args.temporal_roi, frames=_frames(args.frames),
+                                       pred_prefix=args.pred_prefix)
+        print(format_table(result), file=sys.stderr if is_stdout(args.json) else sys.stdout)
+        if args.json is not None:
+            flat = {k: (None if isinstance(v, float) and math.isnan(v) else v)
+                    for k, v in result.as_dict().items()}
+            atomic_write_text(args.json, json.dumps(flat, indent=1) + "\n")
+        return 0

@@ -70,7 +70,7 @@ class _PercentileOption(argparse.Action):
 def cmd_gt_stats(args) -> int:
     from ..errors import check_output_path
     from ..evaluate.gtstats import check_percentile, gt_statistics, parse_image_size
-    from ..io.atomic import atomic_write_text, check_writable, is_stdout
+    from ..io.atomic import atomic_write_text, is_stdout, writing_outputs
 
     from pathlib import Path
 
@@ -80,35 +80,35 @@ def cmd_gt_stats(args) -> int:
             check_output_path(path, flag)
     if args.write_config and is_stdout(args.write_config) and is_stdout(args.json):
         raise ConfigError("--json and --write-config cannot both be standard output (-)")
-    check_writable([Path(p) for p, _ in outputs if p], args.force)
-    from ._common import read_gt
+    with writing_outputs([Path(p) for p, _ in outputs if p], args.force):
+        from ._common import read_gt
 
-    size = parse_image_size(args.image_size)
-    check_percentile(args.percentile)
-    from ..io.paths import expand_paths
+        size = parse_image_size(args.image_size)
+        check_percentile(args.percentile)
+        from ..io.paths import expand_paths
 
-    stats = gt_statistics([read_gt(str(g)) for g in expand_paths(args.gt, "ground-truth files")],
-                          size, ddof=1 if args.sample_std else 0,
-                          percentile=args.percentile)
-    if args.write_config and not stats["recommended_overrides"]:
-        raise InputError("--write-config: the ground truth has no boxes to count (none, or all "
-                         "marked consider = 0), so there are no limits to recommend")
-    table = sys.stderr if is_stdout(args.json) or is_stdout(args.write_config) else sys.stdout
-    width = max(len(k) for k in stats)
-    for k, v in stats.items():
-        if k.endswith("_overrides"):
-            v = " ".join(f"--set {s}" for s in v)
-        elif isinstance(v, float):
-            v = f"{v:.6g}"
-        print(f"{k:<{width}}  {v}", file=table)
-    if args.json:
-        atomic_write_text(args.json, json.dumps(stats, indent=2) + "\n")
-    if args.write_config:
-        atomic_write_text(args.write_config, recommendation_toml(stats))
-        if not is_stdout(args.write_config):
-            print(f"wrote {args.write_config}: use it with `motiontrack track SOURCE --config "
-                  f"{args.write_config}`", file=table)
-    return 0
+        files = expand_paths(args.gt, "ground-truth files")
+        stats = gt_statistics([read_gt(str(g)) for g in files], size,
+                              ddof=1 if args.sample_std else 0, percentile=args.percentile)
+        if args.write_config and not stats["recommended_overrides"]:
+            raise InputError("--write-config: the ground truth has no boxes to count (none, or all "
+                             "marked consider = 0), so there are no limits to recommend")
+        table = sys.stderr if is_stdout(args.json) or is_stdout(args.write_config) else sys.stdout
+        width = max(len(k) for k in stats)
+        for k, v in stats.items():
+            if k.endswith("_overrides"):
+                v = " ".join(f"--set {s}" for s in v)
+            elif isinstance(v, float):
+                v = f"{v:.6g}"
+            print(f"{k:<{width}}  {v}", file=table)
+        if args.json:
+            atomic_write_text(args.json, json.dumps(stats, indent=2) + "\n")
+        if args.write_config:
+            atomic_write_text(args.write_config, recommendation_toml(stats))
+            if not is_stdout(args.write_config):
+                print(f"wrote {args.write_config}: use it with `motiontrack track SOURCE --config "
+                      f"{args.write_config}`", file=table)
+        return 0
 
 
 def recommendation_toml(stats: dict) -> str:

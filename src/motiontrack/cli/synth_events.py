@@ -24,7 +24,7 @@ def register(subparsers) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from ..errors import check_output_path
-    from ..io.atomic import atomic_write_text, check_writable
+    from ..io.atomic import atomic_write_text, writing_outputs
     from ..io.events import write_events
     from ..io.mot import write_mot
     from ..synth import parse_synth_spec
@@ -33,13 +33,13 @@ def run(args: argparse.Namespace) -> int:
     scene = parse_synth_spec(spec)
     check_output_path(args.out, "-o", folder=True)
     paths = {k: args.out / k for k in ("scene.toml", "gt.txt", "events.jsonl")}
-    check_writable(paths.values(), args.force)
-    args.out.mkdir(parents=True, exist_ok=True)
-    events = scene.ground_truth_events()
-    atomic_write_text(paths["scene.toml"], scene.scene_toml())
-    write_mot(scene.ground_truth(), paths["gt.txt"], kind="gt")
-    write_events(paths["events.jsonl"], events, scene.fps, source=scene.spec,
-                 scene=str(paths["scene.toml"]))
+    # the folder's lock, as a run takes it: never a gt.txt into a folder a run is writing
+    with writing_outputs(paths.values(), args.force):
+        events = scene.ground_truth_events()
+        atomic_write_text(paths["scene.toml"], scene.scene_toml())
+        write_mot(scene.ground_truth(), paths["gt.txt"], kind="gt")
+        write_events(paths["events.jsonl"], events, scene.fps, source=scene.spec,
+                     scene=str(paths["scene.toml"]))
     kinds: dict[str, int] = {}
     for e in events:
         kinds[e.type] = kinds.get(e.type, 0) + 1

@@ -30,23 +30,23 @@ def cmd_world(args: argparse.Namespace) -> int:
     from ..calibrate.camera import load_camera
     from ..calibrate.measure import world_positions
     from ..errors import check_output_path
-    from ..io.atomic import check_writable, is_stdout
+    from ..io.atomic import is_stdout, writing_outputs
     from ..io.mot import read_mot, write_mot
 
     check_output_path(args.output, "-o")
     camera = load_camera(args.camera)
     ann = read_mot(args.tracks)
-    check_writable([args.output], args.force)
-    xy = world_positions(ann.boxes, camera)
-    ok = np.all(np.isfinite(xy), axis=1)
-    world = np.full((len(ann), 3), -1.0)
-    world[ok, :2] = xy[ok]
-    world[ok, 2] = 0.0
-    if (~ok).any():
-        log.warning("%d of %d foot points are above the horizon: world set to -1", int((~ok).sum()),
-                    len(ann))
-    out = replace(ann, world=world)
-    write_mot(out, args.output, kind=str(ann.meta.get("kind", "results")))
-    if not is_stdout(args.output):
-        print(f"wrote {args.output} ({len(ann)} boxes)")
-    return 0
+    with writing_outputs([args.output], args.force):
+        xy = world_positions(ann.boxes, camera)
+        ok = np.all(np.isfinite(xy), axis=1)
+        world = np.full((len(ann), 3), -1.0)
+        world[ok, :2] = xy[ok]
+        world[ok, 2] = 0.0
+        if (~ok).any():
+            log.warning("%d of %d foot points are above the horizon: world set to -1",
+                        int((~ok).sum()), len(ann))
+        out = replace(ann, world=world)
+        write_mot(out, args.output, kind=str(ann.meta.get("kind", "results")))
+        if not is_stdout(args.output):
+            print(f"wrote {args.output} ({len(ann)} boxes)")
+        return 0

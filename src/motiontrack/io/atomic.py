@@ -323,6 +323,39 @@ def remove_leftover_temps(paths: Iterable[str | Path]) -> list[Path]:
     return removed
 
 
+def remove_folder_temps(folder: str | Path) -> list[Path]:
+    """Remove every temporary file this module's writers left in ``folder`` (the names of
+    :func:`remove_leftover_temps`, whatever output they were for: a killed run may have written
+    a video the next run does not write); returns them. Call it while holding the folder's
+    :class:`OutputLock`."""
+    folder = Path(folder)
+    removed = []
+    if not folder.is_dir():
+        return removed
+    for q in folder.glob(".*.part*"):
+        if _TEMP_NAME.fullmatch(q.name) and _kind(q) == "a regular file":
+            q.unlink(missing_ok=True)
+            removed.append(q)
+    return removed
+
+
+@contextlib.contextmanager
+def writing_outputs(paths: Iterable[str | Path], force: bool) -> Iterator[None]:
+    """For a command writing a few files (``evaluate --json``, ``synth-events``): hold the
+    :class:`OutputLock` of the folder of each output while the block runs (refused at once when
+    a run holds one, as a second run into a folder is), remove the temporary files a killed
+    writer left of these outputs, and :func:`check_writable` them. ``-`` (standard output) has
+    no folder."""
+    paths = [Path(p) for p in paths if not is_stdout(p)]
+    folders = sorted({Path(os.path.abspath(p)).parent for p in paths})
+    with contextlib.ExitStack() as stack:
+        for folder in folders:
+            stack.enter_context(OutputLock(folder))
+        remove_leftover_temps(paths)
+        check_writable(paths, force)
+        yield
+
+
 #: outputs made of lines: what a killed writer left is kept up to its last whole line
 LINE_SUFFIXES = frozenset({".txt", ".jsonl", ".csv"})
 #: outputs that play as far as they were written (WebM/Matroska is written as it goes)

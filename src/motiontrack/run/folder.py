@@ -8,6 +8,7 @@ the files and the keys read from ``summary.json`` are written down once.
 
 from __future__ import annotations
 
+import hashlib
 import json
 import math
 import shutil
@@ -85,11 +86,50 @@ class RunFolder:
 
     def summary(self) -> dict[str, Any] | None:
         """The run's ``summary.json`` as a dict, or None when it is absent or unreadable."""
+        return self.read_summary()[0]
+
+    def read_summary(self) -> tuple[dict[str, Any] | None, str]:
+        """The run's ``summary.json`` as a dict and ``""``, or None and what is wrong with it
+        (``""`` when there is none): not UTF-8, not JSON, nested too deeply, not an object."""
         try:
             doc = json.loads(self.summary_path.read_text(encoding="utf-8"))
-        except (OSError, ValueError):
-            return None
-        return doc if isinstance(doc, dict) else None
+        except FileNotFoundError:
+            return None, ""
+        except OSError as exc:
+            return None, f"cannot be read ({exc.strerror or exc})"
+        except RecursionError:
+            return None, "nested too deeply"
+        except ValueError as exc:   # not UTF-8, not JSON
+            return None, f"malformed ({str(exc).splitlines()[0] if str(exc) else 'not JSON'})"
+        return (doc, "") if isinstance(doc, dict) else (None, "not a JSON object")
+
+    # ------------------------------------------------------------------ output digests
+    def digests(self) -> dict[str, dict[str, Any]]:
+        """``{name: {"bytes": size, "sha256": hex digest}}`` of the run's outputs: the regular
+        files of the folder but ``summary.json`` (which records them) and hidden ones."""
+        out: dict[str, dict[str, Any]] = {}
+        for p in sorted(self.path.iterdir()):
+            if p.name.startswith(".") or p.name == self.SUMMARY or p.is_symlink() \
+                    or not p.is_file():
+                continue
+            out[p.name] = {"bytes": p.stat().st_size, "sha256": _sha256(p)}
+        return out
+
+    def changed(self, digests: Any) -> str:
+        """What differs between the folder and ``digests`` (as :meth:`digests` gives them):
+        ``""`` when every recorded output is there with its size and content, else the first
+        difference (``"tracks.txt is missing"``, ``"tracks.txt changed"``)."""
+        if not isinstance(digests, dict) or not digests:
+            return "no record of its outputs"
+        for name, rec in sorted(digests.items()):
+            p = self.path / str(name)
+            if not isinstance(rec, dict) or Path(str(name)).name != name:
+                return "a malformed record of its outputs"
+            if p.is_symlink() or not p.is_file():
+                return f"{name} is missing"
+            if p.stat().st_size != rec.get("bytes") or _sha256(p) != rec.get("sha256"):
+                return f"{name} changed"
+        return ""
 
     def write_summary(self, summary: dict[str, Any]) -> Path:
         """Write ``summary.json`` atomically (indented JSON, one trailing newline)."""
@@ -184,3 +224,11 @@ class RunFolder:
             old.remove()
         else:
             part.path.rename(self.path)
+
+
+def _sha256(path: Path) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()

@@ -23,8 +23,8 @@ writer, and finalises the outputs whatever ends the run:
 ``config.toml`` and ``summary.json`` are written last, after every other output.
 
 A job that writes ``summary.json`` owns its output folder while it exists: a lock
-(:class:`~motiontrack.io.atomic.OutputLock`) refuses a second run into the folder at once, the
-temporary files a killed run left there are removed, and with ``force`` the old outputs (the
+(:class:`~motiontrack.io.atomic.OutputLock`) refuses a second run into the folder at once, every
+temporary file a killed run left there is removed (whatever output it was for), and with ``force`` the old outputs (the
 files this job writes and those the old ``summary.json`` lists) are removed before the run
 starts, so that the folder never holds a mixture of two runs.
 """
@@ -40,8 +40,8 @@ from typing import Any, Callable, Iterator, Protocol, Sequence
 import numpy as np
 
 from ..errors import SourceError
-from ..io.atomic import (DiskFullError, OutputLock, check_writable, remove_leftover_temps,
-                         remove_outputs)
+from ..io.atomic import (DiskFullError, OutputLock, check_writable, remove_folder_temps,
+                         remove_leftover_temps, remove_outputs)
 from ..io.sources import Source, SourceInfo
 from ..types import FrameResult
 from .folder import RunFolder
@@ -222,7 +222,7 @@ class Job:
     config : written to ``config.toml`` when the run ends (``(writer function, object)``), or None.
     summary : write ``summary.json`` (the summary is returned by :meth:`run` either way).
     own_folder : hold the folder's lock from now until the run ends (default: with ``summary``;
-        a job without it, such as ``overlay``, writes files into a folder it shares).
+        ``overlay`` writes no summary but holds the lock of its video's folder, a run's often).
     layout : what ``summary.json`` holds, made of the run's :class:`JobSummary` (default
         :meth:`JobSummary.as_dict`; ``analyze`` keeps the fields of a tracks file's analysis).
     replace_listed : with ``force``, also remove the outputs the folder's old ``summary.json``
@@ -404,10 +404,14 @@ class Job:
             frames, ", ".join(removed) or "large outputs")
 
     def _clear_folder(self) -> None:
-        """Before the first output appears: remove the temporary files a killed run left and,
+        """Before the first output appears: remove the temporary files a killed run left (in the
+        folder, and those of this job's outputs elsewhere) and,
         with ``force``, the old outputs (of this job, and those the old summary lists)."""
         old = self._old_outputs() if self.force and self.replace_listed else []
         if self._lock is not None:  # no other run writes into the folder now
+            # every temporary file a killed run left in the folder goes, not only those of the
+            # outputs this job writes (a run with a video, killed, then one without)
+            remove_folder_temps(self.out)
             remove_leftover_temps([*self.paths.values(), *old])
         if self.force:
             remove_outputs([*self.paths.values(), *old])

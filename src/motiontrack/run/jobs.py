@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any, Callable, Iterable, Sequence
 from ..config import PipelineConfig, SourceConfig, save_config
 from ..errors import ConfigError
 from ..evaluate.scoring import DEFAULT_SCORING, ignores_zero_marked
+from ..io.atomic import is_stdout
 from ..io.pacing import PacedSource
 from ..io.sources import Source
 from ..imaging import scaled_size
@@ -286,7 +287,9 @@ def overlay_job(source: Any, out: str | Path | None, runs: Sequence[tuple[str, A
         writers: list = [VideoWriter("video", video, codec)] if video is not None else []
         if png_frames:
             writers.append(StillsWriter(stills, png_frames))
+        # the folder's lock as a run takes it: an overlay into a run's folder waits for no run
         return Job(src, OverlayProcessor(runs, truth, first, last), writers,
-                   video.parent if video is not None else stills, force=force, summary=False)
+                   video.parent if video is not None else stills, force=force, summary=False,
+                   own_folder=not (video is not None and is_stdout(video)))
 
     return _opened(source, sc, build)
