@@ -15,7 +15,7 @@ from motiontrack.io.mot import read_mot
 from motiontrack.io.sources import open_source
 from motiontrack.pipeline import fill_gap_frames, run
 from motiontrack.tracking.gaps import fill_gaps
-from motiontrack.types import Annotations
+from motiontrack.types import Annotations, frame_number
 
 #: the scores the PETS accuracy benchmarks print
 KEYS = ("HOTA", "MOTA", "IDF1", "recall", "precision", "IDSW")
@@ -54,8 +54,8 @@ def score_tracks(video: str, cfg: PipelineConfig, gt: Annotations,
     Identity and HOTA at IoU 0.5, rows with consider = 0 as ignore regions."""
     # the rows `motiontrack track` writes: each frame's tracks and those confirmed in it at their
     # tentative frames (tracker.backfill), then the short gaps filled when the run ends
-    rows = [(f + 1, t.id, *t.box.as_array()) for r in run(video, cfg, detections=detections)
-            for f, t in r.reported()]
+    rows = [(frame_number(f), t.id, *t.box.as_array()) for r in run(video, cfg, detections=detections)
+            for f, t in r.reported]
     a = np.array(rows, float).reshape(-1, 6)
     src = open_source(video)
     fps = src.info.fps

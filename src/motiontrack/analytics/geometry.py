@@ -12,6 +12,7 @@ import numpy as np
 __all__ = [
     "side",
     "segments_intersect",
+    "segments_meet",
     "points_in_polygon",
     "distance_to_polygon",
     "polygon_is_simple",
@@ -119,9 +120,9 @@ def polygon_area(polygon) -> float:
 _PAIRS_PER_BLOCK = 1 << 20
 
 
-def _meet(p0, p1, a, b) -> np.ndarray:
+def segments_meet(p0: np.ndarray, p1: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Whether segment ``p0 → p1`` meets segment ``a → b`` (touching counts), for arrays of
-    points ``(..., 2)`` that broadcast against each other; neither segment has zero length."""
+    points ``(..., 2)`` that broadcast against each other; the shape they broadcast to, bool."""
     x0, y0, x1, y1 = p0[..., 0], p0[..., 1], p1[..., 0], p1[..., 1]
     ax, ay, bx, by = a[..., 0], a[..., 1], b[..., 0], b[..., 1]
     d1 = (bx - ax) * (y0 - ay) - (by - ay) * (x0 - ax)
@@ -129,13 +130,16 @@ def _meet(p0, p1, a, b) -> np.ndarray:
     d3 = (x1 - x0) * (ay - y0) - (y1 - y0) * (ax - x0)
     d4 = (x1 - x0) * (by - y0) - (y1 - y0) * (bx - x0)
     meet = (d1 * d2 <= 0) & (d3 * d4 <= 0)
-    # collinear segments (all four products 0) meet only where their extents overlap
+    # collinear segments (all four products 0) meet only where their extents overlap; a segment
+    # of zero length (a track standing still) is collinear with any other
     collinear = (d1 == 0) & (d2 == 0)
-    overlap = ((np.minimum(x0, x1) <= np.maximum(ax, bx))
-               & (np.maximum(x0, x1) >= np.minimum(ax, bx))
-               & (np.minimum(y0, y1) <= np.maximum(ay, by))
-               & (np.maximum(y0, y1) >= np.minimum(ay, by)))
-    return np.where(collinear, overlap, meet)
+    if np.any(collinear):
+        overlap = ((np.minimum(x0, x1) <= np.maximum(ax, bx))
+                   & (np.maximum(x0, x1) >= np.minimum(ax, bx))
+                   & (np.minimum(y0, y1) <= np.maximum(ay, by))
+                   & (np.maximum(y0, y1) >= np.minimum(ay, by)))
+        meet = np.where(collinear, overlap, meet)
+    return meet
 
 
 def polygon_is_simple(polygon) -> bool:
@@ -159,7 +163,7 @@ def polygon_is_simple(polygon) -> bool:
         others = (j > i + 1) & ~((i == 0) & (j == k - 1))
         if not others.any():
             continue
-        meet = _meet(v[i[:, 0]][:, None, :], w[i[:, 0]][:, None, :], v[None, :, :], w[None, :, :])
+        meet = segments_meet(v[i[:, 0]][:, None, :], w[i[:, 0]][:, None, :], v[None, :, :], w[None, :, :])
         if np.any(meet & others):
             return False
     return True

@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .geometry import segments_meet
+
 __all__ = ["LineSet", "steps_meet_lines"]
 
 
@@ -28,35 +30,13 @@ def steps_meet_lines(p0: np.ndarray, p1: np.ndarray, a: np.ndarray, b: np.ndarra
     -------
     (N, L) bool
     """
-    return _meets(p0[:, None, :], p1[:, None, :], a[None, :, :], b[None, :, :])
+    return segments_meet(p0[:, None, :], p1[:, None, :], a[None, :, :], b[None, :, :])
 
 
 def _meet_pairs(p0: np.ndarray, p1: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """:func:`steps_meet_lines` for K (step, segment) pairs: ``p0, p1, a, b`` all (K, 2);
     returns (K,) bool."""
-    return _meets(p0, p1, a, b)
-
-
-def _meets(p0: np.ndarray, p1: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Whether step ``p0 → p1`` meets segment ``a → b``, for arrays of points (..., 2) that
-    broadcast against each other (touching counts)."""
-    x0, y0, x1, y1 = p0[..., 0], p0[..., 1], p1[..., 0], p1[..., 1]
-    ax, ay, bx, by = a[..., 0], a[..., 1], b[..., 0], b[..., 1]
-    d1 = (bx - ax) * (y0 - ay) - (by - ay) * (x0 - ax)
-    d2 = (bx - ax) * (y1 - ay) - (by - ay) * (x1 - ax)
-    d3 = (x1 - x0) * (ay - y0) - (y1 - y0) * (ax - x0)
-    d4 = (x1 - x0) * (by - y0) - (y1 - y0) * (bx - x0)
-    meet = (d1 * d2 <= 0) & (d3 * d4 <= 0)
-    # a step along the line's own direction (all four products 0) meets it only where the
-    # extents overlap; a step of zero length (a track standing still) is collinear with any line
-    collinear = (d1 == 0) & (d2 == 0)
-    if np.any(collinear):
-        overlap = ((np.minimum(x0, x1) <= np.maximum(ax, bx))
-                   & (np.maximum(x0, x1) >= np.minimum(ax, bx))
-                   & (np.minimum(y0, y1) <= np.maximum(ay, by))
-                   & (np.maximum(y0, y1) >= np.minimum(ay, by)))
-        meet = np.where(collinear, overlap, meet)
-    return meet
+    return segments_meet(p0, p1, a, b)
 
 
 class LineSet:
