@@ -34,7 +34,8 @@ def _sequence(folder: Path, summary: Mapping[str, Any]) -> dict[str, dict]:
     pred = read_mot(run.tracks, kind="results")   # empty: found nothing
     window = (summary.get("accuracy") or {}).get("frames_scored")
     if isinstance(window, list) and len(window) == 2 and all(isinstance(f, int) for f in window):
-        # the frames the run's own accuracy covers (gt.txt no longer knows a scene's length)
+        # the frames the run's own accuracy covers: a gt.txt beside the run does not say how long
+        # its scene was (a synthetic scene's last frames may hold nobody)
         gt, pred, _ = scored_frames(gt, pred, (window[0], window[1]), outside=True)
     else:
         gt, pred, _ = scored_frames(gt, pred, (1, int(summary["frames"])))
