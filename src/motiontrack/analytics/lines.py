@@ -33,12 +33,6 @@ def steps_meet_lines(p0: np.ndarray, p1: np.ndarray, a: np.ndarray, b: np.ndarra
     return segments_meet(p0[:, None, :], p1[:, None, :], a[None, :, :], b[None, :, :])
 
 
-def _meet_pairs(p0: np.ndarray, p1: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """:func:`steps_meet_lines` for K (step, segment) pairs: ``p0, p1, a, b`` all (K, 2);
-    returns (K,) bool."""
-    return segments_meet(p0, p1, a, b)
-
-
 class LineSet:
     """``L`` lines (end points ``a``, ``b``: (L, 2) float64) and one frame of the crossing rule
     for ``N`` tracks at once.
@@ -88,7 +82,7 @@ class LineSet:
         i, j = np.nonzero((s_prev * s <= 0) & has_prev[:, None])
         touched = touched.copy()
         if len(i):
-            touched[i, j] |= _meet_pairs(prev[i], points[i], self.a[j], self.b[j])
+            touched[i, j] |= segments_meet(prev[i], points[i], self.a[j], self.b[j])
         flips = beyond & (side != 0) & (new_side != side)
         crossing = np.where(flips & touched, new_side, 0).astype(np.int8)
         side = np.where(beyond, new_side, side)
