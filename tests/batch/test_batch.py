@@ -318,21 +318,12 @@ def test_a_task_that_never_returns_is_cancelled_and_its_worker_restarted(client)
 def _synth_video(folder: Path, n: int = 40) -> tuple[Path, Path]:
     """A synthetic scene written as an .avi file and its ground truth as gt.txt: a video file
     with no ground truth of its own."""
-    import cv2
+    from helpers.video_files import write_synth_video
 
     from motiontrack.io.mot import write_mot
-    from motiontrack.io.sources import open_source
 
     video, gt = folder / "walk.avi", folder / "walk-gt.txt"
-    with open_source(f"synth:walker?n_frames={n}") as src:
-        writer = None
-        for f in src:
-            if writer is None:
-                h, w = f.image.shape[:2]
-                writer = cv2.VideoWriter(str(video), cv2.VideoWriter_fourcc(*"MJPG"), 10, (w, h))
-            writer.write(f.image)
-        writer.release()
-        write_mot(src.ground_truth(), gt, kind="gt")
+    write_mot(write_synth_video(video, f"synth:walker?n_frames={n}"), gt, kind="gt")
     return video, gt
 
 

@@ -68,20 +68,10 @@ def test_a_video_named_as_a_batch_file_is_refused_before_any_video_runs(tmp_path
 
 # ----------------------------------------------------------------------- truncated
 def test_a_truncated_video_is_a_truncated_row_not_a_done_one(tmp_path):
-    import cv2
-
-    import motiontrack.synth  # noqa: F401 - registers synth:
-    from motiontrack.io.sources import open_source
+    from helpers.video_files import write_synth_video
 
     video = tmp_path / "walk.avi"
-    with open_source("synth:walker?n_frames=12") as src:
-        writer = None
-        for f in src:
-            if writer is None:
-                h, w = f.image.shape[:2]
-                writer = cv2.VideoWriter(str(video), cv2.VideoWriter_fourcc(*"MJPG"), 10, (w, h))
-            writer.write(f.image)
-        writer.release()
+    write_synth_video(video, "synth:walker?n_frames=12")
     data = video.read_bytes()
     video.write_bytes(data[:len(data) // 2])
     results = tmp_path / "results"

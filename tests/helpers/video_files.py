@@ -1,4 +1,4 @@
-"""The frames of a video file a test wrote, decoded by OpenCV."""
+"""Video files of synthetic scenes a test writes, and their frames decoded by OpenCV."""
 
 from __future__ import annotations
 
@@ -18,3 +18,20 @@ def read_frames(path) -> list[np.ndarray]:
             frames.append(img)
     finally:
         cap.release()
+
+
+def write_synth_video(path, spec: str):
+    """Write the frames of the synthetic scene ``spec`` (``"synth:walker?n_frames=12"``) to the
+    MJPG video ``path`` at 10 fps; returns the scene's ground truth (Annotations)."""
+    import motiontrack.synth  # noqa: F401 - registers synth:
+    from motiontrack.io.sources import open_source
+
+    with open_source(spec) as src:
+        writer = None
+        for f in src:
+            if writer is None:
+                h, w = f.image.shape[:2]
+                writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), 10, (w, h))
+            writer.write(f.image)
+        writer.release()
+        return src.ground_truth()
