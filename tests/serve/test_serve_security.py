@@ -35,7 +35,7 @@ from motiontrack.cli import main  # noqa: E402
 from motiontrack.errors import ConfigError  # noqa: E402
 from motiontrack.io.tomlfile import read_toml  # noqa: E402
 from motiontrack.serve.app import MAX_BODY, create_app  # noqa: E402
-from motiontrack.serve.guard import LOOPBACK_NAMES, allowed_hosts  # noqa: E402
+from motiontrack.serve.hosts import LOOPBACK_NAMES, allowed_hosts  # noqa: E402
 from motiontrack.serve.hub import Hub  # noqa: E402
 from motiontrack.serve.scenes import SceneFiles  # noqa: E402
 from helpers.serve_process import ServeProcess  # noqa: E402

@@ -4,7 +4,6 @@ browser."""
 from __future__ import annotations
 
 import argparse
-import ipaddress
 import logging
 import os
 
@@ -42,20 +41,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=cmd_serve)
 
 
-def _loopback(host: str) -> bool:
-    if host == "localhost":
-        return True
-    try:
-        return ipaddress.ip_address(host).is_loopback
-    except ValueError:
-        return False
-
-
 def cmd_serve(args) -> int:
     from ..errors import ConfigError
+    from ..serve.hosts import is_loopback
 
     token = args.token or os.environ.get(TOKEN_ENV) or None
-    if not _loopback(args.host) and not token:
+    if not is_loopback(args.host) and not token:
         raise ConfigError(f"--host {args.host} is reachable from other machines: give --token "
                           f"or set {TOKEN_ENV} (every request then needs it)")
     if not 0 < args.port < 65536:

@@ -7,6 +7,7 @@
 * :mod:`.hub` — the server's state per camera and the fan-out to viewers;
 * :mod:`.scenes` — the scene files the editor reads and writes;
 * :mod:`.app` — the Starlette app: page, JSON API, MJPEG and event streams;
+* :mod:`.guard`, :mod:`.hosts` — who may ask the app what: token, host names, origins;
 * :mod:`.server` — processes, supervision, uvicorn, shutdown.
 
 Needs the ``serve`` extra (Starlette, uvicorn); nothing here is imported by ``import

@@ -25,7 +25,8 @@ from starlette.routing import Route
 from ..analytics.scene import scene_json_schema
 from ..errors import ConfigError, MotionTrackError
 from .cameras import cameras_json_schema
-from .guard import LOOPBACK_NAMES, HostCheck, OriginCheck, TokenCheck
+from .guard import HostCheck, OriginCheck, TokenCheck
+from .hosts import LOOPBACK_NAMES
 from .hub import CameraState, Cursor, Hub
 from .scenes import SceneFiles
 

@@ -2,11 +2,12 @@
 
 Three ASGI middlewares wrap the app of :mod:`.app` (outermost first):
 
-* :class:`HostCheck` — the ``Host`` header must name this server (:func:`allowed_hosts`: the
-  address it listens on, ``localhost``/``127.0.0.1``/``[::1]`` for a loopback address, and the
-  ``--allowed-host`` names), with or without a port, else 403. A page whose domain an attacker
-  rebinds to 127.0.0.1 (DNS rebinding) sends its own domain as ``Host`` and is refused, so it can
-  neither read the API and the pictures nor write a scene.
+* :class:`HostCheck` — the ``Host`` header must name this server
+  (:func:`~.hosts.allowed_hosts`: the address it listens on, ``localhost``/``127.0.0.1``/
+  ``[::1]`` for a loopback address, and the ``--allowed-host`` names), with or without a port,
+  else 403. A page whose domain an attacker rebinds to 127.0.0.1 (DNS rebinding) sends its own
+  domain as ``Host`` and is refused, so it can neither read the API and the pictures nor write
+  a scene.
 * :class:`OriginCheck` — a request that changes state (any method but GET, HEAD and OPTIONS)
   whose ``Origin`` header is present must come from the page's own origin (the scheme's host
   and port are those of the ``Host`` header), else 403: another site's page in the user's
@@ -23,93 +24,18 @@ and the app's JSON error shape. The model is documented in ``docs/serve.md`` ("S
 from __future__ import annotations
 
 import hmac
-import ipaddress
-import re
-from typing import Any, Callable, Iterable
+from typing import Any, Callable
 from urllib.parse import parse_qs, urlsplit
 
 from starlette.responses import JSONResponse
 
-from ..errors import ConfigError, printable
+from .hosts import HOST, host_name
 
-__all__ = ["HostCheck", "OriginCheck", "TokenCheck", "allowed_hosts", "host_name",
-           "LOOPBACK_NAMES"]
+__all__ = ["HostCheck", "OriginCheck", "TokenCheck"]
 
-#: the names a loopback address answers to (IPv6 without its brackets)
-LOOPBACK_NAMES = frozenset({"localhost", "127.0.0.1", "::1"})
 #: methods that only read: no origin check
 _SAFE_METHODS = frozenset({"GET", "HEAD", "OPTIONS"})
-#: a Host header (RFC 9110 7.2): a name or IPv4 address, or an IPv6 literal in brackets; a port
-_HOST = re.compile(r"(?:\[(?P<v6>[0-9A-Fa-f:.]+)\]|(?P<name>[A-Za-z0-9._~%!$&'()*+,;=-]+))"
-                   r"(?::(?P<port>[0-9]{1,5}))?")
 _DEFAULT_PORTS = {"http": 80, "https": 443}
-
-
-def host_name(text: str) -> str | None:
-    """``text`` (a host name or an IP address, IPv6 with or without brackets, no port) as the
-    checks compare it: lower case, an IPv6 address in its shortest form without brackets; None
-    when it is none of these."""
-    if text.startswith("[") and text.endswith("]"):
-        text = text[1:-1]
-        try:
-            return ipaddress.IPv6Address(text).compressed
-        except ValueError:
-            return None
-    if ":" in text:
-        try:
-            return ipaddress.IPv6Address(text).compressed
-        except ValueError:
-            return None
-    m = _HOST.fullmatch(text)
-    return text.lower() if m is not None and m["name"] and m["port"] is None else None
-
-
-def _loopback(host: str) -> bool:
-    if host == "localhost":
-        return True
-    try:
-        return ipaddress.ip_address(host).is_loopback
-    except ValueError:
-        return False
-
-
-def _wildcard(host: str) -> bool:
-    try:
-        return ipaddress.ip_address(host).is_unspecified
-    except ValueError:
-        return False
-
-
-def allowed_hosts(bind: str, extra: Iterable[str] = ()) -> frozenset[str] | None:
-    """The host names a server listening on ``bind`` answers to, with the ``extra`` names
-    (``--allowed-host``); None: any.
-
-    * a loopback address (``127.0.0.1``, ``::1``, ``localhost``): it, ``localhost``,
-      ``127.0.0.1`` and ``::1``, and ``extra``;
-    * a wildcard address (``0.0.0.0``, ``::``): any name — the names that reach a machine are
-      many (its addresses, host names, a reverse proxy's), and ``serve`` requires a token there,
-      which a rebinding page does not have — unless ``extra`` names some: then those and the
-      loopback names;
-    * any other address or name: it and ``extra``.
-
-    Raises
-    ------
-    ConfigError
-        A name of ``extra`` that is not a host name or an IP address (a port, a scheme, a path).
-    """
-    names = set()
-    for value in extra:
-        name = host_name(value)
-        if name is None:
-            raise ConfigError(f"--allowed-host must be a host name or an IP address, without "
-                              f"scheme, port or path, got {printable(value)!r}")
-        names.add(name)
-    own = host_name(bind) or bind.lower()
-    if _wildcard(own):
-        return frozenset(names | LOOPBACK_NAMES) if names else None
-    if _loopback(own):
-        names |= LOOPBACK_NAMES
-    return frozenset(names | {own})
 
 
 def _header(scope: dict, name: bytes) -> str | None:
@@ -122,7 +48,7 @@ def _header(scope: dict, name: bytes) -> str | None:
 def _parse_host(value: str | None) -> tuple[str, int | None] | None:
     """A ``Host`` header as ``(name, port)`` (:func:`host_name`'s form; port None when the
     header has none), or None when it is missing or malformed."""
-    m = _HOST.fullmatch(value or "")
+    m = HOST.fullmatch(value or "")
     if m is None:
         return None
     name = host_name(f"[{m['v6']}]" if m["v6"] is not None else m["name"])
@@ -137,7 +63,7 @@ def _refuse(status: int, message: str) -> JSONResponse:
 class HostCheck:
     """ASGI middleware: the ``Host`` header must name one of ``hosts`` (any port), else 403.
 
-    ``hosts``: names in :func:`host_name`'s form (:func:`allowed_hosts`)."""
+    ``hosts``: names in :func:`host_name`'s form (:func:`~.hosts.allowed_hosts`)."""
 
     def __init__(self, app: Any, hosts: frozenset[str]) -> None:
         self.app, self.hosts = app, hosts

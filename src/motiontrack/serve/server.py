@@ -28,7 +28,7 @@ from ..run.folder import RunFolder
 from .app import create_app
 from .cameras import CameraSpec, load_cameras
 from .channel import Channel
-from .guard import allowed_hosts
+from .hosts import allowed_hosts
 from .hub import Hub
 from .scenes import SceneFiles, check_scene_files
 from .worker import camera_main

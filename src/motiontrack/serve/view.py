@@ -29,7 +29,7 @@ from ..run.job import JobContext, JobSummary, Writer
 from ..types import FrameResult
 from .app import create_app
 from .cameras import CameraSpec
-from .guard import allowed_hosts
+from .hosts import allowed_hosts
 from .hub import CameraState, Hub
 from .worker import JPEG_QUALITY, STATUS_EVERY, VIEW_FPS, _Camera
 
