@@ -249,6 +249,36 @@ def test_the_show_page_answers_only_to_its_own_host_names():
         LiveView("cam", allowed=["cams.lan:80"])
 
 
+def test_the_show_page_accepts_connections_as_soon_as_its_address_is_printed(monkeypatch):
+    """The address is printed when LiveView returns; a browser opened at once must reach it
+    even while the server thread is still starting."""
+    import socket
+    import threading
+
+    import uvicorn
+
+    from motiontrack.serve.view import LiveView
+
+    go = threading.Event()
+    run = uvicorn.Server.run
+
+    def late_run(self, *args, **kwargs):
+        go.wait(10)
+        return run(self, *args, **kwargs)
+
+    monkeypatch.setattr(uvicorn.Server, "run", late_run)
+    view = LiveView("cam")
+    try:
+        with socket.create_connection(("127.0.0.1", view.port), timeout=5) as sock:
+            go.set()
+            sock.sendall(b"GET /api/cameras HTTP/1.1\r\nHost: 127.0.0.1\r\n"
+                         b"Connection: close\r\n\r\n")
+            assert sock.recv(64).startswith(b"HTTP/1.1 200")
+    finally:
+        go.set()
+        view.close()
+
+
 # ------------------------------------------------------------------------ the cameras file
 @pytest.mark.parametrize("calibration, message", [
     ("missing.xml", r"^motiontrack: error: camera\[1\] \(gate\): camera = missing.xml: camera "

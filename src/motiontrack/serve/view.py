@@ -129,6 +129,9 @@ class LiveView:
             self._sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
             self._sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
             self._sock.bind((host, port))
+            # listening before the address is printed: a browser opened at once is queued
+            # until the server thread accepts, instead of refused
+            self._sock.listen(64)
         except OSError as exc:
             self._sock.close()
             raise ConfigError(f"--show: cannot listen on {host}:{port}: "
