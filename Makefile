@@ -4,6 +4,9 @@ VENV ?= .venv
 BIN := $(VENV)/bin
 OUT ?= out
 SCENE ?= synth:crossing
+# processes that share the suite (pytest-xdist): two halve its time on a 2-core machine; `0` runs
+# it in this process
+TEST_WORKERS ?= 2
 
 .PHONY: run test test-fast bench clean
 
@@ -24,11 +27,11 @@ run: $(VENV)/.installed
 	$(BIN)/motiontrack track $(SCENE) -o $(OUT) --force
 
 test: $(VENV)/.dev-installed
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q -n $(TEST_WORKERS)
 
-# everything but the tests marked slow (end-to-end runs, real-data scores): under 2 minutes
+# everything but the tests marked slow (end-to-end runs, real-data scores): about a minute
 test-fast: $(VENV)/.dev-installed
-	$(BIN)/python -m pytest -q -m "not slow"
+	$(BIN)/python -m pytest -q -n $(TEST_WORKERS) -m "not slow"
 
 bench: $(VENV)/.dev-installed
 	$(BIN)/python benchmarks/throughput.py
