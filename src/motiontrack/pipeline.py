@@ -157,7 +157,7 @@ class Pipeline:
             pre = replace(pre, grayscale=False)
         self.pre_cfg = replace(pre, scale=self.scale)  # the resolved (automatic) scale
         pw, ph = scaled_size(image_size[0], image_size[1], self.scale)
-        self.roi = load_roi(pre.roi, pw, ph) if pre.roi else None
+        self.roi = load_roi(pre.roi, pw, ph, cfg.source.max_pixels) if pre.roi else None
         tracker_cfg = cfg.tracker
         if detections is not None:
             # a detector's box is one object: there is no merged blob to split (split shares of a

@@ -10,6 +10,7 @@ import numpy as np
 from .config import PreprocessConfig
 from .errors import InputError
 from .imaging import resolve_scale, scaled_size
+from .io.imagesize import DEFAULT_MAX_PIXELS, check_image
 
 __all__ = ["preprocess", "load_roi"]
 
@@ -42,11 +43,14 @@ def preprocess(image: np.ndarray, cfg: PreprocessConfig) -> np.ndarray:
     return out if out is not image else image.copy()
 
 
-def load_roi(path: str | Path, width: int, height: int) -> np.ndarray:
-    """Load a region-of-interest mask and resize it to ``(height, width)``: uint8 0/255."""
+def load_roi(path: str | Path, width: int, height: int,
+             max_pixels: int = DEFAULT_MAX_PIXELS) -> np.ndarray:
+    """Load a region-of-interest mask and resize it to ``(height, width)``: uint8 0/255; a file
+    whose header claims more than ``max_pixels`` (``source.max_pixels``) is refused undecoded."""
     p = Path(path)
     if not p.is_file():
         raise InputError(f"ROI mask not found: {p}")
+    check_image(p, max_pixels)
     roi = cv2.imread(str(p), cv2.IMREAD_GRAYSCALE)
     if roi is None:
         raise InputError(f"cannot read ROI mask image {p}")

@@ -166,3 +166,34 @@ def test_a_folder_of_exif_turned_photos_reads_every_frame(tmp_path):
     shapes = [f.image.shape[:2] for f in src]
     assert len(shapes) == 3 and len(set(shapes)) == 1
     assert (src.info.width, src.info.height) in ((30, 20), (20, 30))
+
+
+def test_a_roi_mask_over_the_bound_is_refused_before_decoding(tmp_path, capsys):
+    roi = png_claiming(tmp_path / "roi.png", 25_000, 25_000)
+    folder = tmp_path / "imgs"
+    folder.mkdir()
+    for i in range(2):
+        cv2.imwrite(str(folder / f"{i}.png"), np.zeros((40, 50, 3), np.uint8))
+    assert main(["track", str(folder), "--set", f"preprocess.roi={roi}", "--no-video",
+                 "-o", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert "roi.png is 25000x25000 pixels" in err and "source.max_pixels=N" in err
+    assert err.count("\n") == 1 and "internal error" not in err
+
+
+def test_evaluate_masks_refuses_a_mask_over_its_bound(tmp_path, capsys):
+    gt, pred = tmp_path / "groundtruth", tmp_path / "pred"
+    gt.mkdir()
+    pred.mkdir()
+    cv2.imwrite(str(gt / "gt000001.png"), np.zeros((40, 50), np.uint8))
+    png_claiming(pred / "bin000001.png", 25_000, 25_000)
+    assert main(["evaluate-masks", "--gt", str(gt), "--pred", str(pred)]) == 2
+    err = capsys.readouterr().err
+    assert "bin000001.png is 25000x25000 pixels" in err and "--max-pixels N" in err
+    assert err.count("\n") == 1
+    cv2.imwrite(str(pred / "bin000001.png"), np.zeros((40, 50), np.uint8))
+    assert main(["evaluate-masks", "--gt", str(gt), "--pred", str(pred),
+                 "--max-pixels", "1999"]) == 2
+    assert "more than the bound of 1,999" in capsys.readouterr().err
+    assert main(["evaluate-masks", "--gt", str(gt), "--pred", str(pred),
+                 "--max-pixels", "2000"]) == 0

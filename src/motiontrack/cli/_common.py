@@ -133,6 +133,19 @@ def _exit_now_if_still_reading(sources: list, code: int) -> None:
     os._exit(code)
 
 
+def max_pixels_option(p: argparse.ArgumentParser) -> None:
+    """``--max-pixels N`` of the commands that read pictures outside a pipeline config."""
+    p.add_argument("--max-pixels", type=int, default=50_000_000,
+                   help="refuse a picture (its header) or video (its container) of more pixels, "
+                        "before decoding it (50000000; at most 2**30)")
+
+
+def checked_max_pixels(args: argparse.Namespace) -> int:
+    if not 1 <= args.max_pixels <= 2**30:
+        raise ConfigError(f"--max-pixels must be in [1, {2**30}], got {args.max_pixels}")
+    return args.max_pixels
+
+
 def accuracy_line(a: Mapping[str, Any],
                   keys: tuple[str, ...] = ("HOTA", "MOTA", "IDF1", "recall", "precision")) -> str:
     """The ``accuracy`` line of a command's printed summary, ending with the scoring

@@ -9,6 +9,7 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, TextIO
 
+from ._common import checked_max_pixels, max_pixels_option
 from ..errors import (ConfigError, InputError, check_output_path, excerpt, finite_number, location,
                       require_file)
 
@@ -36,7 +37,7 @@ def register(subparsers) -> None:
     c.add_argument("-o", "--output", type=Path, required=True,
                    help="camera YAML to write (- for standard output)")
     c.add_argument("--force", action="store_true", help="overwrite an existing output")
-    _max_pixels_option(c)
+    max_pixels_option(c)
     c.set_defaults(func=cmd_chessboard)
 
     s = sub.add_parser("show", help="undistorted image with the projected ground grid")
@@ -47,7 +48,7 @@ def register(subparsers) -> None:
     s.add_argument("--step", type=float, default=None, help="grid spacing in metres (auto)")
     s.add_argument("--extent", default=None, help="grid extent xmin,xmax,ymin,ymax in metres (auto)")
     s.add_argument("--force", action="store_true", help="overwrite an existing output")
-    _max_pixels_option(s)
+    max_pixels_option(s)
     s.set_defaults(func=cmd_show)
 
     ln = sub.add_parser("lines", help="thesis method: κ1 from straight lines + coplanar Tsai fit")
@@ -69,7 +70,7 @@ def register(subparsers) -> None:
     ln.add_argument("-o", "--output", type=Path, required=True,
                     help="camera .toml or .xml to write (- for TOML on standard output)")
     ln.add_argument("--force", action="store_true", help="overwrite an existing output")
-    _max_pixels_option(ln)
+    max_pixels_option(ln)
     ln.set_defaults(func=cmd_lines)
 
     g = sub.add_parser("ground", help="ground plane from image <-> world point pairs")
@@ -84,16 +85,6 @@ def register(subparsers) -> None:
     g.set_defaults(func=cmd_ground)
 
 
-def _max_pixels_option(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--max-pixels", type=int, default=50_000_000,
-                   help="refuse a picture (its header) or video (its container) of more pixels, "
-                        "before decoding it (50000000; at most 2**30)")
-
-
-def _check_max_pixels(args: argparse.Namespace) -> int:
-    if not 1 <= args.max_pixels <= 2**30:
-        raise ConfigError(f"--max-pixels must be in [1, {2**30}], got {args.max_pixels}")
-    return args.max_pixels
 
 
 def _check_out(path: Path, force: bool) -> None:
@@ -162,7 +153,7 @@ def cmd_chessboard(args: argparse.Namespace) -> int:
     pattern = parse_pattern(args.pattern)
     _positive(args.square, "--square", 10.0, "metres")
     _check_out(args.output, args.force)
-    most = _check_max_pixels(args)
+    most = checked_max_pixels(args)
     args.images = expand_paths(args.images, "images")
     images = [_read_image(p, most) for p in args.images]
     flags = 0 if args.free_aspect else cv2.CALIB_FIX_ASPECT_RATIO
@@ -271,7 +262,7 @@ def cmd_show(args: argparse.Namespace) -> int:
 
     _positive(args.step, "--step", MAX_EXTENT_M, "metres")
     camera = load_camera(args.camera)
-    image = _read_image(args.image, _check_max_pixels(args))
+    image = _read_image(args.image, checked_max_pixels(args))
     size = getattr(camera, "image_size", None)
     if size and tuple(size) != (image.shape[1], image.shape[0]):
         log.warning("image is %dx%d but the camera was calibrated for %dx%d", image.shape[1],
@@ -354,7 +345,7 @@ def cmd_lines(args: argparse.Namespace) -> int:
         raise ConfigError(f"output must be .toml or .xml, got {args.output}")
     _positive(args.half_width, "--half-width", MAX_HALF_WIDTH_PX, "pixels")
     _check_out(args.output, args.force)
-    gray = _read_image(args.image, _check_max_pixels(args), gray=True)
+    gray = _read_image(args.image, checked_max_pixels(args), gray=True)
     h, w = gray.shape
     if args.geometry is not None:
         cam0 = load_camera(args.geometry)

@@ -9,6 +9,7 @@ import sys
 from pathlib import Path
 
 from ..errors import ConfigError
+from ._common import checked_max_pixels, max_pixels_option
 
 
 def register(subparsers) -> None:
@@ -35,6 +36,7 @@ def register(subparsers) -> None:
                    help="write counts and metrics as JSON (- for standard output; the table then "
                         "goes to standard error)")
     p.add_argument("--force", action="store_true", help="overwrite an existing --json file")
+    max_pixels_option(p)
     p.set_defaults(func=run)
 
 
@@ -73,7 +75,8 @@ def run(args: argparse.Namespace) -> int:
     with writing_outputs([args.json] if args.json is not None else [], args.force):
         result = evaluate_mask_folders(args.gt, args.pred, roi=args.roi,
                                        temporal_roi=args.temporal_roi, frames=_frames(args.frames),
-                                       pred_prefix=args.pred_prefix)
+                                       pred_prefix=args.pred_prefix,
+                                       max_pixels=checked_max_pixels(args))
         print(format_table(result), file=sys.stderr if is_stdout(args.json) else sys.stdout)
         if args.json is not None:
             flat = {k: (None if isinstance(v, float) and math.isnan(v) else v)

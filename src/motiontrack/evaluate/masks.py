@@ -47,6 +47,7 @@ import cv2
 import numpy as np
 
 from ..errors import InputError
+from ..io.imagesize import DEFAULT_MAX_PIXELS, check_image
 
 __all__ = [
     "STATIC", "SHADOW", "OUTSIDE_ROI", "UNKNOWN", "MOTION",
@@ -196,18 +197,20 @@ def read_temporal_roi(path: str | Path) -> tuple[int, int]:
     return first, last
 
 
-def read_mask(path: str | Path) -> np.ndarray:
-    """An 8-bit single-channel mask ``(H, W) uint8`` (colour files are converted to grey)."""
+def read_mask(path: str | Path, max_pixels: int = DEFAULT_MAX_PIXELS) -> np.ndarray:
+    """An 8-bit single-channel mask ``(H, W) uint8`` (colour files are converted to grey); a file
+    whose header claims more than ``max_pixels`` is refused undecoded."""
     p = Path(path)
+    check_image(p, max_pixels, "--max-pixels N")
     img = cv2.imread(str(p), cv2.IMREAD_GRAYSCALE)
     if img is None:
         raise InputError(f"cannot read mask image {p}")
     return img
 
 
-def read_roi(path: str | Path) -> np.ndarray:
+def read_roi(path: str | Path, max_pixels: int = DEFAULT_MAX_PIXELS) -> np.ndarray:
     """``ROI.bmp`` → ``(H, W) bool`` (non-zero = inside)."""
-    return read_mask(path) != 0
+    return read_mask(path, max_pixels) != 0
 
 
 _NUM_RE = re.compile(r"(\d+)(?=\.[A-Za-z0-9]+$)")
@@ -297,7 +300,8 @@ def evaluate_mask_folders(gt_dir: str | Path, pred_dir: str | Path,
                           roi: str | Path | np.ndarray | None = None,
                           temporal_roi: str | Path | tuple[int, int] | None = None,
                           frames: tuple[int, int] | None = None,
-                          pred_prefix: str | None = None) -> MaskEvaluation:
+                          pred_prefix: str | None = None,
+                          max_pixels: int = DEFAULT_MAX_PIXELS) -> MaskEvaluation:
     """Evaluate a folder of predicted masks against a CDnet ground-truth folder.
 
     Parameters
@@ -311,6 +315,7 @@ def evaluate_mask_folders(gt_dir: str | Path, pred_dir: str | Path,
     frames : optional ``(first, last)`` further restricting the frames (intersected with the
         temporal ROI), e.g. to evaluate a subset.
     pred_prefix : only prediction files starting with this prefix.
+    max_pixels : a mask or ROI file whose header claims more pixels is refused before decoding.
 
     Raises
     ------
@@ -325,18 +330,19 @@ def evaluate_mask_folders(gt_dir: str | Path, pred_dir: str | Path,
     if not gt_files:
         raise InputError(f"{gt_dir}: no ground-truth masks found")
     pred_files = find_frames(pred_dir, pred_prefix)
-    roi_arr = _spatial_roi(roi, video)
+    roi_arr = _spatial_roi(roi, video, max_pixels)
     lo, hi = _frame_range(gt_dir, gt_files, temporal_roi, frames)
     wanted = _complete_frames(gt_dir, pred_dir, gt_files, pred_files, lo, hi)
     log.debug("evaluating %d frames %d..%d", len(wanted), lo, hi)
-    return evaluate_masks(_mask_pairs(wanted, gt_files, pred_files, roi_arr), roi_arr)
+    return evaluate_masks(_mask_pairs(wanted, gt_files, pred_files, roi_arr, max_pixels), roi_arr)
 
 
-def _spatial_roi(roi: str | Path | np.ndarray | None, video: Path) -> np.ndarray | None:
+def _spatial_roi(roi: str | Path | np.ndarray | None, video: Path,
+                 max_pixels: int = DEFAULT_MAX_PIXELS) -> np.ndarray | None:
     """The ROI as a bool mask: a file, an array, the video folder's ``ROI.bmp``, or None."""
     if roi is None and (video / "ROI.bmp").is_file():
         roi = video / "ROI.bmp"
-    return read_roi(roi) if isinstance(roi, (str, Path)) else (
+    return read_roi(roi, max_pixels) if isinstance(roi, (str, Path)) else (
         None if roi is None else np.asarray(roi) != 0)
 
 
@@ -376,12 +382,13 @@ def _complete_frames(gt_dir: Path, pred_dir: str | Path, gt_files: dict[int, Pat
 
 
 def _mask_pairs(wanted: list[int], gt_files: dict[int, Path], pred_files: dict[int, Path],
-                roi_arr: np.ndarray | None) -> Iterator[tuple[int, np.ndarray, np.ndarray]]:
+                roi_arr: np.ndarray | None, max_pixels: int = DEFAULT_MAX_PIXELS
+                ) -> Iterator[tuple[int, np.ndarray, np.ndarray]]:
     """``(frame, gt, pred)`` read one frame at a time, sizes checked against each other and the
     ROI."""
     for f in wanted:
-        gt = read_mask(gt_files[f])
-        pred = read_mask(pred_files[f])
+        gt = read_mask(gt_files[f], max_pixels)
+        pred = read_mask(pred_files[f], max_pixels)
         if gt.shape != pred.shape:
             raise InputError(f"{pred_files[f]}: size {pred.shape[::-1]} differs from the "
                              f"ground truth {gt.shape[::-1]} ({gt_files[f].name})")
