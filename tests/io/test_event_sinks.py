@@ -496,3 +496,32 @@ def test_second_interrupt_while_sinks_drain_stops_waiting_and_keeps_the_run(capl
     assert a.closes[1:] == [None] and a.closes[0] is not None and b.closes == [None]
     assert w.stats() == [{"sink": "fake", "dropped": 1}] * 2
     assert "not waiting for the event sinks" in caplog.text
+
+
+def test_sinks_receive_a_discontinuity_record_before_the_frames_events():
+    """A receiver that keeps state per track (who is inside a zone) learns, in frame order, that
+    the source jumped and that state was dropped, exactly as ``events.jsonl`` says it."""
+    import numpy as np
+
+    from motiontrack.run.event_sinks import EventSinksWriter
+    from motiontrack.types import Discontinuity, Event, FrameResult, SceneFrame
+
+    class Recording:
+        def __init__(self):
+            self.bodies = []
+
+        def start(self):
+            pass
+
+        def offer(self, body):
+            self.bodies.append(json.loads(body))
+
+    sink = Recording()
+    w = EventSinksWriter([sink], "door")
+    w.start(None)
+    event = Event("zone_exit", 121, 4.8, 7, 1.0, 2.0, zone="z", dwell_s=0.3)
+    for scene in (SceneFrame(120), SceneFrame(121, (event,), discontinuity=Discontinuity("loop"))):
+        w.write(FrameResult(index=scene.frame - 1, timestamp=0.0, frame=np.zeros((4, 4, 3), np.uint8),
+                            mask=None, regions=(), tracks=(), scene=scene))
+    assert sink.bodies == [{"type": "discontinuity", "reason": "loop", "frame": 121,
+                            "camera": "door"}, {**event.to_json(), "camera": "door"}]

@@ -49,7 +49,9 @@ def sinks_writer(targets: Sequence[Target], camera: str,
 
 
 class EventSinksWriter(Writer):
-    """Every event as ``{**event.to_json(), "camera": camera}`` to each delivery, in frame order.
+    """Every event as ``{**event.to_json(), "camera": camera}`` to each delivery, in frame order;
+    a frame after a discontinuity of the source is preceded by its ``{"type": "discontinuity",
+    "reason", "frame", "camera"}`` record (counted among the sink's ``events``).
 
     ``summary.json`` gains ``sinks``: per sink its ``events``, ``delivered``, ``failed``,
     ``dropped`` and ``retries`` (:meth:`Delivery.stats`). The writer owns no file.
@@ -69,8 +71,14 @@ class EventSinksWriter(Writer):
         self._open = True
 
     def write(self, result: FrameResult) -> None:
-        for e in result.scene.events if result.scene is not None else ():
-            body = encode({**e.to_json(), "camera": self.camera})
+        scene = result.scene
+        if scene is None:
+            return
+        records = [e.to_json() for e in scene.events]
+        if scene.discontinuity is not None:   # as events.jsonl: the jump before the frame's events
+            records.insert(0, scene.discontinuity.to_json(scene.frame))
+        for record in records:
+            body = encode({**record, "camera": self.camera})
             for s in self.sinks:
                 s.offer(body)
 
