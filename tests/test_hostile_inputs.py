@@ -18,6 +18,7 @@ import cv2
 import numpy as np
 import pytest
 
+from helpers.cli_errors import user_error
 from motiontrack.cli import main
 from motiontrack.errors import (EXCERPT_CHARS, InputError, excerpt, location, printable,
                                 token_at)
@@ -71,17 +72,6 @@ distortion_coefficients: !!opencv-matrix
 def run(capsys, *argv) -> tuple[int, str]:
     code = main([str(a) for a in argv])
     return code, capsys.readouterr().err
-
-
-def user_error(code: int, err: str, *words: str) -> str:
-    """The one error line of a refused command (exit 2); checks the words are in it."""
-    lines = [ln for ln in err.splitlines() if "error" in ln]
-    assert code == 2, err
-    assert "Traceback" not in err and "internal error" not in err, err
-    assert len(lines) == 1 and lines[0].startswith("motiontrack: error: "), err
-    for w in words:
-        assert w.lower() in lines[0].lower(), (w, lines[0])
-    return lines[0]
 
 
 @pytest.fixture

@@ -14,6 +14,7 @@ import cv2
 import numpy as np
 import pytest
 
+from helpers.cli_errors import user_error
 from motiontrack.analytics import parse_scene
 from motiontrack.cli import main
 from motiontrack.errors import ConfigError
@@ -21,16 +22,6 @@ from motiontrack.io.sinks import parse_mqtt, parse_webhook
 from motiontrack.run.folders import source_name
 
 HUGE = int("9" * 400)
-
-
-def user_error(code: int, err: str, *words: str) -> str:
-    lines = [ln for ln in err.splitlines() if "error" in ln]
-    assert code == 2, err
-    assert "Traceback" not in err and "internal error" not in err, err
-    assert len(lines) == 1 and lines[0].startswith("motiontrack: error: "), err
-    for w in words:
-        assert w in lines[0], (w, lines[0])
-    return lines[0]
 
 
 @pytest.mark.parametrize("scene, message", [
