@@ -95,5 +95,24 @@ def test_a_batch_with_a_scene_writes_each_videos_counts_beside_the_index(tmp_pat
                         ("zone", "exits"): a["zones"]["all"]["exits"]}
     totals = json.loads((results / TOTALS_FILE).read_text(encoding="utf-8"))
     assert totals["videos"] == names
+    # every video's events in one store, the video's name as their camera
+    from motiontrack.io.event_store import EventQuery, EventStore
+
+    with EventStore(results, readonly=True) as store:
+        for n in names:
+            with EventStore(results / n, readonly=True) as own:
+                mine = [e.event for e in own]
+            assert [e.event for e in store.search(EventQuery(camera=n, oldest_first=True))] == mine
+            assert mine and {e.segment for e in store.search(EventQuery(camera=n))} == {n}
+    assert not list(results.glob("*.tmp")) and not (results / "events.db-wal").exists()
     assert totals["zones"]["all"]["enters"] == sum(
         int(c[4]) for c in counts if c[1:4] == ("zone", "all", "enters")) >= 2
+
+
+def test_a_batch_without_events_leaves_no_store_and_removes_an_old_one(tmp_path):
+    from motiontrack.batch.events import write_event_store
+
+    (tmp_path / "events.db").write_bytes(b"old")
+    _summary(tmp_path, "plain", None)
+    assert write_event_store(tmp_path, [{"name": "plain", "status": "done"}]) is None
+    assert not (tmp_path / "events.db").exists()

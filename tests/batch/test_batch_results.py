@@ -56,7 +56,7 @@ def _done(results: Path, *videos: tuple[str, str]) -> list[Video]:
 
 # --------------------------------------------------------------------------- names
 @pytest.mark.parametrize("stem", ["index.csv", "index.parquet", "combined.json", "counts.csv",
-                                  "totals.json", "Index.CSV"])
+                                  "totals.json", "events.db", "Index.CSV"])
 def test_a_video_named_as_a_batch_file_is_refused_before_any_video_runs(tmp_path, capsys, stem):
     results = tmp_path / "results"
     code = main(["batch", str(tmp_path / f"{stem}.avi"), WALKER, "-o", str(results)])

@@ -402,6 +402,21 @@ def test_live_events_since_sse_and_counts(server):
 
 
 @pytest.mark.slow
+def test_the_cameras_events_are_searchable_within_seconds(server):
+    """Each camera process adds its events to the server's one store (OUT/events.db),
+    committed within a second; the search API finds them by camera and type."""
+    found = server.wait("the walker's events in the store",
+                        lambda: (lambda r: r if r["total"] >= 2 else None)(server.client.get(
+                            "/api/events/search?camera=walker").json()), 30)
+    assert {e["camera"] for e in found["events"]} == {"walker"}
+    assert all(e["segment"].startswith("walker/") for e in found["events"])
+    assert {e["type"] for e in found["events"]} >= {"zone_enter", "line_cross"}
+    crossings = server.client.get("/api/events/search?type=line_cross&rule=gate").json()
+    assert crossings["total"] >= 1 and {e["rule"] for e in crossings["events"]} == {"gate"}
+    assert (server.out / "events.db").is_file()
+
+
+@pytest.mark.slow
 def test_live_event_stream_resumes_where_the_last_one_ended(server):
     """What a browser's EventSource does when its connection drops: it reconnects with the id of
     the last message it received (Last-Event-ID), and the events it missed come first."""

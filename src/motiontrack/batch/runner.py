@@ -24,11 +24,13 @@ from ..config import PipelineConfig, apply_overrides, from_dict, load_config, to
 from ..errors import ConfigError, printable
 from ..io.atomic import (DiskFullError, OutputLock, atomic_write_bytes, atomic_write_text,
                          remove_folder_temps)
+from ..io.event_store import STORE_NAME
 from ..run.executor import dask_client, map_tasks
 from ..run.folder import RunFolder
 from ..version import __version__
 from .combined import COMBINED_FILE, write_combined
 from .counts import COUNTS_FILE, TOTALS_FILE, write_counts
+from .events import write_event_store
 from .sources import Video, expand_sources, with_files
 
 log = logging.getLogger(__name__)
@@ -38,7 +40,7 @@ __all__ = ["INDEX_FILE", "INDEX_COLUMNS", "BatchTask", "run_video", "run_batch",
 INDEX_FILE = "index.csv"
 PARQUET_FILE = "index.parquet"
 #: the files a batch writes at the root of RESULTS: no video may be named as one of them
-BATCH_FILES = (INDEX_FILE, PARQUET_FILE, COMBINED_FILE, COUNTS_FILE, TOTALS_FILE)
+BATCH_FILES = (INDEX_FILE, PARQUET_FILE, COMBINED_FILE, COUNTS_FILE, TOTALS_FILE, STORE_NAME)
 INDEX_COLUMNS = ("name", "source", "status", "error", "frames", "fps", "tracks", "wall_s",
                  "worker", "attempts", "config_hash", "motiontrack_version", "opencv_version",
                  "HOTA", "MOTA", "IDF1")
@@ -572,6 +574,7 @@ def _finish(out: Path, rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
     the event counts of those with a scene."""
     write_combined(out, rows)
     write_counts(out, rows)
+    write_event_store(out, rows)
     return rows
 
 

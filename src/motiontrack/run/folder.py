@@ -18,6 +18,7 @@ from typing import Any
 
 from ..errors import InputError
 from ..io.atomic import OutputLock, atomic_write_text, commit_leftovers
+from ..io.event_store import STORE_NAME
 from ..io.mot import read_seqinfo
 
 __all__ = ["RunFolder"]
@@ -37,6 +38,7 @@ class RunFolder:
     SUMMARY = "summary.json"
     CONFIG = "config.toml"
     EVENTS = "events.jsonl"
+    EVENT_STORE = STORE_NAME
     COUNTS = "counts.csv"
     GT = "gt.txt"
     HEATMAP = "heatmap.png"
@@ -63,6 +65,10 @@ class RunFolder:
     @property
     def events(self) -> Path:
         return self.path / self.EVENTS
+
+    @property
+    def event_store(self) -> Path:
+        return self.path / self.EVENT_STORE
 
     @property
     def counts(self) -> Path:

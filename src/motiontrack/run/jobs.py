@@ -24,6 +24,7 @@ from ..io.video import extension_for
 from ..pipeline import completes_tracks, fill_gap_frames, open_configured_source
 from ..render.streams import parse_streams
 from ..types import Annotations, Box
+from .folder import RunFolder
 from .folders import source_name
 from .job import Job, Writer
 from .processors import (DenseFlowProcessor, FollowProcessor, OverlayProcessor,
@@ -63,7 +64,8 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
               scene: str | Path | Callable[[Any], Any] | None = None,
               bin_s: float = 60.0, sinks: Sequence[Any] = (),
               camera_name: str | None = None, sink_settings: Any = None,
-              writers: Sequence[Writer] = (), pace: bool = False) -> Job:
+              writers: Sequence[Writer] = (), pace: bool = False,
+              store_events: bool = True) -> Job:
     """``motiontrack track``: ``tracks.txt``, the annotated video, the mask video and the
     intermediate movies as ``cfg.output`` and ``save`` ask, the mask of every frame as
     ``bin%06d.png`` in the folder ``mask_images``, the live view with ``show``, ``gt.txt`` and
@@ -80,9 +82,12 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
     ``sink_settings`` say (a :class:`~motiontrack.io.sinks.SinkSettings`). ``writers``
     are more outputs, given every frame after the others (``serve``'s live view). ``pace``
     plays a recorded source at its own frame rate (:class:`~motiontrack.io.pacing.PacedSource`:
-    ``track --show``, someone is watching)."""
+    ``track --show``, someone is watching). With a scene and ``store_events``, the events are
+    also kept in the run's event store ``events.db`` under ``camera_name`` (default: the
+    source's name); ``serve`` keeps them in one store of its own instead."""
     out = Path(out_dir)
     ignores_zero_marked(scoring)   # an unknown name fails before the source opens
+    store_camera = camera_name or source_name(source)
     camera_name = _sink_camera_name(sinks, scene, camera_name, source)
     if mask_images is not None and detections is not None:
         raise ConfigError("--mask-images needs motion masks; with --detections there are none")
@@ -121,6 +126,10 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
         writers: list[Writer] = [tracks]
         if analytics is not None:
             writers += _scene_writers(out, str(source), analytics.scene, fitted, bin_s)
+            if store_events:
+                from .event_store_writer import EventStoreWriter
+
+                writers.append(EventStoreWriter(RunFolder(out).event_store, store_camera))
         writers += _picture_writers(out, cfg, streams, mask_images, force, show)
         if truth is not None:
             from ..evaluate.score import score_run

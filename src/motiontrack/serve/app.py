@@ -29,6 +29,7 @@ from .guard import HostCheck, OriginCheck, TokenCheck
 from .hosts import LOOPBACK_NAMES
 from .hub import CameraState, Cursor, Hub
 from .scenes import SceneFiles
+from .search import search_routes
 
 __all__ = ["create_app", "json_body", "MAX_BODY", "MAX_DEPTH"]
 
@@ -106,15 +107,16 @@ def json_body(body: bytes) -> Any:
 def create_app(hub: Hub, token: str | None = None,
                scenes: Mapping[str, Path | None] | SceneFiles | None = None,
                stopping: Callable[[], bool] = lambda: False,
-               hosts: frozenset[str] | None = LOOPBACK_NAMES) -> Any:
+               hosts: frozenset[str] | None = LOOPBACK_NAMES,
+               store: Path | None = None) -> Any:
     """The ASGI app over ``hub``. ``scenes``: each camera's scene file (None: the camera has
     none; the editor's PUT then answers 409). ``stopping`` tells the streams to end (the server
     is shutting down). ``hosts``: the host names the app answers to
     (:func:`~.guard.allowed_hosts`; None: any), ``token``: the token every request needs
-    (:mod:`.guard`)."""
+    (:mod:`.guard`); ``store``: the event store the search answers from (:mod:`.search`)."""
     files = scenes if isinstance(scenes, SceneFiles) else SceneFiles(scenes or {})
     routes = [*_page_routes(), *_api_routes(hub), *_stream_routes(hub, stopping),
-              *_editor_routes(hub, files), *_schema_routes()]
+              *_editor_routes(hub, files), *_schema_routes(), *search_routes(store)]
     app: Any = OriginCheck(Starlette(routes=routes))
     if token:
         app = TokenCheck(app, token)

@@ -24,6 +24,7 @@ from typing import Any, Sequence
 
 from ..config import load_config
 from ..errors import ConfigError, MotionTrackError
+from ..io.event_store import STORE_NAME
 from ..run.folder import RunFolder
 from .app import create_app
 from .cameras import CameraSpec, load_cameras
@@ -227,7 +228,7 @@ def serve(cameras_file: str | Path, host: str = "127.0.0.1", port: int = 8080,
     sup = Supervisor(specs, out_dir, hub, rotate_s=rotate_s, rotate_mb=rotate_mb,
                      log_level=log_level)
     app = create_app(hub, token, SceneFiles(scenes, calibrations), stopping=sup.stopping.is_set,
-                     hosts=hosts)
+                     hosts=hosts, store=out_dir / STORE_NAME)
 
     class _Server(uvicorn.Server):
         def handle_exit(self, sig: int, frame: Any) -> None:

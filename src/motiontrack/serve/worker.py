@@ -49,10 +49,12 @@ from ..analytics import load_scene
 from ..config import load_config
 from ..config_flags import flag_overrides
 from ..errors import MotionTrackError
+from ..io.event_store import STORE_NAME
 from ..io.pacing import Pacer
 from ..io.sources import Source
 from ..pipeline import open_configured_source
 from ..run import track_job
+from ..run.event_store_writer import EventStoreWriter
 from ..run.job import JobContext, Writer
 from ..types import Discontinuity, FrameResult
 from .cameras import CameraSpec
@@ -458,8 +460,11 @@ def run_camera(spec: CameraSpec, out_dir: Path, channel: Channel, stop: _Flag,
                 seg = Segments(frames)
                 cam.segment = _segment_name(out_dir)
                 scene = cam.scenes.load if cam.scenes is not None else None
-                job = track_job(seg, cfg, out_dir / cam.segment, scene=scene,
-                                writers=[LiveWriter(cam, seg, rotate_s, rotate_bytes)])
+                # one event store for the whole server, beside the cameras' folders
+                store = EventStoreWriter(out_dir.parent / STORE_NAME, spec.name,
+                                         f"{out_dir.name}/{cam.segment}", owned=False)
+                job = track_job(seg, cfg, out_dir / cam.segment, scene=scene, store_events=False,
+                                writers=[LiveWriter(cam, seg, rotate_s, rotate_bytes), store])
                 try:
                     job.run(should_stop=stop)
                 except KeyboardInterrupt:
