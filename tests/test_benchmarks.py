@@ -203,3 +203,14 @@ def test_seed_sweeps_script_finds_the_crossing_switch_of_seed_9():
     rows = {line.split("|")[1].strip(): line for line in out.splitlines() if line.startswith("| `")}
     assert "1 of 1 (seed 9)" in rows["`synth:crossing` (two people crossing)"], out
     assert "0 of 1" in rows["`synth:column` (a person passing behind a column)"], out
+
+
+def test_event_store_benchmark_reports_each_query_with_its_matches():
+    out = subprocess.run([sys.executable, str(REPO / "benchmarks" / "event_store.py"),
+                          "--events", "600", "--rounds", "2"],
+                         capture_output=True, text=True, timeout=60).stdout
+    rows = re.findall(r"^(\S.*?)\s+(\d+)\s+(\d+\.\d\d)\s+(\d+\.\d\d)\s+50$", out, re.M)
+    assert [r[0] for r in rows] == ["newest 100", "one camera", "loiter at the gate last night",
+                                    "one rule, a day", "page 11 of one type"], out
+    assert int(rows[0][1]) == 600 and all(float(r[2]) > 0 for r in rows), out
+    assert "600 events written" in out
