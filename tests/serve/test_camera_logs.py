@@ -102,5 +102,6 @@ def test_a_camera_looping_a_damaged_file_logs_its_failure_once(tmp_path, capfd):
     cut = [line for line in err if "decoding stopped at frame" in line]
     assert len(cut) == 2, err             # once, then once with the count when it ends
     assert "repeated" not in cut[0]
-    assert re.search(r"\(repeated \d+ times more\)$", cut[1]), cut   # two loops or more
+    # one loop or more after the first (fewer on a busy machine): a count, never a line each
+    assert re.search(r"\(repeated (once|\d+ times) more\)$", cut[1]), cut
     assert not [line for line in err if line.startswith("[")], err   # no FFmpeg line

@@ -31,6 +31,9 @@ def _type_text(typ: Any, m: typing.Mapping[str, Any]) -> str:
     args = [a for a in typing.get_args(typ) if a is not type(None)]
     if typing.get_origin(typ) is not tuple and type(None) in typing.get_args(typ):
         typ = args[0]                        # optional: "none" is its default
+    if typing.get_origin(typ) is tuple and typing.get_args(typ)[-1] is not Ellipsis:
+        n, lo, hi = len(typing.get_args(typ)), m.get("lo"), m.get("hi")
+        return f"{n} numbers in [{_number(lo)}, {_number(hi)}]"   # a pair such as clip_s
     if typing.get_origin(typ) is tuple:     # an array of points
         return "array of `[x, y]`"
     if m.get("choices"):
@@ -53,6 +56,8 @@ def _default_text(default: Any) -> str:
         return f"`{default}`"
     if isinstance(default, bool):
         return "true" if default else "false"
+    if isinstance(default, tuple):
+        return "[" + ", ".join(_default_text(v) for v in default) + "]"
     return _number(default) if isinstance(default, (int, float)) else str(default)
 
 

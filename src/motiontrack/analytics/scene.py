@@ -32,13 +32,14 @@ registered rules. :func:`scene_json_schema` exports the whole file as JSON Schem
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
 from ..errors import ConfigError
 from ..io.tomlfile import read_toml
 from ..schema import from_dict, json_schema, keys_shown, param, shown
+from .evidence import EvidencePlan, EvidenceSpec, split_evidence
 from .rules import RULES
 from .specs import (COORD_LIMIT, MAX_TABLES, AbandonedSpec, LineSpec, SceneSection, SpeedSpec,
                     StationarySpec, ZoneSpec)
@@ -71,6 +72,7 @@ class SceneTop(SceneSection):
     forget_s: float = param(2.0, lo=0.0, lo_open=True, hi=COORD_LIMIT,
                             doc="a track unseen longer has left (zone exit, stationary end); "
                                 "its id seen again is a new track")
+    evidence: EvidenceSpec = field(default_factory=EvidenceSpec)
 
 
 #: the scene's fields of the built-in rules' sections
@@ -96,6 +98,7 @@ class Scene:
     speed: SpeedSpec | None = None
     source: str = ""
     sections: tuple[tuple[str, Any], ...] = ()
+    evidence: EvidencePlan = field(default_factory=EvidencePlan)
 
     def spec(self, section: str) -> Any:
         """The parsed table of ``section`` (None when the scene has none)."""
@@ -153,10 +156,14 @@ def parse_scene(data: Any, camera: Any = None, source: str = "") -> Scene:
         raise ConfigError(f"unknown scene key(s) {keys_shown(unknown)}; valid keys: "
                           f"{', '.join(valid)}")
     head = from_dict(SceneTop, {k: v for k, v in data.items() if k in top})
+    data, overrides = split_evidence(data, {r.section: r.many for r in rules})
     specs = {r.section: r.parse(data.get(r.section), camera, r.section) for r in rules}
-    builtin = {field: specs.pop(section) for section, field in _FIELDS.items() if section in specs}
+    builtin = {name: specs.pop(section) for section, name in _FIELDS.items() if section in specs}
+    plan = EvidencePlan(head.evidence, overrides,
+                        {e.name: r.section for r in rules for e in r.events})
     scene = Scene(head.anchor, head.hysteresis_px, head.forget_s, **builtin, source=source,
-                  sections=tuple((k, v) for k, v in specs.items() if v is not None))
+                  sections=tuple((k, v) for k, v in specs.items() if v is not None),
+                  evidence=plan)
     key = scene.camera_key
     if key is not None and camera is None:
         raise ConfigError(f"{key} is in metres and needs a camera calibration (--camera); "

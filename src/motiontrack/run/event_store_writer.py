@@ -3,7 +3,8 @@
 
 An event's time in the store is the frame's wall-clock time for a live source, and for a
 recorded one the time the run started plus the event's ``t`` (a file's own recording time is
-not known).
+not known). With an evidence folder each event also gets its snapshot and clip
+(:mod:`.evidence`), recorded in the store as they are written.
 """
 
 from __future__ import annotations
@@ -14,7 +15,8 @@ from pathlib import Path
 from typing import Callable
 
 from ..io.event_store import EventStore
-from ..types import FrameResult
+from ..types import FrameResult, frame_number
+from .evidence import EvidenceKeeper
 from .job import JobContext, JobSummary, Writer
 
 __all__ = ["EventStoreWriter"]
@@ -30,7 +32,8 @@ class EventStoreWriter(Writer):
     """
 
     def __init__(self, path: str | Path, camera: str, segment: str | None = None,
-                 owned: bool = True, clock: Callable[[], float] = time.time) -> None:
+                 owned: bool = True, clock: Callable[[], float] = time.time,
+                 evidence: Path | None = None) -> None:
         self.path = Path(path)
         self.paths = {"event_store": self.path} if owned else {}
         self.camera, self.segment = camera, segment
@@ -39,27 +42,56 @@ class EventStoreWriter(Writer):
         self._live = False
         self._started = 0.0
         self.count = 0
+        #: the run folder whose ``evidence/`` gets each event's snapshot and clip (None: none)
+        self.evidence_folder = evidence
+        self._keeper: EvidenceKeeper | None = None
+        self._ctx: JobContext | None = None
 
     def start(self, ctx: JobContext) -> None:
-        if self.paths and not self.path.exists():
+        fresh = not self.path.exists()
+        if self.paths and fresh:
             for stale in ("-wal", "-shm"):   # a killed run's journal of a file now removed
                 with contextlib.suppress(FileNotFoundError):
                     Path(f"{self.path}{stale}").unlink()
         self._store = EventStore(self.path)
         self._live = bool(ctx.info.live)
         self._started = self._clock()
+        self._ctx = ctx
+        analytics = getattr(ctx.processor, "analytics", None)
+        if self.evidence_folder is not None and analytics is not None:
+            self._keeper = EvidenceKeeper(self.evidence_folder, self.path.parent,
+                                          analytics.scene.evidence, ctx.fps)
+            if self.paths and fresh:   # an older run's evidence would be named as this run's
+                self._keeper.clear()
 
     def write(self, result: FrameResult) -> None:
-        scene = result.scene
-        if self._store is None or scene is None:
+        if self._store is None:
             return
-        for e in scene.events:
+        scene, keeper, n = result.scene, self._keeper, frame_number(result.index)
+        picture = None
+        if keeper is not None and (keeper.needs_picture(n) or (scene is not None and scene.events)):
+            picture = self._ctx.annotated(result)
+        clips = keeper.frame(n, picture) if keeper is not None else []
+        for e in scene.events if scene is not None else ():
             when = result.timestamp if self._live else self._started + e.t
-            self._store.add(e.to_json(), self.camera, when, self.segment)
+            record = e.to_json()
+            event_id = self._store.add(record, self.camera, when, self.segment)
+            if keeper is not None:
+                snapshot = keeper.event(event_id, record, result, picture)
+                if snapshot is not None:
+                    self._store.set_media(event_id, snapshot=snapshot)
             self.count += 1
+        self._media(clips)
         self._store.tick()
 
+    def _media(self, clips: list[tuple[int, str]]) -> None:
+        for event_id, path in clips:
+            self._store.set_media(event_id, clip=path)
+
     def close(self, keep: bool) -> None:
+        if self._keeper is not None and self._store is not None and keep:
+            self._media(self._keeper.close())   # the clips still open end with the run
+        self._keeper = None
         if self._store is not None:
             self._store.close(finished=bool(self.paths))   # a run's own store is complete now
             self._store = None

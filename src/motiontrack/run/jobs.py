@@ -129,7 +129,8 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
             if store_events:
                 from .event_store_writer import EventStoreWriter
 
-                writers.append(EventStoreWriter(RunFolder(out).event_store, store_camera))
+                writers.append(EventStoreWriter(RunFolder(out).event_store, store_camera,
+                                                evidence=out))
         writers += _picture_writers(out, cfg, streams, mask_images, force, show)
         if truth is not None:
             from ..evaluate.score import score_run

@@ -462,7 +462,8 @@ def run_camera(spec: CameraSpec, out_dir: Path, channel: Channel, stop: _Flag,
                 scene = cam.scenes.load if cam.scenes is not None else None
                 # one event store for the whole server, beside the cameras' folders
                 store = EventStoreWriter(out_dir.parent / STORE_NAME, spec.name,
-                                         f"{out_dir.name}/{cam.segment}", owned=False)
+                                         f"{out_dir.name}/{cam.segment}", owned=False,
+                                         evidence=out_dir / cam.segment)
                 job = track_job(seg, cfg, out_dir / cam.segment, scene=scene, store_events=False,
                                 writers=[LiveWriter(cam, seg, rotate_s, rotate_bytes), store])
                 try:

@@ -1,0 +1,169 @@
+"""The snapshot and clip of each event, written beside the run's outputs in ``evidence/``.
+
+For event ``ID`` (its id in the event store): ``ID.jpg``, the annotated frame of the event;
+``ID-object.jpg``, the object's box (with a margin of a quarter of its size, at least 16 px) cut
+from the same frame; ``ID.avi``, a Motion-JPEG clip from ``clip_s[0]`` seconds before the event
+to ``clip_s[1]`` after it (the scene's ``[evidence]``, :mod:`motiontrack.analytics.evidence`).
+
+The pre-roll comes from a ring buffer of the annotated frames, JPEG-encoded once as they pass
+(at most ``clip_fps`` a second, at most ``clip_width`` pixels across), so an event costs no
+encoding of the past; the clip is written once its last frame has passed, or when the run ends
+(then it ends there). Clips are written under a temporary name and renamed: a killed run leaves
+each clip complete and recorded in the store, or not recorded.
+"""
+
+from __future__ import annotations
+
+import collections
+import logging
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Mapping
+
+import cv2
+import numpy as np
+
+from ..analytics.evidence import EvidencePlan
+from ..io.clips import write_mjpeg_clip
+from ..types import FrameResult
+
+log = logging.getLogger(__name__)
+
+__all__ = ["EvidenceKeeper", "EVIDENCE_DIR"]
+
+EVIDENCE_DIR = "evidence"
+JPEG_QUALITY = 85
+#: the clips' frames: many of them, each seen for a fraction of a second
+CLIP_QUALITY = 75
+#: smallest margin around an object's box in its crop (pixels)
+MIN_MARGIN = 16
+#: the files of evidence/ this module writes
+_OURS = re.compile(r"\d+(\.jpg|-object\.jpg|\.avi)|\.\d+\..*\.part\.avi")
+
+
+@dataclass
+class _Clip:
+    event_id: int
+    frames: list[bytes]
+    last: int                                    # the clip's last frame number
+    done: bool = field(default=False)
+
+
+class EvidenceKeeper:
+    """Snapshots and clips of one run's events in ``folder/evidence/``; paths are given
+    relative to ``root`` (the event store's folder)."""
+
+    def __init__(self, folder: Path, root: Path, plan: EvidencePlan, fps: float) -> None:
+        self.dir = Path(folder) / EVIDENCE_DIR
+        self.root = Path(root)
+        self.plan = plan
+        self.fps = float(fps) or 25.0
+        spec = plan.default
+        self.step = max(1, round(self.fps / spec.clip_fps))   # keep every step-th frame
+        self.clip_fps = self.fps / self.step
+        self.width = spec.clip_width
+        self.any_clip = spec.clip or any(o.clip_s is not None and (o.clip_s[0] or o.clip_s[1])
+                                         for _, _, o in plan.overrides)
+        before = int(np.ceil(plan.longest_before_s * self.clip_fps)) + 1
+        self._ring: collections.deque = collections.deque(maxlen=before)
+        self._open: list[_Clip] = []
+
+    def clear(self) -> int:
+        """Remove the snapshots and clips an earlier run left in ``evidence/`` (by their names:
+        ``ID.jpg``, ``ID-object.jpg``, ``ID.avi`` and unfinished ``.part`` clips), before a run
+        whose store starts afresh numbers its events from 1 again; how many were removed."""
+        if not self.dir.is_dir():
+            return 0
+        n = 0
+        for p in self.dir.iterdir():
+            if p.is_file() and _OURS.fullmatch(p.name):
+                p.unlink()
+                n += 1
+        return n
+
+    def _rel(self, path: Path) -> str:
+        return path.relative_to(self.root).as_posix() if path.is_relative_to(self.root) \
+            else str(path)
+
+    def frame(self, frame: int, picture: np.ndarray | None) -> list[tuple[int, str]]:
+        """Pass frame ``frame`` (its annotated picture; None when no clip wants it); the clips
+        that are complete now, ``(event id, path)``."""
+        if not self.any_clip or picture is None or frame % self.step:
+            return self._finished(frame)
+        jpeg = self._clip_jpeg(picture)
+        self._ring.append((frame, jpeg))
+        for clip in self._open:
+            if frame <= clip.last:
+                clip.frames.append(jpeg)
+        return self._finished(frame)
+
+    def needs_picture(self, frame: int) -> bool:
+        """Whether :meth:`frame` will use the picture of ``frame`` (draw it only then)."""
+        return self.any_clip and frame % self.step == 0
+
+    def event(self, event_id: int, event: Mapping[str, Any], result: FrameResult,
+              picture: np.ndarray | None) -> str | None:
+        """Write the snapshots of ``event`` (if its rule keeps them) and start its clip; the
+        snapshot's path, or None."""
+        spec = self.plan.of(event)
+        frame = int(event.get("frame", 0))
+        if spec.clip:
+            before = [j for f, j in self._ring if f >= frame - spec.clip_s[0] * self.fps]
+            self._open.append(_Clip(event_id, before, frame + int(spec.clip_s[1] * self.fps)))
+        if not spec.snapshot or picture is None:
+            return None
+        self.dir.mkdir(parents=True, exist_ok=True)
+        path = self.dir / f"{event_id}.jpg"
+        cv2.imwrite(str(path), picture, [cv2.IMWRITE_JPEG_QUALITY, JPEG_QUALITY])
+        crop = _crop(result.frame, _box_of(event, result))
+        if crop is not None:
+            cv2.imwrite(str(self.dir / f"{event_id}-object.jpg"), crop,
+                        [cv2.IMWRITE_JPEG_QUALITY, JPEG_QUALITY])
+        return self._rel(path)
+
+    def _finished(self, frame: int | None) -> list[tuple[int, str]]:
+        out = []
+        for clip in self._open:
+            if frame is None or frame >= clip.last:
+                clip.done = True
+                if clip.frames:
+                    self.dir.mkdir(parents=True, exist_ok=True)
+                    path = write_mjpeg_clip(self.dir / f"{clip.event_id}.avi", clip.frames,
+                                            self.clip_fps)
+                    out.append((clip.event_id, self._rel(path)))
+        self._open = [c for c in self._open if not c.done]
+        return out
+
+    def close(self) -> list[tuple[int, str]]:
+        """The run ended: write the clips still open, ending where the run ended."""
+        return self._finished(None)
+
+    def _clip_jpeg(self, picture: np.ndarray) -> bytes:
+        h, w = picture.shape[:2]
+        if w > self.width:
+            picture = cv2.resize(picture, (self.width, max(1, round(h * self.width / w))),
+                                 interpolation=cv2.INTER_LINEAR)
+        ok, jpeg = cv2.imencode(".jpg", picture, [cv2.IMWRITE_JPEG_QUALITY, CLIP_QUALITY])
+        return jpeg.tobytes()
+
+
+def _box_of(event: Mapping[str, Any], result: FrameResult) -> tuple[float, float, float, float]:
+    """The box of the event's track in this frame, or a square around its point (an object
+    that is no track any more, such as an abandoned bag)."""
+    for t in result.tracks:
+        if t.id == event.get("track"):
+            return t.box.x, t.box.y, t.box.w, t.box.h
+    x, y, side = float(event.get("x", 0.0)), float(event.get("y", 0.0)), 64.0
+    return x - side / 2, y - side, side, side
+
+
+def _crop(image: np.ndarray | None, box: tuple[float, float, float, float]) -> np.ndarray | None:
+    if image is None:
+        return None
+    x, y, w, h = box
+    m = max(MIN_MARGIN, 0.25 * max(w, h))
+    H, W = image.shape[:2]
+    x0, y0 = max(0, int(x - m)), max(0, int(y - m))
+    x1, y1 = min(W, int(np.ceil(x + w + m))), min(H, int(np.ceil(y + h + m)))
+    return image[y0:y1, x0:x1] if x1 > x0 and y1 > y0 else None
