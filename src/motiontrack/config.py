@@ -51,6 +51,7 @@ __all__ = [
     "MotionConfig",
     "CleanupConfig",
     "RegionsConfig",
+    "DetectionsParams",
     "TrackerConfig",
     "OutputConfig",
     "MeasureConfig",
@@ -342,6 +343,40 @@ class RegionsConfig(_Section):
 
 
 @dataclass(frozen=True)
+class DetectionsParams(_Section):
+    """The detection-driven tracker (``tracker.method = detections``, the ``detections`` preset):
+    ByteTrack's two stages by score and OC-SORT's observation-centric steps
+    (:mod:`motiontrack.tracking.detections`)."""
+
+    high_score: float = param(0.6, lo=0.0, hi=1.0,
+                              doc="detections at or above this score are matched first (stage 1: "
+                                  "IoU and direction); those below only continue tracks (stage 2)")
+    low_score: float = param(0.1, lo=0.0, hi=1.0,
+                             doc="detections below this score are ignored")
+    new_score: float = param(0.7, lo=0.0, hi=1.0,
+                             doc="an unmatched detection starts a track only from this score")
+    min_iou: float = param(0.3, lo=0.0, hi=1.0,
+                           doc="gate of stages 1 and 3: IoU below this never matches")
+    low_iou: float = param(0.5, lo=0.0, hi=1.0,
+                           doc="gate of stage 2 (low-score detections): IoU below this never matches")
+    inertia: float = param(0.2, lo=0.0, hi=10.0,
+                           doc="weight of the direction-consistency term in stage 1 (OC-SORT OCM; "
+                               "0 = off), times the detection's score")
+    delta_t: int = param(3, lo=1, hi=100,
+                         doc="a track's direction is that of its observations this many frames "
+                             "apart (OC-SORT delta_t)")
+    recover: bool = param(True, doc="stage 3 (OC-SORT OCR): a track left unmatched may take a "
+                                    "detection left over near its last observation")
+    reupdate: bool = param(True, doc="a track seen again after a gap re-runs its Kalman filter "
+                                     "over a line from its last observation to the new one "
+                                     "(OC-SORT ORU) instead of its coasted prediction")
+    appearance_weight: float = param(0.0, lo=0.0, hi=10.0,
+                                     doc="weight of the colour-histogram (Bhattacharyya) distance "
+                                         "in stage 1 when the run has pictures (a video beside "
+                                         "--detections); 0 = off")
+
+
+@dataclass(frozen=True)
 class TrackerConfig(_Section):
     method: str = param("kalman", doc="multi-object tracker: see `motiontrack list`")
     cost: str = param("iou", choices=("iou", "center"), doc="association cost")
@@ -393,6 +428,7 @@ class TrackerConfig(_Section):
     fill_motion: bool = param(False, doc="apply fill_gaps_s and backfill to tracks from motion regions "
                                          "too (off: a motion track's first boxes and the boxes at a "
                                          "gap's ends are often a fragment or a merged blob)")
+    detections: DetectionsParams = field(default_factory=DetectionsParams)
 
 
 @dataclass(frozen=True)

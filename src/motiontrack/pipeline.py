@@ -40,6 +40,7 @@ from .motion.regions import find_regions
 from .people import PeopleStage, head_params
 from .people.heads import split_regions_by_heads
 from .preprocess import load_roi, preprocess
+from .tracking import detections as _detections  # noqa: F401  (registers tracker "detections")
 from .tracking.bridge import Bridge
 from .tracking.tracker import TRACKERS
 from .types import (Annotations, Box, Discontinuity, Frame, FrameResult, PeopleFrame, Region,
@@ -167,6 +168,8 @@ class Pipeline:
             # with 20% dropped boxes)
             tracker_cfg = replace(tracker_cfg, split_merged=False, coast_frames=0)
         self.tracker = TRACKERS.get(cfg.tracker.method)(tracker_cfg, image_size, fps)
+        #: the tracker weighs the appearance of external detections in the frame's picture
+        self.tracker_sees_pictures = isinstance(self.tracker, _detections.DetectionTracker)
         # a confirmed track's tentative frames (FrameResult.earlier)
         self.tracker.keep_tentative = (cfg.tracker.backfill
                                        and completes_tracks(cfg, detections is not None))
@@ -402,8 +405,13 @@ class Pipeline:
                 hyps = {tid: r.box.as_array() for tid, r in people.hypotheses_by_track.items()}
             # fitted outlines of tracked people: where each one is inside a merged region
             located = people.located_by_track or None
+        image, scale = small, self.scale
+        if small is None and self.detector is None and self.tracker_sees_pictures:
+            # external detections: the detection tracker's appearance reads the frame itself (an
+            # empty image is a source of detections alone, without pictures)
+            image, scale = (frame.image if frame.image.size else None), 1.0
         tracks = self.tracker.update(regions, dt=self._frame_gap(frame), owned=owned,
-                                     image=small, mask=mask, scale=self.scale, located=located,
+                                     image=image, mask=mask, scale=scale, located=located,
                                      frame=frame.index, hypotheses=hyps)
         if self.bridge is not None:
             self.bridge.remember(frame.image, tracks)
