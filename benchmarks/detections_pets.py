@@ -12,8 +12,10 @@ detector makes, drawn with a seed:
 * ``jitter``: each side of a box moves by a normal error of this fraction of the box's height;
 * ``fp``: false boxes per frame (Poisson), of a person's typical size, anywhere in the image.
 
-Every row runs the default pipeline with these detections (the same call as ``motiontrack track
-VIDEO --detections det.txt``) and scores it like the other PETS benchmarks: CLEAR-MOT, Identity
+Every row runs the pipeline with these detections and the motion-blob tracker's defaults (``motiontrack
+track VIDEO --detections det.txt --set tracker.method=kalman`` with no preset; ``--preset
+detections`` runs what ``track --detections`` runs, see benchmarks/detections.py) and scores it
+like the other PETS benchmarks: CLEAR-MOT, Identity
 and HOTA at IoU 0.5 against gt_mot15.txt, rows with consider = 0 as ignore regions; noisy rows
 average ``--seeds`` draws. The tracks scored are what ``motiontrack track`` writes for tracks
 from detections: each track also at the first ``confirm_hits`` - 1 frames, where it was still
@@ -22,8 +24,8 @@ tentative (``tracker.backfill``), and its gaps of up to a second interpolated
 the online output alone. The boxes are the Kalman filter's estimate (HOTA below 1 with perfect
 detections measures that smoothing).
 
-Run: .venv/bin/python benchmarks/detections.py [--data ../shared/data] [--seeds 3] [--frames 300]
-     [--set stage.param=value ...]
+Run: .venv/bin/python benchmarks/detections_pets.py [--data ../shared/data] [--seeds 3]
+     [--frames 300] [--preset NAME] [--set stage.param=value ...]
 """
 
 from __future__ import annotations
@@ -99,14 +101,16 @@ def main() -> None:
     ap.add_argument("--seeds", type=int, default=3, help="draws of each noisy row")
     ap.add_argument("--frames", type=int, default=300)
     ap.add_argument("--set", dest="overrides", action="append", default=[], metavar="STAGE.PARAM=VALUE")
+    ap.add_argument("--preset", default=None, help="shipped preset to start from (default none)")
     args = ap.parse_args()
     video = pets_video(args.data)
     gt = read_mot(video.parent / "gt_mot15.txt", kind="gt")
-    cfg = load_config(None, [*args.overrides, f"source.max_frames={args.frames}"])
+    cfg = load_config(None, [*args.overrides, f"source.max_frames={args.frames}"],
+                      preset=args.preset)
     src = open_source(str(video))
     size = (src.info.width, src.info.height)
     src.close()
-    print(f"PETS09-S2L1 frames 1-{args.frames}, the default tracker on detections made from the "
+    print(f"PETS09-S2L1 frames 1-{args.frames}, the {args.preset or 'default'} tracker on detections made from the "
           f"ground truth{' with ' + ' '.join(args.overrides) if args.overrides else ''}")
     print(f"{'drop':>5}{'burst':>6}{'jitter':>7}{'fp':>5}" + "".join(f"{k:>10}" for k in KEYS))
     for drop, burst, jitter, fp in ROWS:
