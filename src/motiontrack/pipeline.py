@@ -162,7 +162,7 @@ class Pipeline:
         tracker_cfg = cfg.tracker
         if detections is not None:
             # a detector's box is one object: there is no merged blob to split (split shares of a
-            # box that overlaps a neighbour's prediction swap identities; benchmarks/detections.py),
+            # box that overlaps a neighbour's prediction swap identities; benchmarks/detections_pets.py),
             # and no fragment at an occluder's edge to tilt the Kalman velocity (coasting at the
             # median pace there: HOTA the same in sum over the benchmark's rows, MOTA -0.028
             # with 20% dropped boxes)

@@ -148,3 +148,48 @@ def test_every_step_handles_no_detections_and_no_tracks():
     assert trk.update([]) == []
     assert direction_cost(np.zeros((0, 2)), np.zeros((0, 2)), np.zeros((3, 2)),
                           np.zeros(0, bool)).shape == (0, 3)
+
+
+def _picture(*boxes_colours) -> np.ndarray:
+    img = np.zeros((300, 300, 3), np.uint8)
+    for (x, y, w, h), bgr in boxes_colours:
+        img[y:y + h, x:x + w] = bgr
+    return img
+
+
+RED, BLUE = (0, 0, 255), (255, 0, 0)
+
+
+@pytest.mark.parametrize("weight, taken", [(1.0, "red"), (0.0, "blue")])
+def test_with_pictures_the_appearance_term_keeps_a_track_on_its_colour(weight, taken):
+    trk = _tracker("tracker.confirm_hits=1", f"tracker.detections.appearance_weight={weight}")
+    # frame 1: a red person at (100, 100, 40, 40) starts track 1 with a red histogram
+    trk.update(np.array([[100.0, 100, 40, 40]]), np.array([0.9]),
+               image=_picture(((100, 100, 40, 40), RED)))
+    # frame 2: a blue box up-left and a red box down-right, 10 px off the prediction each way:
+    # IoU 30*30 / (1600 + 1600 - 900) = 0.391 for both, no direction yet (one observation), so
+    # IoU alone ties and the solver takes the first, blue; the Bhattacharyya distance to the red
+    # histogram (about 1 for blue, 0 for red) breaks the tie for red
+    blue, red = [90.0, 90, 40, 40], [110.0, 110, 40, 40]
+    iou = iou_matrix(np.array([[100.0, 100, 40, 40]]), np.array([blue, red]))[0]
+    assert iou == pytest.approx([900 / 2300, 900 / 2300])
+    img = _picture(((90, 90, 40, 40), BLUE), ((110, 110, 40, 40), RED))
+    trk.update(np.array([blue, red]), np.array([0.9, 0.9]), image=img)
+    assert trk.meta[0].tid == 1      # the other box started a second track after it
+    assert trk.last[0].tolist() == (red if taken == "red" else blue)
+
+
+def test_the_pipeline_gives_the_tracker_the_picture_only_when_there_is_one():
+    from motiontrack.pipeline import Pipeline
+    from motiontrack.types import Annotations, Frame
+
+    det = Annotations.from_columns([1], [-1], np.array([[100.0, 100, 40, 40]]), scores=[0.9])
+    cfg = load_config(None, ["tracker.confirm_hits=1", "tracker.detections.appearance_weight=1"],
+                      preset="detections")
+    with_video = Pipeline(cfg, (300, 300), det, 25.0)
+    with_video.process(Frame(0, _picture(((100, 100, 40, 40), RED))))
+    assert with_video.tracker.meta[0].hist is not None
+    # a source of detections alone: an empty image, no histogram
+    alone = Pipeline(cfg, (300, 300), det, 25.0)
+    alone.process(Frame(0, np.zeros((0, 0), np.uint8)))
+    assert alone.tracker.meta[0].hist is None
