@@ -52,6 +52,17 @@ def test_size_and_fps_options_stand_in_for_a_missing_seqinfo(tmp_path, mot15):
     assert (s["width"], s["height"], s["source_fps"], s["frames"]) == (320, 240, 10.0, 20)
 
 
+def test_scene_analytics_of_detections_without_pictures_draw_the_heatmap_on_black(tmp_path, mot15):
+    scene = tmp_path / "scene.toml"
+    scene.write_text('[[line]]\nname = "door"\npoints = [[100, 100], [500, 400]]\n')
+    out = tmp_path / "o"
+    assert main(["track", "--detections", str(mot15 / "TUD-Campus" / "det" / "det.txt"),
+                 "--scene", str(scene), "-o", str(out)]) == 0
+    heat = _summary(out)["heatmap"]
+    assert heat["background"] == "none" and heat["visits"] > 0
+    assert (out / "heatmap.png").is_file() and (out / "events.jsonl").is_file()
+
+
 def test_a_preset_given_with_detections_is_kept(tmp_path, mot15):
     out = tmp_path / "o"
     assert main(["track", "--detections", str(mot15 / "TUD-Campus" / "det" / "det.txt"),
@@ -99,6 +110,7 @@ def _split_with(tmp_path, mot15, det_text=None, seqinfo=True):
     ("nothing to track", "track needs a SOURCE, or --detections det.txt"),
     ("split and source", "--detections-folder tracks a whole split"),
     ("split without -o", "--detections-folder needs -o DIR"),
+    ("save without pictures", "--save draws on the source's pictures"),
 ])
 def test_bad_detection_input_is_one_clear_line(tmp_path, mot15, capsys, case, message):
     out = ["-o", str(tmp_path / "o")]
@@ -119,6 +131,9 @@ def test_bad_detection_input_is_one_clear_line(tmp_path, mot15, capsys, case, me
         args = ["--detections-folder", str(tmp_path / "empty"), *out]
     elif case == "nothing to track":
         args = out
+    elif case == "save without pictures":
+        args = ["--detections", str(mot15 / "TUD-Campus" / "det" / "det.txt"), "--save",
+                "background", *out]
     elif case == "split and source":
         args = ["synth:walker", "--detections-folder", str(mot15), *out]
     else:

@@ -169,8 +169,9 @@ def _check_detection_options(args) -> None:
                           "--detections-folder SPLIT")
     if args.size and args.source is not None:
         raise ConfigError("--size is for --detections without a SOURCE (a video states its size)")
-    if args.source is None and args.show:
-        raise ConfigError("--show draws on the source's pictures: give SOURCE with --detections")
+    if args.source is None and (args.show or args.save):
+        raise ConfigError(f"{'--show' if args.show else '--save'} draws on the source's "
+                          "pictures: give SOURCE with --detections")
 
 
 def _split(args, cfg) -> int:
