@@ -111,6 +111,7 @@ def _split_with(tmp_path, mot15, det_text=None, seqinfo=True):
     ("split and source", "--detections-folder tracks a whole split"),
     ("split without -o", "--detections-folder needs -o DIR"),
     ("save without pictures", "--save draws on the source's pictures"),
+    ("split with --gt", "--gt is an option of one run; --detections-folder writes"),
 ])
 def test_bad_detection_input_is_one_clear_line(tmp_path, mot15, capsys, case, message):
     out = ["-o", str(tmp_path / "o")]
@@ -134,6 +135,9 @@ def test_bad_detection_input_is_one_clear_line(tmp_path, mot15, capsys, case, me
     elif case == "save without pictures":
         args = ["--detections", str(mot15 / "TUD-Campus" / "det" / "det.txt"), "--save",
                 "background", *out]
+    elif case == "split with --gt":
+        args = ["--detections-folder", str(mot15), "--gt", str(mot15 / "TUD-Campus" / "gt" /
+                                                               "gt.txt"), *out]
     elif case == "split and source":
         args = ["synth:walker", "--detections-folder", str(mot15), *out]
     else:

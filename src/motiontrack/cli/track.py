@@ -163,6 +163,13 @@ def _check_detection_options(args) -> None:
         if args.out is None:
             raise ConfigError("--detections-folder needs -o DIR (e.g. TRACKERS/NAME/data) for "
                               "its <seq>.txt files")
+        one_run = [flag for flag, on in (("--gt", args.gt), ("--scene", args.scene),
+                                         ("--show", args.show), ("--save", args.save),
+                                         ("--mask-images", args.mask_images)) if on]
+        if one_run:
+            raise ConfigError(f"{one_run[0]} is an option of one run; --detections-folder writes "
+                              "each sequence's tracks only (score them with evaluate "
+                              "--gt-folder SPLIT --trackers-folder TRACKERS)")
         return
     if args.source is None and not args.detections:
         raise ConfigError("track needs a SOURCE, or --detections det.txt, or "
