@@ -379,11 +379,13 @@ class DetectionsParams(_Section):
 @dataclass(frozen=True)
 class TrackerConfig(_Section):
     method: str = param("kalman", doc="multi-object tracker: see `motiontrack list`")
-    cost: str = param("iou", choices=("iou", "center"), doc="association cost")
+    cost: str = param("iou", choices=("iou", "center"), doc="association cost",
+        when={"method": "kalman"})
     min_iou: float = param(0.1, lo=0.0, hi=1.0, doc="gate: IoU below this never matches (cost=iou)",
-                           when={"cost": "iou"})
+                           when={"method": "kalman", "cost": "iou"})
     max_distance: float = param(1.0, lo=0.0,
-                                doc="gate: centre distance / predicted box diagonal above this never matches")
+                                doc="gate: centre distance / predicted box diagonal above this never matches",
+        when={"method": "kalman"})
     confirm_hits: int = param(5, lo=1, hi=100, doc="hits needed to turn tentative into confirmed")
     max_lost_s: float = param(2.0, lo=0.0, hi=3600.0,
                               doc="seconds a confirmed track may coast unseen before deletion (converted "
@@ -396,28 +398,35 @@ class TrackerConfig(_Section):
                                      doc="Kalman measurement noise std, fraction of box height")
     partial_ratio: float = param(0.6, lo=0.0, hi=1.0,
                                  doc="a match smaller than this fraction of the prediction's area is a "
-                                     "partial view: keep the predicted size, anchor the visible edges (0 = off)")
+                                     "partial view: keep the predicted size, anchor the visible edges (0 = off)",
+        when={"method": "kalman"})
     search_growth: float = param(0.05, lo=0.0, hi=10.0,
-                                 doc="re-detection window growth per unseen frame (fraction of max_distance)")
+                                 doc="re-detection window growth per unseen frame (fraction of max_distance)",
+        when={"method": "kalman"})
     split_merged: bool = param(True, doc="split a motion blob holding several tracks' predictions "
                                       "into one synthetic measurement per track (people crossing); "
-                                      "never applied to --detections boxes (one object each)")
+                                      "never applied to --detections boxes (one object each)",
+        when={"method": "kalman"})
     coast_frames: int = param(10, lo=0, hi=1000,
                               doc="a lost track coasts at the median pace of its last N steps, not its "
                                   "last Kalman velocity (a fragment at an occluder's edge tilts that); "
-                                  "0 = Kalman velocity; never applied to --detections boxes")
+                                  "0 = Kalman velocity; never applied to --detections boxes",
+        when={"method": "kalman"})
     appearance_weight: float = param(0.5, lo=0.0, hi=10.0,
                                      doc="weight of the colour-histogram (Bhattacharyya) distance in the "
-                                         "association cost (0 = no appearance model)")
+                                         "association cost (0 = no appearance model)",
+        when={"method": "kalman"})
     appearance_gate: float = param(0.6, lo=0.0, hi=1.0,
                                    doc="an unseen track is re-identified only below this appearance distance",
-                                   when={"appearance_weight": Not(0.0, 0.5)})
+                                   when={"method": "kalman", "appearance_weight": Not(0.0, 0.5)})
     bridge: str = param("none", doc="single-object tracker (kcf, csrt, mil, mosse, medianflow, ...) "
-                                    "that carries a confirmed track through motion-detection misses; none = off")
+                                    "that carries a confirmed track through motion-detection misses; none = off",
+        when={"method": "kalman"})
     bridge_frames: int = param(50, lo=1, hi=100000, doc="longest bridge, frames",
-                               when={"bridge": Not("none", "kcf")})
+                               when={"method": "kalman", "bridge": Not("none", "kcf")})
     history: int = param(64, lo=0, hi=100000, doc="trajectory points kept per track (bounded)")
-    output_lost: bool = param(False, doc="report coasting (lost) tracks in tracks.txt")
+    output_lost: bool = param(False, doc="report coasting (lost) tracks in tracks.txt",
+        when={"method": "kalman"})
     fill_gaps_s: float = param(1.0, lo=0.0, hi=3600.0,
                                doc="when the run ends, fill each track's gaps of up to this many seconds "
                                    "in tracks.txt by linear interpolation (0 = off); tracks from "

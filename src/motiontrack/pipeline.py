@@ -188,7 +188,8 @@ class Pipeline:
             self.ghosts = GhostFilter(cfg.motion.ghost_ratio, pixels=cfg.motion.ghost_pixels)
         self._prev_tracks: tuple = ()
         self.bridge = None
-        if cfg.tracker.bridge != "none":
+        if cfg.tracker.bridge != "none" and not self.tracker_sees_pictures:
+            # (the detection tracker takes no owned measurements: tracker.bridge needs kalman)
             self.bridge = Bridge(cfg.tracker.bridge, cfg.tracker.bridge_frames)
         #: the dual background: for FrameResult.static (``static``) and motion.keep_stopped
         self.static = (DualBackground(fps or 25.0, self.scale)

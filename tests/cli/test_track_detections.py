@@ -147,3 +147,10 @@ def test_bad_detection_input_is_one_clear_line(tmp_path, mot15, capsys, case, me
     assert code == 2
     assert len(err) == 1 and err[0].startswith("motiontrack: error:"), err
     assert message in err[0]
+
+
+def test_a_motion_blob_tracker_key_set_with_detections_is_warned_about(tmp_path, mot15, capsys):
+    assert main(["track", "--detections", str(mot15 / "TUD-Campus" / "det" / "det.txt"),
+                 "--set", "tracker.min_iou=0.2", "--max-frames", "3", "-o", str(tmp_path / "o")]) == 0
+    err = capsys.readouterr().err
+    assert "tracker.min_iou has no effect while tracker.method = detections" in err, err
