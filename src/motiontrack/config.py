@@ -348,12 +348,12 @@ class DetectionsParams(_Section):
     ByteTrack's two stages by score and OC-SORT's observation-centric steps
     (:mod:`motiontrack.tracking.detections`)."""
 
-    high_score: float = param(0.6, lo=0.0, hi=1.0,
+    high_score: float = param(0.7, lo=0.0, hi=1.0,
                               doc="detections at or above this score are matched first (stage 1: "
                                   "IoU and direction); those below only continue tracks (stage 2)")
     low_score: float = param(0.1, lo=0.0, hi=1.0,
                              doc="detections below this score are ignored")
-    new_score: float = param(0.7, lo=0.0, hi=1.0,
+    new_score: float = param(0.8, lo=0.0, hi=1.0,
                              doc="an unmatched detection starts a track only from this score")
     min_iou: float = param(0.3, lo=0.0, hi=1.0,
                            doc="gate of stages 1 and 3: IoU below this never matches")

@@ -32,13 +32,13 @@ def _walk(trk: DetectionTracker, frames: int, step: float = 8.0, size: float = 4
 
 def test_a_low_score_detection_continues_a_track_it_could_never_start():
     trk = _tracker("tracker.confirm_hits=1")
-    # frame 1: a 0.9 box (>= new_score 0.7) starts track 1, confirmed at once (confirm_hits 1)
+    # frame 1: a 0.9 box (>= new_score 0.8) starts track 1, confirmed at once (confirm_hits 1)
     assert list(_step(trk, [[0, 0, 10, 20]], [0.9])) == [1]
-    # frame 2: only a 0.3 box (low_score 0.1 <= 0.3 < high_score 0.6): stage 2. The track is at
+    # frame 2: only a 0.3 box (low_score 0.1 <= 0.3 < high_score 0.7): stage 2. The track is at
     # rest, so its prediction is (0, 0, 10, 20); IoU with (1, 0, 10, 20) = 9*20 / (200 + 200 -
     # 180) = 180 / 220 = 0.818 >= low_iou 0.5: the weak box continues track 1
     assert list(_step(trk, [[1, 0, 10, 20]], [0.3])) == [1]
-    # the same 0.3 box alone never starts a track: below new_score 0.7, in any frame
+    # the same 0.3 box alone never starts a track: below new_score 0.8, in any frame
     fresh = _tracker("tracker.confirm_hits=1")
     assert [_step(fresh, [[1, 0, 10, 20]], [0.3]) for _ in range(5)] == [{}] * 5
 
