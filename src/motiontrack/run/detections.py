@@ -11,7 +11,6 @@ detections, frame by frame, as with a video.
 
 from __future__ import annotations
 
-import logging
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
@@ -27,8 +26,6 @@ from ..io.pictureless import PicturelessSource
 from ..pipeline import fill_gap_frames, run
 from ..tracking.gaps import fill_gaps
 from ..types import Annotations, frame_number
-
-log = logging.getLogger(__name__)
 
 __all__ = ["DetectionsSequence", "detections_sequence", "read_detections",
            "pictureless_source", "track_detections", "track_split"]

@@ -51,7 +51,7 @@ from .tracker import APPEARANCE_RATE, TRACKERS, TrackView
 
 __all__ = ["DetectionTracker", "direction_cost", "unit_directions"]
 
-#: running-average rate of a track's appearance histogram
+#: running-average rate of a track's appearance histogram (the motion-blob tracker's)
 _HIST_RATE = APPEARANCE_RATE
 
 
