@@ -44,9 +44,9 @@ def test_people_stage_benchmark_replays_the_stage_identically_and_reports_its_pa
 
 
 @pytest.mark.slow
-def test_detections_benchmark_reports_every_row(data):
+def test_pets_detections_benchmark_reports_every_row(data):
     data("pets09-s2l1", "video.avi")
-    out = subprocess.run([sys.executable, str(REPO / "benchmarks" / "detections.py"), "--data",
+    out = subprocess.run([sys.executable, str(REPO / "benchmarks" / "detections_pets.py"), "--data",
                           str(data_root()), "--frames", "40", "--seeds", "1"],
                          capture_output=True, text=True, timeout=120, check=True).stdout
     rows = re.findall(r"^\s*(\d\.\d\d)\s+(\d\.\d\d)\s+(\d\.\d\d)\s+(\d\.\d)((?:\s+-?\d+\.\d+){6})$",
@@ -55,6 +55,22 @@ def test_detections_benchmark_reports_every_row(data):
     perfect = [float(v) for v in rows[0][4].split()]
     # perfect detections: every reported box is a person
     assert rows[0][:4] == ("0.00", "0.00", "0.00", "0.0") and perfect[4] == 1.0, out
+
+
+@pytest.mark.slow
+def test_detections_benchmark_puts_motiontrack_beside_sort_settings_on_mot15(data):
+    data("mot15-dev", "TUD-Campus", "det", "det.txt")
+    out = subprocess.run([sys.executable, str(REPO / "benchmarks" / "detections.py"), "--data",
+                          str(data_root()), "--repeat", "1"],
+                         capture_output=True, text=True, timeout=300, check=True).stdout
+    rows = {m[0].strip(): [float(v) for v in m[1].split()] for m in re.findall(
+        r"^(motiontrack[\w ']*?)\s+((?:\d+\.\d+\s+){3}\d+\s+\d+)$", out, re.M)}
+    assert set(rows) >= {"motiontrack", "motiontrack SORT settings"}, out
+    ours, sort = rows["motiontrack"], rows["motiontrack SORT settings"]
+    # HOTA, MOTA, IDF1 above, identity switches at most, SORT's settings of the same tracker
+    assert all(a > b for a, b in zip(ours[:3], sort[:3])) and ours[3] <= sort[3], out
+    split = float(re.search(r"process start to exit: (\d+\.\d+)", out).group(1))
+    assert 0 < split < 30, out
 
 
 @pytest.mark.slow

@@ -254,7 +254,7 @@ def test_unknown_preset(capsys):
     from motiontrack.cli import main
 
     assert main(["track", "synth:walker?n_frames=5", "--preset", "nope"]) == 2
-    assert "unknown preset 'nope'; valid presets: fast, people" in capsys.readouterr().err
+    assert "unknown preset 'nope'; valid presets: detections, fast, people" in capsys.readouterr().err
 
 
 @pytest.mark.slow

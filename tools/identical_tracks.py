@@ -3,7 +3,7 @@ the SHA-256 of every ``tracks.txt`` compared with a recorded set.
 
 Cases: PETS 2009 S2L1 frames 1-300 with the defaults and with ``--preset people``, the synthetic
 ``crossing`` and ``column`` scenes, and PETS tracked from seeded jittered ground-truth detections
-(``--detections``). Every case runs the installed command in a process of its own, as a user
+(``--detections``) by the motion-blob tracker and by the detections preset. Every case runs the installed command in a process of its own, as a user
 runs it.
 
 Run:
@@ -60,8 +60,17 @@ def cases(data: Path, tmp: Path) -> dict[str, list[str]]:
         "pets-people": [video, "--preset", "people"],
         "synth-crossing": ["synth:crossing"],
         "synth-column": ["synth:column"],
-        "pets-detections": [video, "--detections", str(det)],
+        # the motion-blob tracker on detections, with its own defaults (--detections alone
+        # runs the detections preset)
+        "pets-detections": [video, "--detections", str(det), *_sets(
+            "tracker.method=kalman", "tracker.confirm_hits=5", "tracker.max_lost_s=2",
+            "tracker.fill_gaps_s=1")],
+        "pets-detections-preset": [video, "--detections", str(det)],
     }
+
+
+def _sets(*overrides: str) -> list[str]:
+    return [a for o in overrides for a in ("--set", o)]
 
 
 def run_case(name: str, args: list[str], tmp: Path) -> str:

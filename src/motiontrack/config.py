@@ -51,6 +51,7 @@ __all__ = [
     "MotionConfig",
     "CleanupConfig",
     "RegionsConfig",
+    "DetectionsParams",
     "TrackerConfig",
     "OutputConfig",
     "MeasureConfig",
@@ -342,13 +343,49 @@ class RegionsConfig(_Section):
 
 
 @dataclass(frozen=True)
+class DetectionsParams(_Section):
+    """The detection-driven tracker (``tracker.method = detections``, the ``detections`` preset):
+    ByteTrack's two stages by score and OC-SORT's observation-centric steps
+    (:mod:`motiontrack.tracking.detections`)."""
+
+    high_score: float = param(0.7, lo=0.0, hi=1.0,
+                              doc="detections at or above this score are matched first (stage 1: "
+                                  "IoU and direction); those below only continue tracks (stage 2)")
+    low_score: float = param(0.1, lo=0.0, hi=1.0,
+                             doc="detections below this score are ignored")
+    new_score: float = param(0.8, lo=0.0, hi=1.0,
+                             doc="an unmatched detection starts a track only from this score")
+    min_iou: float = param(0.3, lo=0.0, hi=1.0,
+                           doc="gate of stages 1 and 3: IoU below this never matches")
+    low_iou: float = param(0.5, lo=0.0, hi=1.0,
+                           doc="gate of stage 2 (low-score detections): IoU below this never matches")
+    inertia: float = param(0.2, lo=0.0, hi=10.0,
+                           doc="weight of the direction-consistency term in stage 1 (OC-SORT OCM; "
+                               "0 = off), times the detection's score")
+    delta_t: int = param(3, lo=1, hi=100,
+                         doc="a track's direction is that of its observations this many frames "
+                             "apart (OC-SORT delta_t)")
+    recover: bool = param(True, doc="stage 3 (OC-SORT OCR): a track left unmatched may take a "
+                                    "detection left over near its last observation")
+    reupdate: bool = param(True, doc="a track seen again after a gap re-runs its Kalman filter "
+                                     "over a line from its last observation to the new one "
+                                     "(OC-SORT ORU) instead of its coasted prediction")
+    appearance_weight: float = param(0.0, lo=0.0, hi=10.0,
+                                     doc="weight of the colour-histogram (Bhattacharyya) distance "
+                                         "in stage 1 when the run has pictures (a video beside "
+                                         "--detections); 0 = off")
+
+
+@dataclass(frozen=True)
 class TrackerConfig(_Section):
     method: str = param("kalman", doc="multi-object tracker: see `motiontrack list`")
-    cost: str = param("iou", choices=("iou", "center"), doc="association cost")
+    cost: str = param("iou", choices=("iou", "center"), doc="association cost",
+        when={"method": "kalman"})
     min_iou: float = param(0.1, lo=0.0, hi=1.0, doc="gate: IoU below this never matches (cost=iou)",
-                           when={"cost": "iou"})
+                           when={"method": "kalman", "cost": "iou"})
     max_distance: float = param(1.0, lo=0.0,
-                                doc="gate: centre distance / predicted box diagonal above this never matches")
+                                doc="gate: centre distance / predicted box diagonal above this never matches",
+        when={"method": "kalman"})
     confirm_hits: int = param(5, lo=1, hi=100, doc="hits needed to turn tentative into confirmed")
     max_lost_s: float = param(2.0, lo=0.0, hi=3600.0,
                               doc="seconds a confirmed track may coast unseen before deletion (converted "
@@ -361,28 +398,35 @@ class TrackerConfig(_Section):
                                      doc="Kalman measurement noise std, fraction of box height")
     partial_ratio: float = param(0.6, lo=0.0, hi=1.0,
                                  doc="a match smaller than this fraction of the prediction's area is a "
-                                     "partial view: keep the predicted size, anchor the visible edges (0 = off)")
+                                     "partial view: keep the predicted size, anchor the visible edges (0 = off)",
+        when={"method": "kalman"})
     search_growth: float = param(0.05, lo=0.0, hi=10.0,
-                                 doc="re-detection window growth per unseen frame (fraction of max_distance)")
+                                 doc="re-detection window growth per unseen frame (fraction of max_distance)",
+        when={"method": "kalman"})
     split_merged: bool = param(True, doc="split a motion blob holding several tracks' predictions "
                                       "into one synthetic measurement per track (people crossing); "
-                                      "never applied to --detections boxes (one object each)")
+                                      "never applied to --detections boxes (one object each)",
+        when={"method": "kalman"})
     coast_frames: int = param(10, lo=0, hi=1000,
                               doc="a lost track coasts at the median pace of its last N steps, not its "
                                   "last Kalman velocity (a fragment at an occluder's edge tilts that); "
-                                  "0 = Kalman velocity; never applied to --detections boxes")
+                                  "0 = Kalman velocity; never applied to --detections boxes",
+        when={"method": "kalman"})
     appearance_weight: float = param(0.5, lo=0.0, hi=10.0,
                                      doc="weight of the colour-histogram (Bhattacharyya) distance in the "
-                                         "association cost (0 = no appearance model)")
+                                         "association cost (0 = no appearance model)",
+        when={"method": "kalman"})
     appearance_gate: float = param(0.6, lo=0.0, hi=1.0,
                                    doc="an unseen track is re-identified only below this appearance distance",
-                                   when={"appearance_weight": Not(0.0, 0.5)})
+                                   when={"method": "kalman", "appearance_weight": Not(0.0, 0.5)})
     bridge: str = param("none", doc="single-object tracker (kcf, csrt, mil, mosse, medianflow, ...) "
-                                    "that carries a confirmed track through motion-detection misses; none = off")
+                                    "that carries a confirmed track through motion-detection misses; none = off",
+        when={"method": "kalman"})
     bridge_frames: int = param(50, lo=1, hi=100000, doc="longest bridge, frames",
-                               when={"bridge": Not("none", "kcf")})
+                               when={"method": "kalman", "bridge": Not("none", "kcf")})
     history: int = param(64, lo=0, hi=100000, doc="trajectory points kept per track (bounded)")
-    output_lost: bool = param(False, doc="report coasting (lost) tracks in tracks.txt")
+    output_lost: bool = param(False, doc="report coasting (lost) tracks in tracks.txt",
+        when={"method": "kalman"})
     fill_gaps_s: float = param(1.0, lo=0.0, hi=3600.0,
                                doc="when the run ends, fill each track's gaps of up to this many seconds "
                                    "in tracks.txt by linear interpolation (0 = off); tracks from "
@@ -393,6 +437,7 @@ class TrackerConfig(_Section):
     fill_motion: bool = param(False, doc="apply fill_gaps_s and backfill to tracks from motion regions "
                                          "too (off: a motion track's first boxes and the boxes at a "
                                          "gap's ends are often a fragment or a merged blob)")
+    detections: DetectionsParams = field(default_factory=DetectionsParams)
 
 
 @dataclass(frozen=True)

@@ -40,6 +40,7 @@ from .motion.regions import find_regions
 from .people import PeopleStage, head_params
 from .people.heads import split_regions_by_heads
 from .preprocess import load_roi, preprocess
+from .tracking import detections as _detections  # noqa: F401  (registers tracker "detections")
 from .tracking.bridge import Bridge
 from .tracking.tracker import TRACKERS
 from .types import (Annotations, Box, Discontinuity, Frame, FrameResult, PeopleFrame, Region,
@@ -161,12 +162,14 @@ class Pipeline:
         tracker_cfg = cfg.tracker
         if detections is not None:
             # a detector's box is one object: there is no merged blob to split (split shares of a
-            # box that overlaps a neighbour's prediction swap identities; benchmarks/detections.py),
+            # box that overlaps a neighbour's prediction swap identities; benchmarks/detections_pets.py),
             # and no fragment at an occluder's edge to tilt the Kalman velocity (coasting at the
             # median pace there: HOTA the same in sum over the benchmark's rows, MOTA -0.028
             # with 20% dropped boxes)
             tracker_cfg = replace(tracker_cfg, split_merged=False, coast_frames=0)
         self.tracker = TRACKERS.get(cfg.tracker.method)(tracker_cfg, image_size, fps)
+        #: the tracker weighs the appearance of external detections in the frame's picture
+        self.tracker_sees_pictures = isinstance(self.tracker, _detections.DetectionTracker)
         # a confirmed track's tentative frames (FrameResult.earlier)
         self.tracker.keep_tentative = (cfg.tracker.backfill
                                        and completes_tracks(cfg, detections is not None))
@@ -185,7 +188,8 @@ class Pipeline:
             self.ghosts = GhostFilter(cfg.motion.ghost_ratio, pixels=cfg.motion.ghost_pixels)
         self._prev_tracks: tuple = ()
         self.bridge = None
-        if cfg.tracker.bridge != "none":
+        if cfg.tracker.bridge != "none" and not self.tracker_sees_pictures:
+            # (the detection tracker takes no owned measurements: tracker.bridge needs kalman)
             self.bridge = Bridge(cfg.tracker.bridge, cfg.tracker.bridge_frames)
         #: the dual background: for FrameResult.static (``static``) and motion.keep_stopped
         self.static = (DualBackground(fps or 25.0, self.scale)
@@ -402,8 +406,13 @@ class Pipeline:
                 hyps = {tid: r.box.as_array() for tid, r in people.hypotheses_by_track.items()}
             # fitted outlines of tracked people: where each one is inside a merged region
             located = people.located_by_track or None
+        image, scale = small, self.scale
+        if small is None and self.detector is None and self.tracker_sees_pictures:
+            # external detections: the detection tracker's appearance reads the frame itself (an
+            # empty image is a source of detections alone, without pictures)
+            image, scale = (frame.image if frame.image.size else None), 1.0
         tracks = self.tracker.update(regions, dt=self._frame_gap(frame), owned=owned,
-                                     image=small, mask=mask, scale=self.scale, located=located,
+                                     image=image, mask=mask, scale=scale, located=located,
                                      frame=frame.index, hypotheses=hyps)
         if self.bridge is not None:
             self.bridge.remember(frame.image, tracks)

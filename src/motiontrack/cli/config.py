@@ -18,8 +18,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "serve's cameras file or a sequences manifest, for editors.")
     p.add_argument("keys", nargs="*", metavar="KEY",
                    help="only these keys or sections, e.g. motion.knn or tracker.max_lost_s")
-    p.add_argument("--preset", help="shipped settings to start from: people, fast (see "
-                                    "`motiontrack list`)")
+    p.add_argument("--preset", help="shipped settings to start from: people, fast, detections "
+                                    "(see `motiontrack list`)")
     p.add_argument("--config", help="TOML config file (applied after --preset)")
     p.add_argument("--set", dest="overrides", action="append", default=[],
                    metavar="STAGE.PARAM=VALUE", help="override one config field (repeatable)")

@@ -15,6 +15,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 def cmd_list(args) -> int:
     from ..motion import DETECTORS
     from ..tracking.single import SINGLE_TRACKERS
+    from ..tracking import detections as _detections  # noqa: F401  (registers its tracker)
     from ..tracking.tracker import TRACKERS
 
     from ..config import presets

@@ -19,10 +19,13 @@ def register(sub: argparse._SubParsersAction) -> None:
         "track", help="track moving objects in a video, camera, stream, image folder or synth: scene",
         description="Run the pipeline on SOURCE and write annotated video, tracks.txt (MOTChallenge), "
                     "summary.json and the resolved config.toml to the output folder.")
-    p.add_argument("source", help="video file, camera index (0), rtsp/http URL, image folder or glob "
-                                  "('input/*.jpg'), or synth:NAME (see `motiontrack list`)")
+    p.add_argument("source", nargs="?",
+                   help="video file, camera index (0), rtsp/http URL, image folder or glob "
+                        "('input/*.jpg'), or synth:NAME (see `motiontrack list`); optional with "
+                        "--detections (then only for drawing)")
     p.add_argument("-o", "--out", help=out_help("track"))
-    p.add_argument("--preset", help="shipped settings to start from: people, fast (see `motiontrack list`)")
+    p.add_argument("--preset", help="shipped settings to start from: people, fast, detections "
+                                    "(the default with --detections; see `motiontrack list`)")
     p.add_argument("--config", help="TOML config file (applied after --preset)")
     p.add_argument("--set", dest="overrides", action="append", default=[], metavar="STAGE.PARAM=VALUE",
                    help="override one config field, e.g. --set motion.method=knn (repeatable)")
@@ -41,7 +44,16 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--gt", help="ground truth to score the run against (any supported format)")
     add_scoring_option(p)
     p.add_argument("--detections", help="MOTChallenge det.txt: track these detections instead of "
-                                        "detecting motion")
+                                        "detecting motion; without SOURCE the frame count, size "
+                                        "and rate come from the seqinfo.ini beside it or in the "
+                                        "folder above, or from --size and --fps")
+    p.add_argument("--detections-folder", metavar="SPLIT",
+                   help="track every SPLIT/<seq>/det/det.txt (a MOTChallenge split) into "
+                        "OUT/<seq>.txt: with -o TRACKERS/NAME/data, `motiontrack evaluate "
+                        "--gt-folder SPLIT --trackers-folder TRACKERS` scores them")
+    p.add_argument("--size", metavar="WxH",
+                   help="with --detections and no SOURCE: the frame size, e.g. 640x480 (instead "
+                        "of seqinfo.ini's)")
     p.add_argument("--min-score", type=float, default=None,
                    help="with --detections: drop detections below this confidence")
     add_flag(p, "--camera")
@@ -72,7 +84,10 @@ def _build_config(args):
 
     overrides = run_overrides(args, ("start", "max_frames", "fps", "codec", "no_video",
                                      "mask_video", "camera"))
-    cfg = load_config(args.config, overrides, preset=args.preset)
+    preset = args.preset
+    if preset is None and (args.detections or args.detections_folder):
+        preset = "detections"   # a detector's boxes: the detection-driven tracker
+    cfg = load_config(args.config, overrides, preset=preset)
     warn_inactive_overrides(cfg, args.overrides)
     return cfg
 
@@ -126,25 +141,89 @@ def _viewer():
     return show
 
 
+def _size(text: str | None) -> tuple[int, int] | None:
+    from ..errors import ConfigError
+
+    if text is None:
+        return None
+    w, sep, h = text.lower().partition("x")
+    if not (sep and w.isdigit() and h.isdigit() and int(w) > 0 and int(h) > 0):
+        raise ConfigError(f"--size must be WIDTHxHEIGHT in pixels, e.g. 640x480, got {text!r}")
+    return int(w), int(h)
+
+
+def _check_detection_options(args) -> None:
+    """The combinations of SOURCE, --detections and --detections-folder that make a run."""
+    from ..errors import ConfigError
+
+    if args.detections_folder:
+        if args.source or args.detections:
+            raise ConfigError("--detections-folder tracks a whole split: give no SOURCE and no "
+                              "--detections")
+        if args.out is None:
+            raise ConfigError("--detections-folder needs -o DIR (e.g. TRACKERS/NAME/data) for "
+                              "its <seq>.txt files")
+        one_run = [flag for flag, on in (("--gt", args.gt), ("--scene", args.scene),
+                                         ("--show", args.show), ("--save", args.save),
+                                         ("--mask-images", args.mask_images)) if on]
+        if one_run:
+            raise ConfigError(f"{one_run[0]} is an option of one run; --detections-folder writes "
+                              "each sequence's tracks only (score them with evaluate "
+                              "--gt-folder SPLIT --trackers-folder TRACKERS)")
+        return
+    if args.source is None and not args.detections:
+        raise ConfigError("track needs a SOURCE, or --detections det.txt, or "
+                          "--detections-folder SPLIT")
+    if args.size and args.source is not None:
+        raise ConfigError("--size is for --detections without a SOURCE (a video states its size)")
+    if args.source is None and (args.show or args.save):
+        raise ConfigError(f"{'--show' if args.show else '--save'} draws on the source's "
+                          "pictures: give SOURCE with --detections")
+
+
+def _split(args, cfg) -> int:
+    """``--detections-folder SPLIT -o DIR``: every sequence's tracks in DIR/<seq>.txt."""
+    from ..run.detections import track_split
+
+    def done(name, tracks) -> None:
+        log.info("%s: %d rows, %d tracks", name, len(tracks), len(set(tracks.ids.tolist())))
+
+    files = track_split(args.detections_folder, args.out, cfg, size=_size(args.size),
+                        min_score=args.min_score, force=args.force, done=done)
+    print(f"sequences {len(files)}\noutputs   {args.out}")
+    return 0
+
+
 def cmd_track(args) -> int:
-    from ..io.mot import read_mot
     from ..run import track_job
     from ._common import frame_loop, output_folder, read_gt
     from ._sinks import sink_settings, sink_targets
 
+    _check_detection_options(args)
+    if args.source is None and not args.detections_folder:
+        args.overrides = [*args.overrides, "output.video=false"]   # nothing to draw on
+    cfg = _build_config(args)
+    if args.detections_folder:
+        return _split(args, cfg)
     sinks = sink_targets(args)
     settings = sink_settings(args)
-    cfg = _build_config(args)
     gt = read_gt(args.gt) if args.gt else None
-    det = None
+    det = source = None
     if args.detections:
-        det = read_mot(args.detections, kind="det")
-        if args.min_score is not None:
-            det = det.select(det.scores >= args.min_score)
+        from ..run.detections import (detections_sequence, pictureless_source,
+                                      read_detections)
+
+        det = read_detections(args.detections, args.min_score)
+        if args.source is None:
+            source = pictureless_source(detections_sequence(args.detections, det,
+                                                            _size(args.size)), cfg)
     window = args.show and _has_gui()
     view = _live_view(args) if args.show and not window else None
     try:
-        job = track_job(args.source, cfg, output_folder(args, "track"), force=args.force, gt=gt,
+        job = track_job(args.source if source is None else source, cfg,
+                        output_folder(args, "track") if source is None or args.out
+                        else _named_folder(source.info.name),
+                        force=args.force, gt=gt,
                         detections=det, show=_viewer() if window else None, save=args.save,
                         mask_images=args.mask_images, scoring=args.scoring, scene=args.scene,
                         bin_s=args.bin_s, sinks=sinks, camera_name=args.camera_name,
@@ -160,6 +239,13 @@ def cmd_track(args) -> int:
         if view is not None:
             view.close()
     return 0
+
+
+def _named_folder(name: str):
+    """A new run folder named after the sequence of detections tracked without a SOURCE."""
+    from ..run.folders import new_run_folder
+
+    return new_run_folder("track", name)
 
 
 def _keep_open(view) -> None:

@@ -4,6 +4,7 @@
 
     SPLIT/<seq>/gt/gt.txt            ground truth of one sequence
     SPLIT/<seq>/seqinfo.ini          [Sequence] seqLength = number of frames
+    SPLIT/<seq>/det/det.txt          public detections of one sequence
     TRACKERS/<tracker>/data/<seq>.txt   one tracker's result for that sequence
 
 A seqmap file (TrackEval's ``seqmaps/MOT17-train.txt``) lists the sequences to evaluate: a header
@@ -24,7 +25,8 @@ from pathlib import Path
 from ..errors import InputError, excerpt, location, printable
 from .mot import read_seqinfo
 
-__all__ = ["LayoutSequence", "read_seqmap", "split_sequences", "tracker_names", "tracker_file"]
+__all__ = ["LayoutSequence", "read_seqmap", "split_sequences", "tracker_names", "tracker_file",
+           "seqinfo_for", "detection_files"]
 
 #: the folder of a tracker holding its result files (TrackEval ``TRACKER_SUB_FOLDER``)
 TRACKER_SUB_FOLDER = "data"
@@ -133,3 +135,35 @@ def tracker_file(trackers_folder: str | Path, tracker: str, sequence: str) -> Pa
                          f"{printable(tracker)}/{TRACKER_SUB_FOLDER}/{printable(p.name)} "
                          f"({location(p)})")
     return p
+
+
+def seqinfo_for(det_path: str | Path) -> Path | None:
+    """The ``seqinfo.ini`` of a detections file: beside it, or in the folder above, as
+    MOTChallenge lays a sequence out (``SEQ/seqinfo.ini``, ``SEQ/det/det.txt``); None when
+    there is neither."""
+    folder = Path(det_path).parent
+    for d in (folder, folder.parent):
+        if (d / "seqinfo.ini").is_file():
+            return d / "seqinfo.ini"
+    return None
+
+
+def detection_files(split: str | Path) -> list[tuple[str, Path]]:
+    """``(sequence, SPLIT/<seq>/det/det.txt)`` for every sequence of a split folder that has
+    one, sorted by name.
+
+    Raises
+    ------
+    InputError
+        The folder is missing, or no sequence in it has ``det/det.txt``.
+    """
+    root = Path(split)
+    if not root.is_dir():
+        raise InputError(f"detections folder not found: {location(root)}")
+    found = sorted((d.name, d / "det" / "det.txt") for d in root.iterdir()
+                   if d.is_dir() and not d.name.startswith(".")
+                   and (d / "det" / "det.txt").is_file())
+    if not found:
+        raise InputError(f"no sequences with detections in {location(root)} (expected "
+                         f"<seq>/det/det.txt)")
+    return found

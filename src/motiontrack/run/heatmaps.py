@@ -109,7 +109,8 @@ class HeatmapWriter(Writer):
 
     def write(self, result: FrameResult) -> None:
         b = np.asarray(self.boxes_of(result), dtype=np.float64).reshape(-1, 4)
-        self._last = result.frame
+        if result.frame is not None and result.frame.size:   # a source without pictures: black
+            self._last = result.frame
         if not len(b):
             return
         self.grid.add(anchor_points(b, self.anchor))
