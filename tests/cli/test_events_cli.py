@@ -40,6 +40,7 @@ def test_the_store_of_a_run_holds_the_events_of_its_events_file(scene_runs):
 
 def test_events_are_listed_filtered_and_exported(scene_runs, capsys, utc):
     r = scene_runs("runner", 0)
+    capsys.readouterr()   # what the shared run printed, when this test started it
     crossings = [e.to_json() for e in r.pred if e.type == "line_cross"]
     assert main(["events", str(r.run_dir), "--type", "line_cross", "--json",
                  "--oldest-first"]) == 0
@@ -60,6 +61,7 @@ def test_events_are_listed_filtered_and_exported(scene_runs, capsys, utc):
 
 def test_totals_count_each_type_per_hour(scene_runs, capsys, utc):
     r = scene_runs("runner", 0)
+    capsys.readouterr()
     assert main(["events", str(r.run_dir), "--totals", "hour"]) == 0
     rows = [ln.split() for ln in capsys.readouterr().out.splitlines()[1:]]
     counted = {}
@@ -84,6 +86,7 @@ def test_times_are_iso_dates_and_times_or_a_time_ago(utc):
 ])
 def test_a_bad_filter_is_one_line(scene_runs, capsys, args, words):
     r = scene_runs("runner", 0)
+    capsys.readouterr()
     user_error(main(["events", str(r.run_dir), *args]), capsys.readouterr().err, *words)
 
 

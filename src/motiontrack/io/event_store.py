@@ -28,6 +28,7 @@ from __future__ import annotations
 import contextlib
 import json
 import re
+import shutil
 import sqlite3
 import time
 from dataclasses import dataclass
@@ -36,6 +37,7 @@ from pathlib import Path
 from typing import Any, Callable, Iterable, Iterator
 
 from ..errors import InputError
+from .atomic import DiskFullError
 
 __all__ = ["EventStore", "EventQuery", "StoredEvent", "STORE_NAME", "SCHEMA_VERSION",
            "MIGRATIONS", "store_path", "parse_time", "query_from"]
@@ -182,9 +184,10 @@ class EventStore:
             raise InputError(f"{self.path}: event store version {version}: open it for writing "
                              f"once (any run into its folder) to bring it to {SCHEMA_VERSION}")
         if not readonly:
-            self._db.execute("PRAGMA journal_mode = WAL")
-            self._db.execute("PRAGMA synchronous = NORMAL")
-            self._migrate(version)
+            with self._full():
+                self._db.execute("PRAGMA journal_mode = WAL")
+                self._db.execute("PRAGMA synchronous = NORMAL")
+                self._migrate(version)
         self._last_commit = clock()
         self._pending = 0
 
@@ -205,12 +208,13 @@ class EventStore:
         duration = next((float(event[k]) for k in _DURATION_KEYS
                          if isinstance(event.get(k), (int, float))), 0.0)
         rule = next((str(event[k]) for k in _RULE_KEYS if event.get(k) is not None), None)
-        cur = self._db.execute(
-            'INSERT INTO events (camera, segment, type, rule, class, track, frame, t, start, '
-            '"end", x, y, snapshot, clip, data) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)',
-            (camera, segment, str(event.get("type")), rule, event.get("class"),
-             event.get("track"), event.get("frame"), event.get("t"), when - duration, when,
-             event.get("x"), event.get("y"), snapshot, clip, json.dumps(event)))
+        with self._full():
+            cur = self._db.execute(
+                'INSERT INTO events (camera, segment, type, rule, class, track, frame, t, start, '
+                '"end", x, y, snapshot, clip, data) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)',
+                (camera, segment, str(event.get("type")), rule, event.get("class"),
+                 event.get("track"), event.get("frame"), event.get("t"), when - duration, when,
+                 event.get("x"), event.get("y"), snapshot, clip, json.dumps(event)))
         self._pending += 1
         self.tick()
         return int(cur.lastrowid)
@@ -218,21 +222,45 @@ class EventStore:
     def set_media(self, event_id: int, snapshot: str | None = None,
                   clip: str | None = None) -> None:
         """Record the snapshot and clip of an event once they are written."""
-        self._db.execute("UPDATE events SET snapshot = COALESCE(?, snapshot), "
-                         "clip = COALESCE(?, clip) WHERE id = ?", (snapshot, clip, event_id))
+        with self._full():
+            self._db.execute("UPDATE events SET snapshot = COALESCE(?, snapshot), "
+                             "clip = COALESCE(?, clip) WHERE id = ?", (snapshot, clip, event_id))
         self._pending += 1
         self.tick()
 
-    def tick(self) -> None:
-        """Commit when the last commit is :attr:`commit_every_s` old (call it every frame)."""
+    def tick(self) -> bool:
+        """Commit when the last commit is :attr:`commit_every_s` old (call it every frame);
+        whether it committed."""
         if self._pending and self._clock() - self._last_commit >= self.commit_every_s:
             self.commit()
+            return True
+        return False
 
     def commit(self) -> None:
         if not self.readonly:
-            self._db.commit()
+            with self._full():
+                self._db.commit()
         self._pending = 0
         self._last_commit = self._clock()
+
+    def rollback(self) -> None:
+        """Forget what was added since the last commit (after a :class:`DiskFullError`)."""
+        self._db.rollback()
+        self._pending = 0
+
+    @contextlib.contextmanager
+    def _full(self) -> Iterator[None]:
+        """SQLite's "database or disk is full" as the :class:`DiskFullError` every output
+        raises when its device fills."""
+        try:
+            yield
+        except sqlite3.OperationalError as exc:
+            text = str(exc)
+            if "full" in text or "quota" in text or ("I/O error" in text and _nearly_full(self.path)):
+                raise DiskFullError(self.path, text) from None   # its journal could not grow
+            if "I/O error" in text or "readonly" in text or "unable to open" in text:
+                raise InputError(f"cannot write the event store {self.path}: {text}") from None
+            raise
 
     # ------------------------------------------------------------------ searching
     def search(self, query: EventQuery = EventQuery()) -> list[StoredEvent]:
@@ -335,6 +363,15 @@ def _whole(params: dict[str, str | None], key: str, lo: int, default: int | None
     if n < lo:
         raise InputError(f"{key} must be a whole number >= {lo}, got {n}")
     return n if most is None else min(n, most)
+
+
+def _nearly_full(path: Path) -> bool:
+    """Whether the device of ``path`` has under 1 MiB free (SQLite says "disk I/O error" when
+    its shared-memory or journal file cannot grow)."""
+    try:
+        return shutil.disk_usage(path.parent).free < 1 << 20
+    except OSError:
+        return False
 
 
 def _quoted(column: str) -> str:

@@ -24,6 +24,9 @@ from ..io.sources import Source, SourceInfo
 from ..types import Annotations, Event, FrameResult
 from .analytics_writers import CountsWriter, EventsWriter
 from .event_sinks import EventSinksWriter
+from .event_store_writer import EventStoreWriter
+from .folder import RunFolder
+from .folders import source_name
 from .heatmaps import HeatmapWriter, scene_geometry
 from .job import Job, JobSummary
 
@@ -148,6 +151,8 @@ def _layout(fps: float, tracks: int) -> Callable[[JobSummary], dict[str, Any]]:
              "outputs": s.outputs}
         if "sinks" in s.extra:   # webhooks and MQTT brokers: what each delivered, dropped, retried
             d["sinks"] = s.extra["sinks"]
+        if "event_store" in s.extra:
+            d["event_store"] = s.extra["event_store"]
         if s.status != "complete":
             d.update(status=s.status, interrupted=s.interrupted)
         return d
@@ -160,8 +165,9 @@ def analyze_job(tracks: Annotations, scene: Scene, fps: float, out: str | Path, 
                 source: str = "", size: tuple[int, int] | None = None,
                 background: np.ndarray | None = None,
                 sinks: EventSinksWriter | None = None) -> Job:
-    """The job writing ``events.jsonl``, ``counts.csv``, ``heatmap.png`` (``heatmap_world.png``
-    with a camera) and ``summary.json`` for ``tracks`` in ``out``.
+    """The job writing ``events.jsonl``, ``events.db`` (no snapshots: a tracks file has no
+    pictures), ``counts.csv``, ``heatmap.png`` (``heatmap_world.png`` with a camera) and
+    ``summary.json`` for ``tracks`` in ``out``.
 
     The heat map is ``size`` pixels (default: the extent of the tracks) over ``background``
     (default: black).
@@ -169,6 +175,7 @@ def analyze_job(tracks: Annotations, scene: Scene, fps: float, out: str | Path, 
     out = Path(out)
     src, proc = analysis(tracks, scene, fps, camera=camera, source=source, size=size)
     writers = [EventsWriter(out, source, scene.source),
+               EventStoreWriter(RunFolder(out).event_store, source_name(source or out)),
                CountsWriter(out, scene.lines, scene.zones, bin_s)]
     if sinks is not None:
         writers.append(sinks)

@@ -14,6 +14,7 @@ import time
 from pathlib import Path
 from typing import Callable
 
+from ..io.atomic import DiskFullError
 from ..io.event_store import EventStore
 from ..types import FrameResult, frame_number
 from .evidence import EvidenceKeeper
@@ -46,6 +47,10 @@ class EventStoreWriter(Writer):
         self.evidence_folder = evidence
         self._keeper: EvidenceKeeper | None = None
         self._ctx: JobContext | None = None
+        #: events added since the last commit, and (once the device is full) every later one:
+        #: written when the run ends, or the run fails with the device full
+        self._uncommitted: list[tuple[dict, float]] = []
+        self._full = False
 
     def start(self, ctx: JobContext) -> None:
         fresh = not self.path.exists()
@@ -69,28 +74,43 @@ class EventStoreWriter(Writer):
             return
         scene, keeper, n = result.scene, self._keeper, frame_number(result.index)
         picture = None
-        if keeper is not None and (keeper.needs_picture(n) or (scene is not None and scene.events)):
+        pictured = result.frame is not None and result.frame.size > 0   # not a tracks file's
+        if keeper is not None and pictured and (keeper.needs_picture(n)
+                                                or (scene is not None and scene.events)):
             picture = self._ctx.annotated(result)
         clips = keeper.frame(n, picture) if keeper is not None else []
-        for e in scene.events if scene is not None else ():
-            when = result.timestamp if self._live else self._started + e.t
-            record = e.to_json()
-            event_id = self._store.add(record, self.camera, when, self.segment)
-            if keeper is not None:
-                snapshot = keeper.event(event_id, record, result, picture)
-                if snapshot is not None:
-                    self._store.set_media(event_id, snapshot=snapshot)
-            self.count += 1
-        self._media(clips)
-        self._store.tick()
+        records = [(e.to_json(), result.timestamp if self._live else self._started + e.t)
+                   for e in (scene.events if scene is not None else ())]
+        self.count += len(records)
+        self._uncommitted += records
+        if self._full:   # the device is full: kept for the end of the run
+            return
+        try:
+            for record, when in records:
+                event_id = self._store.add(record, self.camera, when, self.segment)
+                if keeper is not None:
+                    snapshot = keeper.event(event_id, record, result, picture)
+                    if snapshot is not None:
+                        self._store.set_media(event_id, snapshot=snapshot)
+            self._media(clips)
+            if self._store.tick():
+                self._uncommitted.clear()
+        except DiskFullError:
+            self._store.rollback()   # what was not committed is in _uncommitted
+            self._full = True
+            raise
 
     def _media(self, clips: list[tuple[int, str]]) -> None:
         for event_id, path in clips:
             self._store.set_media(event_id, clip=path)
 
     def close(self, keep: bool) -> None:
-        if self._keeper is not None and self._store is not None and keep:
-            self._media(self._keeper.close())   # the clips still open end with the run
+        if self._store is not None and keep:
+            if self._full:   # the run made room (its video went): the events kept meanwhile
+                for record, when in self._uncommitted:
+                    self._store.add(record, self.camera, when, self.segment)
+            elif self._keeper is not None:
+                self._media(self._keeper.close())   # the clips still open end with the run
         self._keeper = None
         if self._store is not None:
             self._store.close(finished=bool(self.paths))   # a run's own store is complete now

@@ -25,6 +25,7 @@ import cv2
 import numpy as np
 
 from ..analytics.evidence import EvidencePlan
+from ..io.atomic import DiskFullError, atomic_write_bytes
 from ..io.clips import write_mjpeg_clip
 from ..types import FrameResult
 
@@ -39,7 +40,7 @@ CLIP_QUALITY = 75
 #: smallest margin around an object's box in its crop (pixels)
 MIN_MARGIN = 16
 #: the files of evidence/ this module writes
-_OURS = re.compile(r"\d+(\.jpg|-object\.jpg|\.avi)|\.\d+\..*\.part\.avi")
+_OURS = re.compile(r"\d+(\.jpg|-object\.jpg|\.avi)|\.\d+(-object)?\..*\.part\.(avi|jpg)")
 
 
 @dataclass
@@ -113,13 +114,16 @@ class EvidenceKeeper:
             self._open.append(_Clip(event_id, before, frame + int(spec.clip_s[1] * self.fps)))
         if not spec.snapshot or picture is None:
             return None
-        self.dir.mkdir(parents=True, exist_ok=True)
         path = self.dir / f"{event_id}.jpg"
-        cv2.imwrite(str(path), picture, [cv2.IMWRITE_JPEG_QUALITY, JPEG_QUALITY])
         crop = _crop(result.frame, _box_of(event, result))
-        if crop is not None:
-            cv2.imwrite(str(self.dir / f"{event_id}-object.jpg"), crop,
-                        [cv2.IMWRITE_JPEG_QUALITY, JPEG_QUALITY])
+        try:
+            self.dir.mkdir(parents=True, exist_ok=True)
+            _write_jpeg(path, picture)
+            if crop is not None:
+                _write_jpeg(self.dir / f"{event_id}-object.jpg", crop)
+        except (OSError, DiskFullError) as exc:   # a full device: no snapshot, the event stays
+            log.warning("snapshot of event %d not written: %s", event_id, exc)
+            return None
         return self._rel(path)
 
     def _finished(self, frame: int | None) -> list[tuple[int, str]]:
@@ -128,9 +132,13 @@ class EvidenceKeeper:
             if frame is None or frame >= clip.last:
                 clip.done = True
                 if clip.frames:
-                    self.dir.mkdir(parents=True, exist_ok=True)
-                    path = write_mjpeg_clip(self.dir / f"{clip.event_id}.avi", clip.frames,
-                                            self.clip_fps)
+                    try:
+                        self.dir.mkdir(parents=True, exist_ok=True)
+                        path = write_mjpeg_clip(self.dir / f"{clip.event_id}.avi", clip.frames,
+                                                self.clip_fps)
+                    except (OSError, DiskFullError) as exc:   # a full device: no clip
+                        log.warning("clip of event %d not written: %s", clip.event_id, exc)
+                        continue
                     out.append((clip.event_id, self._rel(path)))
         self._open = [c for c in self._open if not c.done]
         return out
@@ -148,6 +156,14 @@ class EvidenceKeeper:
         return jpeg.tobytes()
 
 
+def _write_jpeg(path: Path, picture: np.ndarray) -> None:
+    """Write ``picture`` whole or not at all (``cv2.imwrite`` fails without saying why)."""
+    ok, jpeg = cv2.imencode(".jpg", picture, [cv2.IMWRITE_JPEG_QUALITY, JPEG_QUALITY])
+    if not ok:
+        raise OSError(f"cannot encode {path.name}")
+    atomic_write_bytes(path, jpeg.tobytes())
+
+
 def _box_of(event: Mapping[str, Any], result: FrameResult) -> tuple[float, float, float, float]:
     """The box of the event's track in this frame, or a square around its point (an object
     that is no track any more, such as an abandoned bag)."""
@@ -159,7 +175,7 @@ def _box_of(event: Mapping[str, Any], result: FrameResult) -> tuple[float, float
 
 
 def _crop(image: np.ndarray | None, box: tuple[float, float, float, float]) -> np.ndarray | None:
-    if image is None:
+    if image is None or not image.size:
         return None
     x, y, w, h = box
     m = max(MIN_MARGIN, 0.25 * max(w, h))
