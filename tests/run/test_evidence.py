@@ -108,3 +108,47 @@ def test_a_tracked_run_keeps_each_events_snapshot_and_clip(scene_runs):
         kept = [n for n in range(max(1, e.frame - 125), min(last, e.frame + 250) + 1)
                 if n % 2 == 0]
         assert fps == 12.5 and len(frames) == len(kept), e
+
+
+@pytest.mark.slow
+def test_a_run_killed_while_it_keeps_clips_leaves_each_clip_whole_and_recorded_or_absent(
+        tmp_path):
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    from motiontrack.cli import main
+
+    assert main(["synth-events", "synth:walker?seed=0", "-o", str(tmp_path / "gt")]) == 0
+    scene = tmp_path / "scene.toml"   # short clips, so one is written soon after its event
+    scene.write_text((tmp_path / "gt" / "scene.toml").read_text()
+                     + "\n[evidence]\nclip_s = [1, 1]\nclip_fps = 25\n")
+    out = tmp_path / "run"
+    proc = subprocess.Popen([sys.executable, "-m", "motiontrack", "-q", "track",
+                             "synth:walker?seed=0&n_frames=3000", "--scene", str(scene),
+                             "--no-video", "-o", str(out)], stderr=subprocess.DEVNULL)
+    try:
+        end = time.monotonic() + 60
+        while time.monotonic() < end:
+            if (out / "events.db").is_file():
+                with EventStore(out, readonly=True) as store:
+                    if any(e.clip for e in store):
+                        break
+            time.sleep(0.05)
+        else:
+            pytest.fail("no clip recorded within 60 s")
+    finally:
+        os.kill(proc.pid, signal.SIGKILL)
+        proc.wait(10)
+    with EventStore(out, readonly=True) as store:
+        rows = list(store)
+    assert any(e.clip for e in rows)
+    for e in rows:
+        assert e.snapshot is None or (out / e.snapshot).is_file()
+        if e.clip is not None:   # recorded: whole, 1 s either side at 25 fps
+            frames, fps = read_clip(out / e.clip)
+            assert fps == 25.0 and len(frames) == 51, e
+    referenced = {e.clip for e in rows if e.clip}
+    assert {f"evidence/{p.name}" for p in (out / "evidence").glob("*.avi")} >= referenced
