@@ -75,3 +75,37 @@ def test_bad_filters_are_400_with_the_message_and_no_store_is_no_event(store, tm
     empty = create_app(Hub([("door", False)]), store=tmp_path / "none" / "events.db")
     (r,) = _get(empty, "/api/events/search")
     assert r.json() == {"events": [], "total": 0, "limit": MAX_PAGE, "offset": 0}
+
+
+def test_an_events_snapshot_object_and_clip_are_served(tmp_path):
+    import cv2
+    import numpy as np
+
+    from motiontrack.io.clips import write_mjpeg_clip
+
+    db = tmp_path / "events.db"
+    evidence = tmp_path / "cam" / "seg" / "evidence"
+    evidence.mkdir(parents=True)
+    picture = np.full((24, 32, 3), 90, np.uint8)
+    cv2.imwrite(str(evidence / "1.jpg"), picture)
+    cv2.imwrite(str(evidence / "1-object.jpg"), picture[:8, :8])
+    jpegs = [cv2.imencode(".jpg", np.full((24, 32, 3), 10 * k, np.uint8))[1].tobytes()
+             for k in range(5)]
+    write_mjpeg_clip(evidence / "1.avi", jpegs, 50.0)
+    with EventStore(db) as s:
+        i = s.add({"type": "loiter", "frame": 3, "zone": "bench"}, "cam", time.time(), "cam/seg",
+                   snapshot="cam/seg/evidence/1.jpg", clip="cam/seg/evidence/1.avi")
+        s.add({"type": "loiter", "frame": 4, "zone": "bench"}, "cam", time.time(), "cam/seg",
+              snapshot="../../etc/passwd")
+    app = create_app(Hub([("cam", False)]), store=db)
+    snap, obj, avi, mjpg, bad, none, kind = _get(
+        app, f"/api/events/{i}/snapshot.jpg", f"/api/events/{i}/object.jpg",
+        f"/api/events/{i}/clip.avi", f"/api/events/{i}/clip.mjpg", "/api/events/2/snapshot.jpg",
+        "/api/events/99/clip.avi", f"/api/events/{i}/notes.txt")
+    assert snap.headers["content-type"] == "image/jpeg"
+    assert cv2.imdecode(np.frombuffer(snap.content, np.uint8), 1).shape == (24, 32, 3)
+    assert cv2.imdecode(np.frombuffer(obj.content, np.uint8), 1).shape == (8, 8, 3)
+    assert avi.content == (evidence / "1.avi").read_bytes()
+    assert mjpg.headers["content-type"].startswith("multipart/x-mixed-replace")
+    assert mjpg.content.count(b"Content-Type: image/jpeg") == 5      # every frame of the clip
+    assert bad.status_code == none.status_code == kind.status_code == 404   # outside the folder

@@ -274,6 +274,12 @@ class EventStore:
             args += [-1 if query.limit is None else int(query.limit), int(query.offset)]
         return [_row(r) for r in self._db.execute(sql, args)]
 
+    def get(self, event_id: int) -> StoredEvent | None:
+        """The event ``event_id``, or None."""
+        row = self._db.execute(f'SELECT {", ".join(_quoted(c) for c in _COLUMNS)} FROM events '
+                               'WHERE id = ?', (int(event_id),)).fetchone()
+        return _row(row) if row is not None else None
+
     def count(self, query: EventQuery = EventQuery()) -> int:
         """How many events ``query`` selects, ignoring its limit and offset."""
         where, args = query.where()

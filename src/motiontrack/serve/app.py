@@ -29,6 +29,7 @@ from .guard import HostCheck, OriginCheck, TokenCheck
 from .hosts import LOOPBACK_NAMES
 from .hub import CameraState, Cursor, Hub
 from .scenes import SceneFiles
+from .metrics import metrics_routes
 from .search import search_routes
 
 __all__ = ["create_app", "json_body", "MAX_BODY", "MAX_DEPTH"]
@@ -116,7 +117,7 @@ def create_app(hub: Hub, token: str | None = None,
     (:mod:`.guard`); ``store``: the event store the search answers from (:mod:`.search`)."""
     files = scenes if isinstance(scenes, SceneFiles) else SceneFiles(scenes or {})
     routes = [*_page_routes(), *_api_routes(hub), *_stream_routes(hub, stopping),
-              *_editor_routes(hub, files), *_schema_routes(), *search_routes(store)]
+              *_editor_routes(hub, files), *_schema_routes(), *search_routes(store), *metrics_routes(hub)]
     app: Any = OriginCheck(Starlette(routes=routes))
     if token:
         app = TokenCheck(app, token)

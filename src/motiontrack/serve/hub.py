@@ -90,6 +90,8 @@ class CameraState:
                                        "reconnects": 0}
         self.events: collections.deque = collections.deque(maxlen=EVENTS_KEPT)
         self.seq = 0
+        #: events by type since the server started (``/metrics``)
+        self.event_types: collections.Counter = collections.Counter()
         self.counts: dict[str, Any] = {"lines": {}, "zones": {}}
         self.restarts = 0
         self.frame_subs: set[Subscriber] = set()
@@ -108,6 +110,8 @@ class CameraState:
         with self.lock:
             for e in events:
                 self.seq += 1
+                if e.get("type") != "discontinuity":   # a record of the source, not an event
+                    self.event_types[str(e.get("type"))] += 1
                 item = {**e, "seq": self.seq}
                 self.events.append(item)
                 out.append(item)

@@ -1,5 +1,9 @@
 """The event store's search over HTTP: ``GET /api/events/search`` and ``/api/events/totals``.
 
+``/api/events/{id}/snapshot.jpg``, ``object.jpg``, ``clip.avi`` give an event's evidence
+(:mod:`motiontrack.run.evidence`); ``clip.mjpg`` replays its clip as MJPEG at the clip's rate,
+which an ``<img>`` plays.
+
 The same filters as ``motiontrack events`` (:func:`~motiontrack.io.event_store.query_from`):
 ``camera``, ``type``, ``rule``, ``class``, ``since``, ``until`` (ISO times or a time ago),
 ``limit`` (at most :data:`MAX_PAGE`, also the default) and ``offset``; newest first. Each
@@ -11,11 +15,11 @@ from __future__ import annotations
 
 import time
 from pathlib import Path
-from typing import Any
+from typing import Any, AsyncIterator
 
 import anyio
 from starlette.requests import Request
-from starlette.responses import JSONResponse, Response
+from starlette.responses import FileResponse, JSONResponse, Response, StreamingResponse
 from starlette.routing import Route
 
 from ..errors import MotionTrackError
@@ -61,4 +65,62 @@ def search_routes(store: Path | None) -> list[Route]:
             return JSONResponse({"error": "bin must be hour or day"}, status_code=400)
         return await answer(request, kind)
 
-    return [Route("/api/events/search", search), Route("/api/events/totals", totals)]
+    def media_path(event_id: int, kind: str) -> Path | None:
+        """The file of ``kind`` (snapshot, object, clip) of event ``event_id``, inside the
+        store's folder, or None."""
+        if store is None or not store.is_file():
+            return None
+        with EventStore(store, readonly=True) as s:
+            row = s.get(event_id)
+        if row is None:
+            return None
+        rel = row.clip if kind == "clip" else row.snapshot
+        if rel is None:
+            return None
+        if kind == "object":
+            rel = rel[:-len(".jpg")] + "-object.jpg"
+        root = store.parent.resolve()
+        path = (root / rel).resolve()
+        return path if path.is_relative_to(root) and path.is_file() else None
+
+    async def media(request: Request) -> Response:
+        kind = request.path_params["kind"]
+        if kind not in _MEDIA:
+            return JSONResponse({"error": f"no such file: {', '.join(_MEDIA)}"}, status_code=404)
+        try:
+            event_id = int(request.path_params["id"])
+        except ValueError:
+            return JSONResponse({"error": "the event id must be a number"}, status_code=400)
+        path = await anyio.to_thread.run_sync(media_path, event_id, _MEDIA[kind][0])
+        if path is None:
+            return JSONResponse({"error": f"no {kind} for this event"}, status_code=404)
+        if kind == "clip.mjpg":
+            return StreamingResponse(_replay(path), media_type=MJPEG_TYPE)
+        return FileResponse(path, media_type=_MEDIA[kind][1])
+
+    return [Route("/api/events/search", search), Route("/api/events/totals", totals),
+            Route("/api/events/{id}/{kind:str}", media)]
+
+
+#: the media of an event: what the URL names → (the file it comes from, its content type)
+_MEDIA = {"snapshot.jpg": ("snapshot", "image/jpeg"), "object.jpg": ("object", "image/jpeg"),
+          "clip.avi": ("clip", "video/x-msvideo"), "clip.mjpg": ("clip", "")}
+MJPEG_TYPE = "multipart/x-mixed-replace; boundary=frame"
+
+
+async def _replay(path: Path) -> AsyncIterator[bytes]:
+    """A clip's JPEG frames as an MJPEG stream at the clip's own rate: an ``<img>`` plays it."""
+    frames, fps = await anyio.to_thread.run_sync(_clip_jpegs, path)
+    for jpeg in frames:
+        yield (b"--frame\r\nContent-Type: image/jpeg\r\nContent-Length: "
+               + str(len(jpeg)).encode() + b"\r\n\r\n" + jpeg + b"\r\n")
+        await anyio.sleep(1.0 / fps if fps > 0 else 0.1)
+
+
+def _clip_jpegs(path: Path) -> tuple[list[bytes], float]:
+    import cv2
+
+    from ..io.clips import read_clip
+
+    frames, fps = read_clip(path)
+    return [cv2.imencode(".jpg", f)[1].tobytes() for f in frames], fps
