@@ -38,6 +38,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--rotate-mb", type=float, default=0.0,
                    help="start a new output segment when one reaches this many megabytes "
                         "(default 0: no size limit)")
+    p.add_argument("--keep-days", type=float, default=None, metavar="D",
+                   help="remove output segments (with their events, snapshots and clips) that "
+                        "ended more than D days ago (default: keep all)")
+    p.add_argument("--keep-gb", type=float, default=None, metavar="G",
+                   help="remove the oldest output segments while all take more than G "
+                        "gigabytes (default: no bound); never a segment being written")
     p.set_defaults(func=cmd_serve)
 
 
@@ -52,10 +58,12 @@ def cmd_serve(args) -> int:
     if not 0 < args.port < 65536:
         raise ConfigError(f"--port must be in 1..65535, got {args.port}")
     try:
+        from ..serve.retention import Retention
         from ..serve.server import serve
     except ImportError as exc:
         raise ConfigError(f"serve needs the web extras ({exc.name} is missing): pip install "
                           "'motiontrack[serve]'") from None
     return serve(args.cameras, args.host, args.port, args.out, token, rotate_s=args.rotate_s,
                  rotate_mb=args.rotate_mb, log_level=log.getEffectiveLevel(),
-                 allowed=args.allowed_host)
+                 allowed=args.allowed_host,
+                 retention=Retention(args.keep_days, args.keep_gb))

@@ -228,6 +228,15 @@ class EventStore:
         self._pending += 1
         self.tick()
 
+    def forget_segments(self, names: list[str]) -> int:
+        """Remove the events of the segments ``names`` (their folders are gone); how many."""
+        with self._full():
+            n = 0
+            for name in names:
+                n += self._db.execute("DELETE FROM events WHERE segment = ?", (name,)).rowcount
+            self._db.commit()
+        return n
+
     def tick(self) -> bool:
         """Commit when the last commit is :attr:`commit_every_s` old (call it every frame);
         whether it committed."""

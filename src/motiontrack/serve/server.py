@@ -31,6 +31,7 @@ from .cameras import CameraSpec, load_cameras
 from .channel import Channel
 from .hosts import allowed_hosts
 from .hub import Hub
+from .retention import Retention, RetentionThread
 from .scenes import SceneFiles, check_scene_files
 from .worker import camera_main
 
@@ -205,9 +206,11 @@ def _check_calibrations(specs: tuple[CameraSpec, ...]) -> None:
 def serve(cameras_file: str | Path, host: str = "127.0.0.1", port: int = 8080,
           out: str | Path | None = None, token: str | None = None, *,
           rotate_s: float = 3600.0, rotate_mb: float = 0.0,
-          log_level: int = logging.INFO, allowed: Sequence[str] = ()) -> int:
+          log_level: int = logging.INFO, allowed: Sequence[str] = (),
+          retention: Retention = Retention()) -> int:
     """Run the cameras of ``cameras_file`` and the web app until SIGTERM or SIGINT; 0.
-    ``allowed``: more host names the app answers to (:func:`~.guard.allowed_hosts`)."""
+    ``allowed``: more host names the app answers to (:func:`~.guard.allowed_hosts`);
+    ``retention``: how long and how much of the output segments to keep (:mod:`.retention`)."""
     import uvicorn
 
     hosts = allowed_hosts(host, allowed)
@@ -242,7 +245,11 @@ def serve(cameras_file: str | Path, host: str = "127.0.0.1", port: int = 8080,
     config = uvicorn.Config(app, host=host, port=port, log_level="warning", lifespan="off",
                             timeout_graceful_shutdown=3, access_log=False)
     server = _Server(config)
+    keeper = RetentionThread(out_dir, retention, lambda: [
+        f"{name}/{c['segment']}" for name, c in ((n, cam.describe()) for n, cam in
+                                                  hub.cameras.items()) if c["segment"]])
     sup.start()
+    keeper.start()
     log.info("serving %d camera(s) on http://%s:%d/ ; outputs in %s", len(specs), host, port,
              out_dir)
     previous = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
@@ -251,6 +258,7 @@ def serve(cameras_file: str | Path, host: str = "127.0.0.1", port: int = 8080,
     finally:
         for s in previous:   # a second Ctrl-C while the cameras commit is ignored
             signal.signal(s, signal.SIG_IGN)
+        keeper.stop()
         sup.stop()
         hub.close()
         for s, h in previous.items():
