@@ -87,7 +87,7 @@ def test_the_servers_thread_applies_retention_until_stopped(out):
         seen.append(1)
         return ["gate/d"]
 
-    t = RetentionThread(out, Retention(keep_days=6), in_use, every_s=0.02)
+    t = RetentionThread(out, Retention(keep_days=6), in_use, every_s=0.02, clock=lambda: NOW)
     t.start()
     end = time.monotonic() + 10
     while "gate/a" in _left(out) and time.monotonic() < end:

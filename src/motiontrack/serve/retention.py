@@ -118,11 +118,12 @@ def _forget(store: Path, names: list[str]) -> None:
 
 class RetentionThread:
     """:func:`apply_retention` every ``every_s`` seconds until :meth:`stop`; ``in_use`` gives
-    the segments the cameras are writing."""
+    the segments the cameras are writing, ``clock`` the time (:func:`time.time`)."""
 
     def __init__(self, out: Path, retention: Retention, in_use: Callable[[], Iterable[str]],
-                 every_s: float = CHECK_EVERY_S) -> None:
+                 every_s: float = CHECK_EVERY_S, clock: Callable[[], float] = time.time) -> None:
         self.out, self.retention, self.in_use, self.every_s = out, retention, in_use, every_s
+        self.clock = clock
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, name="retention", daemon=True)
 
@@ -133,7 +134,7 @@ class RetentionThread:
     def _run(self) -> None:
         while not self._stop.wait(self.every_s):
             try:
-                apply_retention(self.out, self.retention, self.in_use(), time.time())
+                apply_retention(self.out, self.retention, self.in_use(), self.clock())
             except Exception as exc:   # noqa: BLE001 - the next check tries again
                 log.warning("retention: %s", exc)
 
