@@ -121,8 +121,12 @@ def test_known_good_files_satisfy_their_exported_schema(file, data):
 def test_scene_schema_knows_every_rules_table_and_its_facts():
     schema = scene_json_schema()
     props = schema["properties"]
-    assert list(props) == ["anchor", "hysteresis_px", "forget_s", "line", "zone", "stationary",
-                           "abandoned", "speed"]
+    assert list(props) == ["anchor", "hysteresis_px", "forget_s", "evidence", "line", "zone",
+                           "stationary", "abandoned", "speed"]
+    assert props["evidence"]["properties"]["clip_s"]["default"] == [5.0, 10.0]
+    # every rule's table may choose its own evidence
+    assert {"snapshot", "clip_s"} <= set(props["zone"]["items"]["properties"])
+    assert {"snapshot", "clip_s"} <= set(props["stationary"]["properties"])
     assert schema["additionalProperties"] is False
     assert props["anchor"]["enum"] == ["bottom_center", "center"]
     assert props["forget_s"]["exclusiveMinimum"] == 0.0

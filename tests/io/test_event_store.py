@@ -132,3 +132,22 @@ def test_an_older_file_is_migrated_and_a_newer_or_foreign_one_refused(tmp_path):
     with pytest.raises(InputError, match=r"no event store at .*missing.db"):
         EventStore(tmp_path / "missing.db", readonly=True)
     assert store_path(tmp_path) == tmp_path / STORE_NAME and store_path(db) == db
+
+
+def test_a_new_store_appears_with_its_tables(tmp_path, monkeypatch):
+    """A reader polling for a run's store never finds a file without its tables."""
+    seen = []
+    real_link = __import__("os").link
+
+    def link(src, dst):
+        with sqlite3.connect(src) as db:   # what the file holds when it takes its name
+            seen.append(db.execute("PRAGMA user_version").fetchone()[0])
+        return real_link(src, dst)
+
+    monkeypatch.setattr("motiontrack.io.event_store.os.link", link)
+    with EventStore(tmp_path) as s:
+        s.add(_cross(1), "door", T0)
+    assert seen == [SCHEMA_VERSION]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["events.db"]   # no temporary file
+    with EventStore(tmp_path) as again:          # an existing store is opened, not replaced
+        assert again.count() == 1

@@ -39,7 +39,7 @@ from typing import Any
 from ..errors import ConfigError
 from ..io.tomlfile import read_toml
 from ..schema import from_dict, json_schema, keys_shown, param, shown
-from .evidence import EvidencePlan, EvidenceSpec, split_evidence
+from .evidence import EvidenceOverride, EvidencePlan, EvidenceSpec, split_evidence
 from .rules import RULES
 from .specs import (COORD_LIMIT, MAX_TABLES, AbandonedSpec, LineSpec, SceneSection, SpeedSpec,
                     StationarySpec, ZoneSpec)
@@ -182,6 +182,10 @@ def load_scene(path: str | Path, camera: Any = None) -> Scene:
         raise ConfigError(f"scene file {Path(path).name}: {exc}") from None
 
 
+#: a rule table's own ``snapshot`` and ``clip_s`` (:mod:`.evidence`), as JSON Schema
+_OVERRIDE_PROPERTIES = json_schema(EvidenceOverride)["properties"]
+
+
 def scene_json_schema() -> dict[str, Any]:
     """JSON Schema (draft 2020-12) of the scene file with the tables of every registered rule,
     for editors: a rule's keys of which exactly one must be given are a ``oneOf``; a rule that
@@ -193,6 +197,7 @@ def scene_json_schema() -> dict[str, Any]:
         else:
             table = json_schema(rule.schema)
             del table["$schema"]
+            table["properties"].update(_OVERRIDE_PROPERTIES)   # split off before the rule reads
             if rule.exactly_one:
                 table["allOf"] = [{"oneOf": [{"required": [k]} for k in keys]}
                                   for keys in rule.exactly_one]

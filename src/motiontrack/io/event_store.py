@@ -27,9 +27,11 @@ from __future__ import annotations
 
 import contextlib
 import json
+import os
 import re
 import shutil
 import sqlite3
+import threading
 import time
 from dataclasses import dataclass
 from datetime import datetime
@@ -165,6 +167,8 @@ class EventStore:
         self._clock = clock
         if readonly and not self.path.is_file():
             raise InputError(f"no event store at {self.path}")
+        if not readonly and not self.path.exists():
+            self._create()
         try:
             if readonly:
                 self._db = sqlite3.connect(f"{self.path.resolve().as_uri()}?mode=ro", uri=True,
@@ -190,6 +194,32 @@ class EventStore:
                 self._migrate(version)
         self._last_commit = clock()
         self._pending = 0
+
+    def _create(self) -> None:
+        """A new store appears whole: made under a temporary name, then linked into place (a
+        reader never finds a file without its tables; when another writer made it first, its
+        file is kept)."""
+        tmp = self.path.with_name(f".{self.path.name}.{os.getpid()}.{threading.get_ident()}.new")
+        tmp.unlink(missing_ok=True)
+        try:
+            db = sqlite3.connect(tmp)
+            try:
+                with self._full():
+                    with db:
+                        for steps in MIGRATIONS:
+                            for statement in steps:
+                                db.execute(statement)
+                        db.execute(f"PRAGMA user_version = {SCHEMA_VERSION}")
+            finally:
+                db.close()
+            try:
+                os.link(tmp, self.path)
+            except FileExistsError:
+                pass
+        except sqlite3.OperationalError as exc:
+            raise InputError(f"cannot create the event store {self.path}: {exc}") from None
+        finally:
+            tmp.unlink(missing_ok=True)
 
     def _migrate(self, version: int) -> None:
         if version == SCHEMA_VERSION:
