@@ -151,7 +151,8 @@ class Pipeline:
         self.scale = resolve_scale(cfg.preprocess.scale, *image_size)
         self.detections = detections
         self._det_index = detections.by_frame() if detections is not None else None
-        self.detector = create_detector(cfg.motion) if detections is None else None
+        self.fps = fps
+        self.detector = create_detector(cfg.motion, fps) if detections is None else None
         pre = cfg.preprocess
         if self.detector is not None and self.detector.wants_color and pre.grayscale:
             pre = replace(pre, grayscale=False)
@@ -195,6 +196,10 @@ class Pipeline:
         self.keep_stopped = cfg.motion.keep_stopped and self.static is not None
         #: frames a lost track may coast: its stopped pixels are kept that long
         self._keep_unseen = self.tracker.max_lost
+        #: the previous frame's feedback to a detector that takes it (``relearns``): the ghost
+        #: filter's ghost pixels to re-learn, and the static objects not to learn
+        self._relearn: np.ndarray | None = None
+        self._static_prev: StaticFrame | None = None
         self.frames_seen = 0
         #: the run's frame count (``index`` of :meth:`regions_of`) at the last reset: the
         #: warm-up counts from there
@@ -224,7 +229,9 @@ class Pipeline:
         """New motion and dual-background models: they re-learn the scene from the next frame
         (a model of the frames before a jump would see the whole picture change)."""
         if self.detector is not None:
-            self.detector = create_detector(self.cfg.motion)
+            self.detector = create_detector(self.cfg.motion, self.fps)
+        self._relearn = None
+        self._static_prev = None
         if self.static is not None:
             self.static = DualBackground(self.static.fps, self.scale)
 
@@ -260,11 +267,16 @@ class Pipeline:
         return max(1, int(round(gap / self._min_gap)))
 
     def _protect_mask(self, shape: tuple[int, int]) -> np.ndarray | None:
-        """Pixels (processing scale) where moving tracks are expected: not learnt as background."""
+        """Pixels (processing scale) not learnt as background: where the previous frame's
+        confirmed tracks that have moved are expected, and the previous frame's static objects
+        (with a dual background and a detector that re-learns)."""
         if not self.detector.protect:
             return None
-        boxes = self.tracker.moving_boxes()
-        if not len(boxes):
+        boxes = list(self.tracker.moving_boxes())
+        static = self._static_prev
+        if static is not None and self.detector.relearns:
+            boxes += [o.box.as_array() for o in static.objects]
+        if not boxes:
             return None
         mask = np.zeros(shape, bool)
         for box in boxes:
@@ -297,10 +309,15 @@ class Pipeline:
             small = self.prepare(frame)
         # the tracks of the frames before a jump say nothing of where this frame moves
         protect = self._protect_mask(small.shape[:2]) if cut is None else None
-        raw = self.detector.apply(small, protect)
+        if self.detector.relearns:
+            relearn, self._relearn = self._relearn, None
+            raw = self.detector.apply(small, protect, relearn if cut is None else None)
+        else:
+            raw = self.detector.apply(small, protect)
         if self.roi is not None:
             raw = np.bitwise_and(raw, self.roi)
         static = self.static.apply(small) if self.static is not None else None
+        self._static_prev = static
         background = self.detector.background() if self._wants_background else None
         return Motion(clean_mask(raw, self.cfg.cleanup), raw_mask=raw, small=small, static=static,
                       background=background, discontinuity=cut)
@@ -317,6 +334,9 @@ class Pipeline:
             mask = self._keep_stopped(mask, motion.static)
         if self.ghosts is not None:   # it learns its background in the warm-up frames too
             mask, regions = self.ghosts.regions(motion.small, mask, self._find, self.scale)
+            if self.detector.relearns:
+                # the detector re-learns the ghost pixels with the next frame
+                self._relearn = self.ghosts.ghost_pixels(mask.shape[:2])
         else:
             regions = self._find(mask)
         if index - self._warm_from < self.cfg.motion.warmup:
@@ -430,7 +450,8 @@ class Pipeline:
         prepared = (frames.prepared(self.prepare) if isinstance(frames, Source)
                     else ((f, self.prepare(f)) for f in frames))
         try:
-            if self.sequential or (self.detector is not None and self.detector.protect):
+            if self.sequential or (self.detector is not None
+                                   and (self.detector.protect or self.detector.relearns)):
                 for frame, small in prepared:
                     yield self.track(frame, self.detect(frame, self.frames_seen, small))
                 return

@@ -1,0 +1,55 @@
+"""The sample-based background in the pipeline: the previous frame's confirmed tracks are not
+learnt (the pipeline passes them as the detector's ``protect`` mask), so a person who stops
+keeps one track through the stop; without the mask the model learns them within ``absorb_s``."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from motiontrack.config import load_config
+from motiontrack.pipeline import Pipeline
+from motiontrack.synth.render import Person
+from motiontrack.synth.sequence import SyntheticScene
+from motiontrack.types import Frame
+
+FPS = 10.0
+WALK_TO = 30        # frame the person stops at
+STAND = 40          # frames standing: 4 s, twice absorb_s
+N_FRAMES = WALK_TO + STAND + 25
+
+
+def _scene() -> SyntheticScene:
+    p = Person(id=1, x0=-15.0, y0=200.0, vx=4.0, vy=0.0, height=70.0, t0=2.0,
+               turns=((float(WALK_TO), 0.0, 0.0), (float(WALK_TO + STAND), 4.0, 0.0)))
+    return SyntheticScene("stop", 0, 320, 240, FPS, N_FRAMES, people=(p,))
+
+
+def _frames_by_id(protect: bool) -> dict[int, list[int]]:
+    scene = _scene()
+    cfg = load_config(None, ["motion.method=vibe", "motion.vibe.absorb_s=2",
+                             f"motion.vibe.protect={str(protect).lower()}",
+                             "preprocess.scale=1.0"])
+    pipe = Pipeline(cfg, (scene.width, scene.height), fps=FPS)
+    seen: dict[int, list[int]] = {}
+    for i in range(scene.n_frames):
+        r = pipe.process(Frame(index=i, image=scene.frame(i), timestamp=i / FPS))
+        for t in r.tracks:
+            seen.setdefault(t.id, []).append(i)
+    return seen
+
+
+def test_person_who_stops_keeps_one_track_under_the_protect_mask():
+    seen = _frames_by_id(True)
+    assert list(seen) == [1]
+    frames = np.array(seen[1])
+    stop = (frames >= WALK_TO) & (frames < WALK_TO + STAND)
+    assert stop.sum() == STAND
+    assert frames[-1] > WALK_TO + STAND + 10
+
+
+def test_person_who_stops_is_learnt_without_the_protect_mask():
+    seen = _frames_by_id(False)
+    frames = np.concatenate([np.array(v) for v in seen.values()])
+    stop = (frames >= WALK_TO) & (frames < WALK_TO + STAND)
+    # learnt after absorb_s (2 s) standing: no box for the rest of the stop
+    assert stop.sum() <= STAND - 15
