@@ -231,7 +231,7 @@ class VibeParams(_Section):
     absorb_s: float = param(10.0, lo=0.0, hi=86400.0,
                             doc="seconds a pixel may stay foreground before it is learnt (what "
                                 "stops and is not protected joins the background); 0 = never")
-    accept_s: float = param(120.0, lo=0.0, hi=86400.0,
+    accept_s: float = param(180.0, lo=0.0, hi=86400.0,
                             doc="the same for protected pixels: something under a track that "
                                 "never moves again (a parked car) becomes background after this; "
                                 "0 = never",

@@ -79,10 +79,12 @@ class SampleBackground(MotionDetector):
     POOL = 4
     #: darkest shadow: the background times this
     SHADOW_TAU = 0.5
+    #: largest colour difference from that darker copy, a share of radius
+    SHADOW_OFF = 0.5
 
     def __init__(self, n_samples: int = 8, min_matches: int = 2, radius: int = 20,
                  subsampling: int = 16, protect: bool = True, absorb_s: float = 10.0,
-                 accept_s: float = 120.0,
+                 accept_s: float = 180.0,
                  ghost_ratio: float = 0.7, shadows: bool = True, seed: int = 0) -> None:
         self.n = int(n_samples)
         self.min_matches = int(min_matches)
@@ -229,7 +231,7 @@ class SampleBackground(MotionDetector):
         v = image.reshape(npix, 3)[idx].astype(np.float32)
         a = (v * b).sum(1) / np.maximum((b * b).sum(1), 1.0)
         off = np.abs(v - a[:, None] * b).max(1)
-        shadow = (a >= self.SHADOW_TAU) & (a <= 1.0) & (off <= 0.5 * self.radius)
+        shadow = (a >= self.SHADOW_TAU) & (a <= 1.0) & (off <= self.SHADOW_OFF * self.radius)
         out.reshape(-1)[idx[shadow]] = 0
 
     def _drop_ghosts(self, image: np.ndarray, lo: np.ndarray, hi: np.ndarray,
