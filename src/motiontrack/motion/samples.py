@@ -74,7 +74,7 @@ class SampleBackground(MotionDetector):
 
     #: the ghost test runs every this many frames, on components of at least this many pixels
     #: (bounding box, processing scale)
-    GHOST_EVERY, GHOST_MIN = 2, 24
+    GHOST_EVERY, GHOST_MIN = 4, 48
     #: random update positions drawn in advance, per pixel
     POOL = 4
     #: darkest shadow: the background times this
@@ -117,6 +117,13 @@ class SampleBackground(MotionDetector):
         self._hi: np.ndarray | None = None    # samples + radius, saturated
         self._held: np.ndarray | None = None  # frames each pixel has been foreground
 
+    def _due(self, held: np.ndarray, seconds: float) -> np.ndarray:
+        """0/255 where ``held`` (frames in the foreground) reached ``seconds`` (none for 0);
+        counts stop at 65535 frames (36 minutes at 30 fps), which also ends a longer time."""
+        if seconds <= 0:
+            return np.zeros_like(held, np.uint8)
+        return cv2.compare(held, min(self._frames_of(seconds), 65535), cv2.CMP_GE)
+
     def _frames_of(self, seconds: float) -> int:
         """``seconds`` in frames of the source (at least 1), or 0 for 0 seconds (never)."""
         return max(1, int(round(seconds * self.fps))) if seconds > 0 else 0
@@ -142,7 +149,7 @@ class SampleBackground(MotionDetector):
             self._hi[k] = pad_hi[1 + dy:1 + dy + h, 1 + dx:1 + dx + w]
         self._lo_v = _pixels(self._lo)
         self._hi_v = _pixels(self._hi)
-        self._held = np.zeros(h * w, np.uint32)
+        self._held = np.zeros((h, w), np.uint16)
         self._tables(h, w)
 
     def _tables(self, h: int, w: int) -> None:
@@ -180,7 +187,7 @@ class SampleBackground(MotionDetector):
             src = np.clip(ys + dy, 0, h - 1) * w + np.clip(xs + dx, 0, w - 1)
             self._lo_v[k * npix + at] = lo[src]
             self._hi_v[k * npix + at] = hi[src]
-        self._held[at] = 0
+        self._held.reshape(-1)[at] = 0
 
     # -- per frame -----------------------------------------------------------------------------
 
@@ -223,16 +230,25 @@ class SampleBackground(MotionDetector):
         idx = np.flatnonzero(out)
         if not len(idx):
             return
-        h, w = out.shape
-        npix = h * w
-        lo = self._lo[0].reshape(npix, 3)[idx].astype(np.float32)
-        hi = self._hi[0].reshape(npix, 3)[idx].astype(np.float32)
-        b = np.where(hi < 255, hi - self.radius, lo + self.radius)
-        v = image.reshape(npix, 3)[idx].astype(np.float32)
-        a = (v * b).sum(1) / np.maximum((b * b).sum(1), 1.0)
-        off = np.abs(v - a[:, None] * b).max(1)
-        shadow = (a >= self.SHADOW_TAU) & (a <= 1.0) & (off <= self.SHADOW_OFF * self.radius)
-        out.reshape(-1)[idx[shadow]] = 0
+        npix = out.size
+        hi = self._hi[0].reshape(npix, 3)[idx].astype(np.int32)
+        v = image.reshape(npix, 3)[idx].astype(np.int32)
+        # the background B (first sample) from its bounds: hi - radius unless hi saturated
+        b = hi - self.radius
+        top = (hi == 255).any(1)
+        if top.any():
+            b[top] = np.where(hi[top] < 255, b[top],
+                              self._lo[0].reshape(npix, 3)[idx[top]] + self.radius)
+        dot = np.einsum("ij,ij->i", v, b)
+        bb = np.einsum("ij,ij->i", b, b)
+        # SHADOW_TAU <= a = dot / bb <= 1, tested in integers first
+        cand = np.flatnonzero((dot <= bb) & (dot * 100 >= int(self.SHADOW_TAU * 100) * bb)
+                              & (bb > 0))
+        if not len(cand):
+            return
+        a = dot[cand] / bb[cand]
+        off = np.abs(v[cand] - a[:, None] * b[cand]).max(1)
+        out.reshape(-1)[idx[cand[off <= self.SHADOW_OFF * self.radius]]] = 0
 
     def _drop_ghosts(self, image: np.ndarray, lo: np.ndarray, hi: np.ndarray,
                      fg: np.ndarray) -> None:
@@ -272,18 +288,19 @@ class SampleBackground(MotionDetector):
         src: list[np.ndarray] = []
         # foreground for too long (``absorb_s``, or ``accept_s`` under the protect mask):
         # learnt at every frame until background
-        held = self._held
-        np.multiply(held, fg, out=held)
-        held += fg
-        never = np.uint32(2 ** 32 - 1)
-        free = self._frames_of(self.absorb_s) or never
+        fg8 = fg.view(np.uint8).reshape(self._held.shape)
+        held = cv2.bitwise_and(self._held, self._held, mask=fg8)   # 0 where background
+        cv2.add(held, 1, dst=held, mask=fg8)                        # (saturates at 65535)
+        self._held = held
+        due8 = self._due(held, self.absorb_s)
         if protect is not None:
             guard = protect.ravel()
             blocked = fg | guard
-            limit = np.where(guard, self._frames_of(self.accept_s) or never, free)
-        else:
-            limit = free
-        due = np.flatnonzero(held >= limit)
+            inside = np.ascontiguousarray(protect).view(np.uint8) * np.uint8(255)
+            late = self._due(held, self.accept_s)
+            due8 = cv2.bitwise_or(cv2.bitwise_and(late, inside),
+                                  cv2.bitwise_and(due8, cv2.bitwise_not(inside)))
+        due = np.flatnonzero(due8) if cv2.countNonZero(due8) else np.empty(0, np.int64)
         at.append((rng.integers(0, self.n, len(due)) * npix + due).astype(np.int32))
         src.append(due.astype(np.int32))
         # random conservative update (about npix / subsampling pixels) and spatial diffusion
