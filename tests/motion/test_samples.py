@@ -164,3 +164,15 @@ def test_gray_input():
     img[BOX] = 250
     assert _fg_in_box(model.apply(img)) > 0.95
     assert model.background().shape == (H, W)
+
+
+def test_track_refuses_min_matches_above_n_samples_in_one_line(tmp_path, capsys):
+    from motiontrack.cli import main
+
+    code = main(["track", "synth:walker?n_frames=2", "-o", str(tmp_path / "t"), "--no-video",
+                 "--set", "motion.method=vibe", "--set", "motion.vibe.min_matches=9"])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert "motion.vibe.min_matches must be at most motion.vibe.n_samples (8), got 9" in err
+    assert "Traceback" not in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "t").exists()
