@@ -53,3 +53,48 @@ def test_person_who_stops_is_learnt_without_the_protect_mask():
     stop = (frames >= WALK_TO) & (frames < WALK_TO + STAND)
     # learnt after absorb_s (2 s) standing: no box for the rest of the stop
     assert stop.sum() <= STAND - 15
+
+
+class _Recorder:
+    """A detector that records what the pipeline passes it."""
+
+    wants_color = False
+    protect = True
+    relearns = True
+
+    def __init__(self) -> None:
+        self.calls: list[tuple] = []
+
+    def apply(self, image, protect=None, relearn=None):
+        self.calls.append((protect, relearn))
+        return np.zeros(image.shape[:2], np.uint8)
+
+    def background(self):
+        return None
+
+
+def test_static_objects_of_the_previous_frame_are_not_learnt():
+    from motiontrack.types import Box, StaticFrame, StaticObject
+
+    cfg = load_config(None, ["motion.method=vibe", "preprocess.scale=0.5"])
+    pipe = Pipeline(cfg, (320, 240), fps=FPS, static=True)
+    assert pipe._protect_mask((120, 160)) is None       # no track, no static object
+    pipe._static_prev = StaticFrame((StaticObject(Box(100.0, 60.0, 40.0, 20.0), 800.0, 12, 2.0),),
+                                    np.zeros((120, 160), np.uint8))
+    mask = pipe._protect_mask((120, 160))
+    assert mask[30:40, 50:70].all() and mask.sum() == 200   # the box at half scale
+
+
+def test_the_ghost_filters_ghost_pixels_reach_the_detector_with_the_next_frame():
+    scene = _scene()
+    cfg = load_config(None, ["motion.method=vibe", "preprocess.scale=1.0"])
+    pipe = Pipeline(cfg, (scene.width, scene.height), fps=FPS)
+    rec = _Recorder()
+    pipe.detector = rec
+    ghost = np.zeros((scene.height, scene.width), bool)
+    ghost[10:20, 10:20] = True
+    pipe.ghosts.ghost_pixels = lambda shape: ghost       # as if a ghost was just found
+    for i in range(3):
+        pipe.process(Frame(index=i, image=scene.frame(i), timestamp=i / FPS))
+    assert rec.calls[0][1] is None
+    assert rec.calls[1][1] is ghost and rec.calls[2][1] is ghost
