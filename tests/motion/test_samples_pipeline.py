@@ -98,3 +98,45 @@ def test_the_ghost_filters_ghost_pixels_reach_the_detector_with_the_next_frame()
         pipe.process(Frame(index=i, image=scene.frame(i), timestamp=i / FPS))
     assert rec.calls[0][1] is None
     assert rec.calls[1][1] is ghost and rec.calls[2][1] is ghost
+
+
+def _frames(scene, cut_at=None):
+    from motiontrack.types import Discontinuity
+
+    return [Frame(index=i, image=scene.frame(i), timestamp=i / FPS,
+                  discontinuity=Discontinuity("seek") if i == cut_at else None)
+            for i in range(scene.n_frames)]
+
+
+def test_two_thread_order_keeps_the_stopped_person_and_repeats_exactly():
+    # Pipeline.results runs the detector a frame ahead in a worker: its protect mask comes from
+    # the tracks two frames back, made before the worker starts, so every run is the same
+    scene = _scene()
+    cfg = load_config(None, ["motion.method=vibe", "motion.vibe.absorb_s=2", "preprocess.scale=1.0"])
+    runs = []
+    for _ in range(2):
+        pipe = Pipeline(cfg, (scene.width, scene.height), fps=FPS)
+        runs.append([(r.index, t.id, tuple(t.box.as_array())) for r in pipe.results(_frames(scene))
+                     for t in r.tracks])
+    assert runs[0] == runs[1]
+    ids = {i for _, i, _ in runs[0]}
+    stopped = {k for k, _, _ in runs[0] if WALK_TO <= k < WALK_TO + STAND}
+    assert ids == {1} and len(stopped) == STAND
+
+
+def test_two_thread_order_gives_no_feedback_across_a_discontinuity(monkeypatch):
+    from motiontrack.motion.ghosts import GhostFilter
+
+    scene = SyntheticScene("short", 0, 64, 48, FPS, 6)
+    pipe = Pipeline(load_config(None, ["motion.method=vibe", "preprocess.scale=1.0"]),
+                    (64, 48), fps=FPS)
+    rec = _Recorder()
+    pipe.detector = rec
+    pipe.reset_motion = lambda: None                     # keep the recorder across the cut
+    ghost = np.zeros((48, 64), bool)
+    monkeypatch.setattr(GhostFilter, "ghost_pixels", lambda self, shape: ghost)  # (also anew)
+    list(pipe.results(_frames(scene, cut_at=3)))
+    relearn = [r is ghost for _, r in rec.calls]
+    # frame 0: nothing found yet; frame 1: fed a frame ahead, before frame 0's regions;
+    # frames 3 and 4: the cut and the frame fed while the state was still the old one's
+    assert relearn == [False, False, True, False, False, True]
