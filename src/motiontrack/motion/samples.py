@@ -42,7 +42,9 @@ _NX = np.array([-1, 0, 1, -1, 1, -1, 0, 1])
 
 @DETECTORS.register("vibe")
 class SampleBackground(MotionDetector):
-    """Sample-based background with selective update (see the module notes).
+    """ViBe-family sample background told where not to learn: people who stop stay foreground.
+
+    See the module notes for the model and its update rule.
 
     Parameters
     ----------
