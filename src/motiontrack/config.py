@@ -44,6 +44,7 @@ __all__ = [
     "FrameDiffParams",
     "MOG2Params",
     "KNNParams",
+    "VibeParams",
     "MedianParams",
     "CNTParams",
     "GSOCParams",
@@ -212,6 +213,47 @@ class KNNParams(_Section):
         check_knn_samples(self.n_samples, self.knn_samples)
 
 
+@dataclass(frozen=True)
+class VibeParams(_Section):
+    """Sample-based background with selective update (ViBe family; docs/pipeline.md)."""
+
+    n_samples: int = param(8, lo=1, hi=64, doc="colour samples kept per pixel")
+    min_matches: int = param(2, lo=1, hi=64, doc="samples within radius that make a pixel "
+                                                 "background, at most n_samples")
+    radius: int = param(20, lo=1, hi=127, doc="largest difference (levels, in every colour "
+                                              "channel) between the frame and a matching sample")
+    subsampling: int = param(16, lo=1, hi=1000,
+                             doc="a background pixel learns with probability 1/subsampling a "
+                                 "frame, and as often writes its value into a neighbour's sample "
+                                 "(higher is slower to learn)")
+    protect: bool = param(True, doc="selective update: pixels of confirmed tracks that have moved, "
+                                    "and of static objects, are not learnt, so people who stop "
+                                    "stay foreground")
+    absorb_s: float = param(10.0, lo=0.0, hi=86400.0,
+                            doc="seconds a pixel may stay foreground before it is learnt (what "
+                                "stops and is not protected joins the background); 0 = never")
+    accept_s: float = param(180.0, lo=0.0, hi=86400.0,
+                            doc="the same for protected pixels: something under a track that "
+                                "never moves again (a parked car) becomes background after this; "
+                                "0 = never",
+                            when={"protect": True})
+    ghost_ratio: float = param(0.7, lo=0.0, hi=10.0,
+                               doc="re-learn at once the foreground components (also under tracks) "
+                                   "whose outline has its edges in the model's background rather "
+                                   "than in the frame: the place an object left (0 = off)")
+    shadows: bool = param(True, doc="leave shadows (a darker copy of the background) out of the "
+                                    "mask (colour input)")
+    seed: int = param(0, lo=0, hi=1_000_000,
+                      doc="seed of the model's random updates: a run repeats exactly for a given "
+                          "seed")
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.min_matches > self.n_samples:
+            raise ConfigError(f"motion.vibe.min_matches must be at most motion.vibe.n_samples "
+                              f"({self.n_samples}), got {self.min_matches}")
+
+
 def check_knn_samples(n_samples: int, knn_samples: int) -> None:
     """KNN's background vote needs ``1 <= knn_samples <= n_samples`` (the config and the
     detector, which can be built without a config, both check it here)."""
@@ -297,6 +339,7 @@ class MotionConfig(_Section):
     frame_diff: FrameDiffParams = field(default_factory=FrameDiffParams)
     mog2: MOG2Params = field(default_factory=MOG2Params)
     knn: KNNParams = field(default_factory=KNNParams)
+    vibe: VibeParams = field(default_factory=VibeParams)
     median: MedianParams = field(default_factory=MedianParams)
     cnt: CNTParams = field(default_factory=CNTParams)
     gsoc: GSOCParams = field(default_factory=GSOCParams)

@@ -17,9 +17,11 @@ the writers.
 from __future__ import annotations
 
 import atexit
+import itertools
 import logging
 import statistics
 import weakref
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Iterable, Iterator
@@ -152,7 +154,8 @@ class Pipeline:
         self.scale = resolve_scale(cfg.preprocess.scale, *image_size)
         self.detections = detections
         self._det_index = detections.by_frame() if detections is not None else None
-        self.detector = create_detector(cfg.motion) if detections is None else None
+        self.fps = fps
+        self.detector = create_detector(cfg.motion, fps) if detections is None else None
         pre = cfg.preprocess
         if self.detector is not None and self.detector.wants_color and pre.grayscale:
             pre = replace(pre, grayscale=False)
@@ -199,6 +202,14 @@ class Pipeline:
         self.keep_stopped = cfg.motion.keep_stopped and self.static is not None
         #: frames a lost track may coast: its stopped pixels are kept that long
         self._keep_unseen = self.tracker.max_lost
+        #: the previous frame's feedback to a detector that takes it (``relearns``): the ghost
+        #: filter's ghost pixels to re-learn, and the static objects not to learn
+        self._relearn: np.ndarray | None = None
+        self._static_prev: StaticFrame | None = None
+        #: the last frame given feedback carried a discontinuity (two-thread order)
+        self._fed_cut = False
+        #: feedback is made right before each frame's detection (one thread), not a frame ahead
+        self.sequential_feedback = True
         self.frames_seen = 0
         #: the run's frame count (``index`` of :meth:`regions_of`) at the last reset: the
         #: warm-up counts from there
@@ -228,7 +239,8 @@ class Pipeline:
         """New motion and dual-background models: they re-learn the scene from the next frame
         (a model of the frames before a jump would see the whole picture change)."""
         if self.detector is not None:
-            self.detector = create_detector(self.cfg.motion)
+            self.detector = create_detector(self.cfg.motion, self.fps)
+        self._static_prev = None
         if self.static is not None:
             self.static = DualBackground(self.static.fps, self.scale)
 
@@ -263,12 +275,32 @@ class Pipeline:
         self._min_gap = gap if self._min_gap is None else min(self._min_gap, gap)
         return max(1, int(round(gap / self._min_gap)))
 
+    def feedback(self, frame: Frame, small: np.ndarray
+                 ) -> tuple[np.ndarray | None, np.ndarray | None]:
+        """What the tracks and the ghost filter ask of the detector for ``frame`` (preprocessed
+        ``small``): ``(protect, relearn)``, the pixels not to learn and those to re-learn at
+        once (:meth:`MotionDetector.apply`), from the state they are in now. None for a frame
+        after a discontinuity (the tracks before a jump say nothing of where it moves), and for
+        the frame after it in :meth:`results`' two-thread order, whose state is still that of
+        the frames before the jump."""
+        relearn, self._relearn = self._relearn, None
+        if frame.discontinuity is not None or self._fed_cut:
+            self._fed_cut = frame.discontinuity is not None and not self.sequential_feedback
+            return None, None
+        protect = self._protect_mask(small.shape[:2])
+        return protect, relearn if self.detector.relearns else None
+
     def _protect_mask(self, shape: tuple[int, int]) -> np.ndarray | None:
-        """Pixels (processing scale) where moving tracks are expected: not learnt as background."""
+        """Pixels (processing scale) not learnt as background: where the previous frame's
+        confirmed tracks that have moved are expected, and the previous frame's static objects
+        (with a dual background and a detector that re-learns)."""
         if not self.detector.protect:
             return None
-        boxes = self.tracker.moving_boxes()
-        if not len(boxes):
+        boxes = list(self.tracker.moving_boxes())
+        static = self._static_prev
+        if static is not None and self.detector.relearns:
+            boxes += [o.box.as_array() for o in static.objects]
+        if not boxes:
             return None
         mask = np.zeros(shape, bool)
         for box in boxes:
@@ -288,23 +320,31 @@ class Pipeline:
         ahead can do it in its thread (:meth:`~motiontrack.io.sources.Source.prepared`)."""
         return preprocess(frame.image, self.pre_cfg) if self.detector is not None else None
 
-    def motion(self, frame: Frame, small: np.ndarray | None = None) -> Motion:
-        """First half of :meth:`detect`, the image work (OpenCV, which releases the GIL)."""
+    def motion(self, frame: Frame, small: np.ndarray | None = None,
+               feedback: tuple[np.ndarray | None, np.ndarray | None] | None = None) -> Motion:
+        """First half of :meth:`detect`, the image work (OpenCV, which releases the GIL).
+        ``feedback``: the detector's ``(protect, relearn)`` made beforehand by :meth:`feedback`
+        (None: made here from the tracks and ghosts as they are now)."""
         cut = frame.discontinuity
         if self._det_index is not None:
             return Motion(None, detections=_regions_from_detections(
                 self.detections, self._det_index.get(frame_number(frame.index))),
                 discontinuity=cut)
-        if cut is not None:
-            self.reset_motion()
         if small is None:
             small = self.prepare(frame)
-        # the tracks of the frames before a jump say nothing of where this frame moves
-        protect = self._protect_mask(small.shape[:2]) if cut is None else None
-        raw = self.detector.apply(small, protect)
+        if feedback is None:
+            feedback = self.feedback(frame, small)
+        if cut is not None:
+            self.reset_motion()
+        protect, relearn = feedback
+        if self.detector.relearns:
+            raw = self.detector.apply(small, protect, relearn)
+        else:
+            raw = self.detector.apply(small, protect)
         if self.roi is not None:
             raw = np.bitwise_and(raw, self.roi)
         static = self.static.apply(small) if self.static is not None else None
+        self._static_prev = static
         background = self.detector.background() if self._wants_background else None
         return Motion(clean_mask(raw, self.cfg.cleanup), raw_mask=raw, small=small, static=static,
                       background=background, discontinuity=cut)
@@ -321,6 +361,9 @@ class Pipeline:
             mask = self._keep_stopped(mask, motion.static)
         if self.ghosts is not None:   # it learns its background in the warm-up frames too
             mask, regions = self.ghosts.regions(motion.small, mask, self._find, self.scale)
+            if self.detector.relearns:
+                # the detector re-learns the ghost pixels with the next frame
+                self._relearn = self.ghosts.ghost_pixels(mask.shape[:2])
         else:
             regions = self._find(mask)
         if index - self._warm_from < self.cfg.motion.warmup:
@@ -435,10 +478,16 @@ class Pipeline:
         (no selective update), the rest of the image work of the next frame (:meth:`motion`:
         the motion detector) runs in a worker thread while this thread finds the current
         frame's regions and tracks them: OpenCV releases the GIL, so the three overlap on two
-        cores (benchmarks/throughput.py; docs/benchmarks.md)."""
+        cores (benchmarks/throughput.py; docs/benchmarks.md). A detector fed by the tracks and
+        the ghost filter (``relearns``: ``vibe``) runs a frame ahead in the same way, fed from
+        the state before the current frame (:meth:`_results_fed`); the other detectors with a
+        ``protect`` mask run in this thread, with the mask of the previous frame's tracks."""
         prepared = (frames.prepared(self.prepare) if isinstance(frames, Source)
                     else ((f, self.prepare(f)) for f in frames))
         try:
+            if self.detector is not None and self.detector.relearns and not self.sequential:
+                yield from self._results_fed(prepared)
+                return
             if self.sequential or (self.detector is not None and self.detector.protect):
                 for frame, small in prepared:
                     yield self.track(frame, self.detect(frame, self.frames_seen, small))
@@ -469,6 +518,33 @@ class Pipeline:
             close = getattr(prepared, "close", None)
             if close is not None:
                 close()
+
+
+    def _results_fed(self, prepared: Iterator) -> Iterator[FrameResult]:
+        """:meth:`results` for a detector fed by the tracks (selective update, re-learning):
+        the detector works on frame *t* + 1 in a worker thread while this thread finds frame
+        *t*'s regions and tracks them, so its ``protect`` mask comes from the tracks of frame
+        *t* − 1 (:meth:`feedback`, made here before the worker starts; the same in every run)."""
+        self.sequential_feedback = False
+        prepared = iter(prepared)
+        pool = ThreadPoolExecutor(1, thread_name_prefix="motiontrack-motion")
+        try:
+            item = next(prepared, None)
+            if item is None:
+                return
+            job = pool.submit(self.motion, item[0], item[1], self.feedback(*item))
+            for k in itertools.count():
+                frame = item[0]
+                motion = job.result()
+                item = next(prepared, None)
+                if item is not None:
+                    job = pool.submit(self.motion, item[0], item[1], self.feedback(*item))
+                yield self.track(frame, self.regions_of(k, motion))
+                if item is None:
+                    return
+        finally:
+            pool.shutdown(wait=True, cancel_futures=True)
+            self.sequential_feedback = True
 
 
 class TrackRun:

@@ -18,6 +18,8 @@ class MotionDetector:
     wants_color = False
     #: whether ``apply`` wants a ``protect`` mask (selective background update switched on)
     protect = False
+    #: whether ``apply`` takes a ``relearn`` request (re-learn the whole frame or some pixels)
+    relearns = False
 
     def apply(self, image: np.ndarray, protect: np.ndarray | None = None) -> np.ndarray:  # pragma: no cover
         """Foreground mask of ``image``.
@@ -26,8 +28,14 @@ class MotionDetector:
         that support it do not learn them into the background there, so a
         person who stops walking does not fade away (selective update, as in the Reading People
         Tracker's background maintenance). The pipeline passes it when ``self.protect`` is true.
+        Detectors with ``relearns`` also take ``relearn``: ``True`` to learn the frame afresh (a
+        global change of the picture), or a (h, w) bool mask of pixels to re-learn at once (the
+        place an object left).
         """
         raise NotImplementedError
+
+    def set_rate(self, fps: float) -> None:
+        """The source's frame rate, for detectors with durations in seconds (default: none)."""
 
     def background(self) -> np.ndarray | None:
         """Current background estimate (for `--save background`), or None."""

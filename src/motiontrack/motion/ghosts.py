@@ -239,6 +239,16 @@ class GhostFilter:
         self._remember(int(top), int(bottom) + 1, int(left), int(right) + 1)
         return out
 
+    def ghost_pixels(self, shape: tuple[int, int]) -> np.ndarray | None:
+        """The remembered ghost pixels (bool, ``shape``: processing scale), or None when there
+        are none: a detector that can re-learn them at once makes them background there."""
+        if self._win is None or self._ghost is None or self._ghost.shape != shape:
+            return None
+        y1, y2, x1, x2 = self._win
+        out = np.zeros(shape, bool)
+        out[y1:y2, x1:x2] = self._ghost[y1:y2, x1:x2] >= 0
+        return out
+
     def _remember(self, y1: int, y2: int, x1: int, x2: int) -> None:
         """Ghost pixels were remembered in the window ``[y1:y2, x1:x2]``."""
         if self._win is not None:
