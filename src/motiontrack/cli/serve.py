@@ -19,8 +19,12 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "and summary per camera under --out, in segments) and serve a web page and "
                     "a JSON API with their annotated pictures, events and counts, and an editor "
                     "of their scene files (docs/serve.md).")
-    p.add_argument("cameras", help="cameras file (TOML, [[camera]] tables: name, source, scene, "
-                                   "config, preset, camera, loop, fps)")
+    p.add_argument("cameras", nargs="?",
+                   help="cameras file (TOML, [[camera]] tables: name, source, scene, "
+                        "config, preset, camera, loop, fps)")
+    p.add_argument("--review", metavar="DIR",
+                   help="instead of cameras: the review page of a finished run's event store "
+                        "(DIR/events.db of a track --scene, batch or serve output folder)")
     p.add_argument("--host", default="127.0.0.1",
                    help="address to listen on (default 127.0.0.1; any other needs a token)")
     p.add_argument("--port", type=int, default=8080, help="port (default 8080)")
@@ -57,12 +61,17 @@ def cmd_serve(args) -> int:
                           f"or set {TOKEN_ENV} (every request then needs it)")
     if not 0 < args.port < 65536:
         raise ConfigError(f"--port must be in 1..65535, got {args.port}")
+    if (args.cameras is None) == (args.review is None):
+        raise ConfigError("give a cameras file, or --review DIR, not both")
     try:
         from ..serve.retention import Retention
+        from ..serve.review import review
         from ..serve.server import serve
     except ImportError as exc:
         raise ConfigError(f"serve needs the web extras ({exc.name} is missing): pip install "
                           "'motiontrack[serve]'") from None
+    if args.review is not None:
+        return review(args.review, args.host, args.port, token, allowed=args.allowed_host)
     return serve(args.cameras, args.host, args.port, args.out, token, rotate_s=args.rotate_s,
                  rotate_mb=args.rotate_mb, log_level=log.getEffectiveLevel(),
                  allowed=args.allowed_host,

@@ -42,7 +42,8 @@ MAX_DEPTH = 16
 #: largest integer a request's JSON may hold: TOML's integers are 64-bit
 _MAX_INT = 2**63 - 1
 _ASSETS = {"index.html": "text/html; charset=utf-8", "app.js": "text/javascript; charset=utf-8",
-           "style.css": "text/css; charset=utf-8"}
+           "style.css": "text/css; charset=utf-8", "review.html": "text/html; charset=utf-8",
+           "review.js": "text/javascript; charset=utf-8"}
 #: seconds between keep-alive comments on an idle event stream
 _KEEPALIVE_S = 15.0
 _BOUNDARY = "frame"
@@ -109,15 +110,17 @@ def create_app(hub: Hub, token: str | None = None,
                scenes: Mapping[str, Path | None] | SceneFiles | None = None,
                stopping: Callable[[], bool] = lambda: False,
                hosts: frozenset[str] | None = LOOPBACK_NAMES,
-               store: Path | None = None) -> Any:
+               store: Path | None = None, review_only: bool = False) -> Any:
     """The ASGI app over ``hub``. ``scenes``: each camera's scene file (None: the camera has
     none; the editor's PUT then answers 409). ``stopping`` tells the streams to end (the server
     is shutting down). ``hosts``: the host names the app answers to
     (:func:`~.guard.allowed_hosts`; None: any), ``token``: the token every request needs
-    (:mod:`.guard`); ``store``: the event store the search answers from (:mod:`.search`)."""
+    (:mod:`.guard`); ``store``: the event store the search answers from (:mod:`.search`);
+    ``review_only``: no cameras, ``/`` is the review page (``serve --review``)."""
     files = scenes if isinstance(scenes, SceneFiles) else SceneFiles(scenes or {})
-    routes = [*_page_routes(), *_api_routes(hub), *_stream_routes(hub, stopping),
-              *_editor_routes(hub, files), *_schema_routes(), *search_routes(store), *metrics_routes(hub)]
+    routes = [*_page_routes(review_only), *_api_routes(hub), *_stream_routes(hub, stopping),
+              *_editor_routes(hub, files), *_schema_routes(), *search_routes(store),
+              *metrics_routes(hub)]
     app: Any = OriginCheck(Starlette(routes=routes))
     if token:
         app = TokenCheck(app, token)
@@ -130,17 +133,21 @@ def _camera(hub: Hub, request: Request) -> CameraState | Response:
     return cam if cam is not None else _error(404, "no such camera")
 
 
-def _page_routes() -> list[Route]:
-    """The page and its fixed list of assets."""
+def _page_routes(review_only: bool = False) -> list[Route]:
+    """The live page (``/``), the review page (``/review``; also ``/`` with ``review_only``)
+    and their fixed list of assets."""
 
     async def page(request: Request) -> Response:
-        return _asset("index.html")
+        return _asset("review.html" if review_only else "index.html")
+
+    async def review(request: Request) -> Response:
+        return _asset("review.html")
 
     async def asset(request: Request) -> Response:
         name = request.path_params["file"]
         return _asset(name) if name in _ASSETS else _error(404, "not found")
 
-    return [Route("/", page), Route("/static/{file}", asset)]
+    return [Route("/", page), Route("/review", review), Route("/static/{file}", asset)]
 
 
 def _api_routes(hub: Hub) -> list[Route]:

@@ -224,7 +224,7 @@ def serve(cameras_file: str | Path, host: str = "127.0.0.1", port: int = 8080,
         raise ConfigError(f"--rotate-s must be > 0 seconds, got {rotate_s}")
     if rotate_mb < 0:
         raise ConfigError(f"--rotate-mb must be >= 0 (0 = no size limit), got {rotate_mb}")
-    _check_port(host, port)
+    check_port(host, port)
     out_dir = Path(out) if out is not None else default_out(cameras_file)
     out_dir.mkdir(parents=True, exist_ok=True)
     hub = Hub([(s.name, s.scene is not None) for s in specs])
@@ -266,7 +266,7 @@ def serve(cameras_file: str | Path, host: str = "127.0.0.1", port: int = 8080,
     return 0
 
 
-def _check_port(host: str, port: int) -> None:
+def check_port(host: str, port: int) -> None:
     """The address can be listened on (before any camera starts)."""
     try:
         family = socket.AF_INET6 if ":" in host else socket.AF_INET
