@@ -35,6 +35,7 @@ from .io.sources import Source, open_source, prefetch
 from .motion import create_detector
 from .motion.cleanup import clean_mask
 from .motion.ghosts import GhostFilter
+from .motion.stage import MotionStage
 from .motion.static import DualBackground
 from .motion.regions import find_regions
 from .people import PeopleStage, head_params
@@ -111,6 +112,8 @@ class Motion:
     background: np.ndarray | None = None
     #: the frame's discontinuity: the models were reset before it
     discontinuity: Discontinuity | None = None
+    #: the background model re-learnt at this frame after a sudden change of the whole picture
+    relearned: bool = False
 
 
 @dataclass(frozen=True)
@@ -151,7 +154,9 @@ class Pipeline:
         self.scale = resolve_scale(cfg.preprocess.scale, *image_size)
         self.detections = detections
         self._det_index = detections.by_frame() if detections is not None else None
-        self.detector = create_detector(cfg.motion) if detections is None else None
+        #: the motion stage: detector, camera-motion compensation, sudden-change handling
+        self.stage = (MotionStage(create_detector(cfg.motion), cfg.motion, cfg.stabilize)
+                      if detections is None else None)
         pre = cfg.preprocess
         if self.detector is not None and self.detector.wants_color and pre.grayscale:
             pre = replace(pre, grayscale=False)
@@ -199,6 +204,8 @@ class Pipeline:
         #: the run's frame count (``index`` of :meth:`regions_of`) at the last reset: the
         #: warm-up counts from there
         self._warm_from = 0
+        #: regions are ignored before this frame count (after a sudden change)
+        self._quiet_until = 0
         #: the people stage's shapes read the detector's background image of each frame: it is
         #: taken right after the detector's update, in the detector's thread, and travels with
         #: the frame's Motion, so detection of the next frame can run meanwhile
@@ -210,6 +217,11 @@ class Pipeline:
         #: while the worker detects the next frame (measured faster than running head splitting
         #: in the worker, which it would slow down).
         self.sequential = False
+
+    @property
+    def detector(self):
+        """The motion detector (None with external detections)."""
+        return self.stage.detector if self.stage is not None else None
 
     def reset(self, discontinuity: Discontinuity) -> None:
         """Every stage's state after ``discontinuity``, in the order a frame meets them:
@@ -223,8 +235,8 @@ class Pipeline:
     def reset_motion(self) -> None:
         """New motion and dual-background models: they re-learn the scene from the next frame
         (a model of the frames before a jump would see the whole picture change)."""
-        if self.detector is not None:
-            self.detector = create_detector(self.cfg.motion)
+        if self.stage is not None:
+            self.stage.reset(create_detector(self.cfg.motion))
         if self.static is not None:
             self.static = DualBackground(self.static.fps, self.scale)
 
@@ -234,6 +246,7 @@ class Pipeline:
             self.ghosts = GhostFilter(self.cfg.motion.ghost_ratio,
                                       pixels=self.cfg.motion.ghost_pixels)
         self._warm_from = index
+        self._quiet_until = 0
 
     def reset_tracking(self) -> None:
         """The tracker ends every track (ids keep counting); the bridge and the people stage
@@ -297,13 +310,16 @@ class Pipeline:
             small = self.prepare(frame)
         # the tracks of the frames before a jump say nothing of where this frame moves
         protect = self._protect_mask(small.shape[:2]) if cut is None else None
-        raw = self.detector.apply(small, protect)
+        out = self.stage.apply(small, protect)
+        raw = out.raw
         if self.roi is not None:
             raw = np.bitwise_and(raw, self.roi)
-        static = self.static.apply(small) if self.static is not None else None
+        if self.static is not None and (out.relearned or out.reanchored):
+            self.static = DualBackground(self.static.fps, self.scale)
+        static = self.static.apply(out.view) if self.static is not None else None
         background = self.detector.background() if self._wants_background else None
         return Motion(clean_mask(raw, self.cfg.cleanup), raw_mask=raw, small=small, static=static,
-                      background=background, discontinuity=cut)
+                      background=background, discontinuity=cut, relearned=out.relearned)
 
     def regions_of(self, index: int, motion: Motion) -> Detection:
         """Second half of :meth:`detect`: the mask's regions, split between heads while the
@@ -319,7 +335,9 @@ class Pipeline:
             mask, regions = self.ghosts.regions(motion.small, mask, self._find, self.scale)
         else:
             regions = self._find(mask)
-        if index - self._warm_from < self.cfg.motion.warmup:
+        if motion.relearned:
+            self._quiet_until = index + self.cfg.motion.relearn_frames
+        if index - self._warm_from < self.cfg.motion.warmup or index < self._quiet_until:
             regions = []
         heads = None
         if regions:
