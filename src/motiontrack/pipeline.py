@@ -114,6 +114,9 @@ class Motion:
     discontinuity: Discontinuity | None = None
     #: the background model re-learnt at this frame after a sudden change of the whole picture
     relearned: bool = False
+    #: the camera's motion since the previous frame while it moves ((2, 3), previous frame's
+    #: pixels → this frame's, processing scale): the tracker carries its tracks with it
+    step: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -319,7 +322,8 @@ class Pipeline:
         static = self.static.apply(out.view) if self.static is not None else None
         background = self.detector.background() if self._wants_background else None
         return Motion(clean_mask(raw, self.cfg.cleanup), raw_mask=raw, small=small, static=static,
-                      background=background, discontinuity=cut, relearned=out.relearned)
+                      background=background, discontinuity=cut, relearned=out.relearned,
+                      step=out.step)
 
     def regions_of(self, index: int, motion: Motion) -> Detection:
         """Second half of :meth:`detect`: the mask's regions, split between heads while the
@@ -420,6 +424,11 @@ class Pipeline:
                 hyps = {tid: r.box.as_array() for tid, r in people.hypotheses_by_track.items()}
             # fitted outlines of tracked people: where each one is inside a merged region
             located = people.located_by_track or None
+        if det.motion.step is not None:
+            # processing pixels → original: the same rotation and scale, the shift 1/scale
+            step = det.motion.step.copy()
+            step[:, 2] /= self.scale
+            self.tracker.camera_moved(step)
         tracks = self.tracker.update(regions, dt=self._frame_gap(frame), owned=owned,
                                      image=small, mask=mask, scale=self.scale, located=located,
                                      frame=frame.index, hypotheses=hyps)

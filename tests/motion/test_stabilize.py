@@ -213,3 +213,34 @@ def test_shift_annotations_moves_boxes_with_the_window():
     out = shift_annotations(gt, offsets, 100, 100, origin=(4, 4))
     assert out.boxes.tolist() == [[6, 6, 5, 5], [3, 8, 5, 5]]   # the box at x=200 left the view
     assert shake_offsets(50, 4, seed=3).min() >= -4 and shake_offsets(50, 4, seed=3).max() <= 4
+
+
+def test_stabilizer_reports_the_camera_step_between_frames_only_while_it_moves(textured):
+    stab = Stabilizer(StabilizeConfig())
+    stab.apply(textured)
+    assert stab.apply(textured.copy()).step is None            # fixed: no step
+    first = stab.apply(_moved(textured, _similarity(3.0, 0.0)))
+    second = stab.apply(_moved(textured, _similarity(3.0, -2.0)))
+    # previous frame → this one: 3 px right, then 2 px up
+    assert np.allclose(first.step, [[1, 0, 3], [0, 1, 0]], atol=0.2)
+    assert np.allclose(second.step, [[1, 0, 0], [0, 1, -2]], atol=0.2)
+
+
+def test_tracker_carries_its_tracks_with_the_camera():
+    from motiontrack.tracking.tracker import MultiObjectTracker
+    from motiontrack.types import Box, Region
+
+    def region(x):
+        return Region(box=Box(x, 50.0, 20.0, 40.0), centroid=(x + 10, 70.0), area=800.0)
+
+    moved, still = MultiObjectTracker(image_size=(320, 240)), MultiObjectTracker(image_size=(320, 240))
+    for k in range(6):                   # a standing object, seen by a steady camera
+        moved.update([region(100.0)])
+        still.update([region(100.0)])
+    # the camera pans 30 px left: the object is 30 px further right in the next frame
+    moved.camera_moved(np.array([[1.0, 0, 30], [0, 1.0, 0]]))
+    (a,) = moved.update([region(130.0)])
+    (b,) = still.update([region(130.0)])
+    assert a.box.x == pytest.approx(130.0, abs=0.5)            # no velocity learnt from the pan
+    assert abs(moved.x[0, 4]) < 0.5 < abs(still.x[0, 4])
+    assert a.history[-2][0] == pytest.approx(140.0, abs=0.5)   # its trail moved with the view

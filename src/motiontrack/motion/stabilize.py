@@ -23,6 +23,7 @@ frame-to-frame estimates keeps a steady camera's estimate from drifting.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import cv2
@@ -31,7 +32,7 @@ import numpy as np
 from ..config import StabilizeConfig
 from ..imaging import to_gray
 
-__all__ = ["Stabilizer", "StabilizedFrame", "estimate_transform", "corner_shift"]
+__all__ = ["Stabilizer", "StabilizedFrame", "compose", "estimate_transform", "corner_shift"]
 
 #: Lucas-Kanade window (px of the measuring image) and pyramid levels: from the previous frame's
 #: transform, a 13 px window on 3 levels follows a further shift of about 25 px
@@ -57,12 +58,16 @@ class StabilizedFrame:
     ``transform`` the (2, 3) float64 similarity that maps anchor pixels onto the frame's, or
     None when the frame is not warped (the camera has not moved, or the anchor was just taken);
     ``reanchored`` whether the anchor was taken afresh at this frame, and ``previous`` the
-    transform from the old anchor onto this frame then (None when it could not be measured)."""
+    transform from the old anchor onto this frame then (None when it could not be measured);
+    ``step`` the (2, 3) camera motion from the previous frame's pixels to this frame's while the
+    camera moves (this frame or the previous one moved more than ``min_motion`` from the
+    anchor), else None."""
 
     image: np.ndarray
     transform: np.ndarray | None = None
     reanchored: bool = False
     previous: np.ndarray | None = None
+    step: np.ndarray | None = None
 
 
 def corner_shift(transform: np.ndarray, width: int, height: int) -> float:
@@ -70,6 +75,13 @@ def corner_shift(transform: np.ndarray, width: int, height: int) -> float:
     c = np.array([[0, 0], [width, 0], [0, height], [width, height]], float)
     moved = c @ transform[:, :2].T + transform[:, 2]
     return float(np.abs(moved - c).max())
+
+
+def compose(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """The (2, 3) transform ``a`` after ``b`` (both (2, 3)): x → a(b(x))."""
+    out = a[:, :2] @ b
+    out[:, 2] += a[:, 2]
+    return out
 
 
 def estimate_transform(points: np.ndarray, moved: np.ndarray, min_inliers: int
@@ -123,12 +135,12 @@ class Stabilizer:
         if m is None:
             return self._unmeasured(gray, image)
         self._lost = 0
-        shift = corner_shift(m, w, h)
-        if shift > self.cfg.reanchor * min(w, h):
+        step = self._step(m, w, h)
+        if corner_shift(m, w, h) > self.cfg.reanchor * min(w, h):
             self._take_anchor(gray, image)
-            return StabilizedFrame(image, reanchored=True, previous=m)
+            return StabilizedFrame(image, reanchored=True, previous=m, step=step)
         self._last = m
-        return self._warp(image, m)
+        return dataclasses.replace(self._warp(image, m), step=step)
 
     def unwarp(self, mask: np.ndarray, frame: StabilizedFrame) -> np.ndarray:
         """``mask`` (h, w uint8, anchor coordinates) in the coordinates of ``frame``'s image, and
@@ -180,6 +192,15 @@ class Stabilizer:
             self._take_anchor(gray, image)
             return StabilizedFrame(image, reanchored=True)
         return self._warp(image, self._last)
+
+    def _step(self, m: np.ndarray, w: int, h: int) -> np.ndarray | None:
+        """The camera's motion from the previous frame (anchor → it: ``self._last``) to this
+        one (anchor → it: ``m``), while the camera moves; None while both stay within
+        ``min_motion`` of the anchor (a fixed camera's tracks are left as they are)."""
+        least = self.cfg.min_motion
+        if corner_shift(m, w, h) <= least and corner_shift(self._last, w, h) <= least:
+            return None
+        return compose(m, cv2.invertAffineTransform(self._last))
 
     def _warp(self, image: np.ndarray, m: np.ndarray) -> StabilizedFrame:
         """``image`` warped by ``m`` into the anchor's coordinates."""

@@ -47,13 +47,16 @@ class StageOutput:
     """One frame of :meth:`MotionStage.apply`: the detector's ``raw`` mask in the frame's own
     coordinates (h, w uint8 0/255), the image the model saw (``view``: the frame in the
     reference frame's coordinates, or the frame itself), whether the model re-learnt at this
-    frame after a sudden change (``relearned``) and whether the reference moved on
-    (``reanchored``)."""
+    frame after a sudden change (``relearned``), whether the reference moved on
+    (``reanchored``), and the camera's motion since the previous frame while it moves (``step``:
+    (2, 3), previous frame's pixels → this frame's, processing scale; see
+    :attr:`StabilizedFrame.step`)."""
 
     raw: np.ndarray
     view: np.ndarray
     relearned: bool = False
     reanchored: bool = False
+    step: np.ndarray | None = None
 
 
 def sudden_change(fraction: float, jump: float, cfg: MotionConfig) -> bool:
@@ -128,7 +131,9 @@ class MotionStage:
         self._moving = raw
         if seen is not None:
             raw = self.stabilizer.unwarp(raw, seen)
-        return StageOutput(raw, view, relearned, seen is not None and seen.reanchored)
+        if seen is None:
+            return StageOutput(raw, view, relearned)
+        return StageOutput(raw, view, relearned, seen.reanchored, seen.step)
 
     def _follow(self, seen: StabilizedFrame) -> None:
         """The reference moved on at ``seen``: the model re-learns from its background carried
