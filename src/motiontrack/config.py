@@ -164,12 +164,14 @@ class StabilizeConfig(_Section):
 
     enabled: bool = param(True, doc="compensate a shaking or panning camera; a frame whose "
                                     "measured motion is below min_motion is left as it is")
-    features: int = param(100, lo=10, hi=5000, doc="corners of the reference frame followed into "
+    features: int = param(60, lo=10, hi=5000, doc="corners of the reference frame followed into "
                                                    "each frame (more is steadier and slower)",
                           when={"enabled": True})
     min_inliers: int = param(12, lo=3, hi=5000,
                              doc="corners that must agree on the camera's motion (RANSAC inliers); "
-                                 "fewer and the current frame becomes the reference",
+                                 "a frame with fewer keeps the previous frame's motion, and after "
+                                 "10 such frames in a row becomes the reference (the model "
+                                 "re-learns); a reference with fewer corners is not followed",
                              when={"enabled": True})
     min_motion: float = param(0.5, lo=0.0, hi=100.0,
                               doc="camera motion (px at processing scale, largest shift of an "
@@ -330,8 +332,9 @@ class MotionConfig(_Section):
         doc="sudden change: a jump of the frame's mean brightness (grey levels) from the previous "
             "frame that makes the background model re-learn the scene; 0 = off")
     relearn_frames: int = param(2, lo=1, hi=1000,
-                                doc="frames after a sudden change whose regions are ignored while "
-                                    "the model settles (tracks coast)")
+                                doc="frames from a sudden change on (that frame included) whose "
+                                    "regions are ignored while the model settles (tracks coast); "
+                                    "no further change is looked for in them")
     frame_diff: FrameDiffParams = field(default_factory=FrameDiffParams)
     mog2: MOG2Params = field(default_factory=MOG2Params)
     knn: KNNParams = field(default_factory=KNNParams)

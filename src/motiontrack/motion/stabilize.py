@@ -34,10 +34,12 @@ from ..imaging import to_gray
 
 __all__ = ["Stabilizer", "StabilizedFrame", "compose", "estimate_transform", "corner_shift"]
 
-#: Lucas-Kanade window (px of the measuring image) and pyramid levels: from the previous frame's
-#: transform, a 13 px window on 3 levels follows a further shift of about 25 px
-_LK = dict(winSize=(13, 13), maxLevel=2,
-           criteria=(cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 20, 0.03))
+#: Lucas-Kanade window (px of the measuring image), pyramid levels and iterations: from the
+#: previous frame's transform, a 9 px window on 3 levels follows a further shift of about 16 px
+#: of the measuring image; the cost grows with window area and iterations (the motion is
+#: measured every frame)
+_LK = dict(winSize=(9, 9), maxLevel=2,
+           criteria=(cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 10, 0.03))
 #: the motion is measured on the gray frame at half the processing scale when its smaller side
 #: is at least this (a quarter of the pixels; the corners still sit within a tenth of a pixel)
 _HALVE_FROM = 200
@@ -91,7 +93,7 @@ def estimate_transform(points: np.ndarray, moved: np.ndarray, min_inliers: int
     if len(points) < max(min_inliers, 3):
         return None
     m, inliers = cv2.estimateAffinePartial2D(points, moved, method=cv2.RANSAC,
-                                             ransacReprojThreshold=_RANSAC_PX, maxIters=500,
+                                             ransacReprojThreshold=_RANSAC_PX, maxIters=200,
                                              refineIters=10)
     if m is None or inliers is None or int(inliers.sum()) < min_inliers:
         return None
