@@ -14,13 +14,23 @@ PETS HOTA / MOTA / IDF1 against the moved MOT ground truth (rows with consider =
 regions, as benchmarks/_pets.py); highway the CDnet F-measure of the pipeline's motion mask
 against the moved ground-truth masks over the temporal ROI (frames 470-1000, ROI.bmp moved too).
 
+With ``--cost ROUNDS`` it instead times whole ``motiontrack track PETS --no-video`` processes
+(300 frames, fixed camera) with and without compensation and sudden-change check, the two
+alternating, and prints the medians over the rounds of wall time and CPU time (user + sys)
+and of each round's difference.
+
 Run: .venv/bin/python benchmarks/jitter.py [--data ../shared/data] [--amplitude 4] [--seeds 3]
+     .venv/bin/python benchmarks/jitter.py --cost 5
 """
 
 from __future__ import annotations
 
 import argparse
+import os
+import statistics
+import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -121,15 +131,55 @@ def _rows(score, a: int, n: int, seeds: int) -> list[tuple[str, list[dict], floa
     return out
 
 
+BARE = ["stabilize.enabled=false", "motion.relearn_fraction=0", "motion.relearn_brightness=0"]
+
+
+def _process(video: Path, overrides: list[str]) -> tuple[float, float]:
+    """Wall and CPU seconds of one ``motiontrack track VIDEO --no-video`` process."""
+    exe = Path(sys.executable).with_name("motiontrack")
+    with tempfile.TemporaryDirectory() as out:
+        cmd = [str(exe), "track", str(video), "--no-video", "--max-frames", str(PETS_FRAMES),
+               "-o", out, "--force", *[a for o in overrides for a in ("--set", o)]]
+        t = time.perf_counter()
+        proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        _, status, usage = os.wait4(proc.pid, 0)
+        wall = time.perf_counter() - t
+    if status != 0:
+        sys.exit(f"{' '.join(cmd)} failed ({status})")
+    return wall, usage.ru_utime + usage.ru_stime
+
+
+def cost(video: Path, rounds: int) -> None:
+    """Print the medians of :func:`_process` with and without compensation."""
+    on, off = [], []
+    for k in range(rounds):
+        pair = [(on, []), (off, BARE)]
+        for runs, ov in (pair if k % 2 == 0 else pair[::-1]):
+            runs.append(_process(video, ov))
+    med = statistics.median
+    print(f"track --no-video, PETS frames 1-{PETS_FRAMES}, medians of {rounds} rounds")
+    for name, runs in (("with compensation (default)", on), ("without", off)):
+        print(f"{name:<30}wall {med(r[0] for r in runs):6.2f} s   CPU {med(r[1] for r in runs):6.2f} s")
+    print(f"{'difference':<30}wall {med(a[0] - b[0] for a, b in zip(on, off)):6.2f} s   "
+          f"CPU {med(a[1] - b[1] for a, b in zip(on, off)):6.2f} s")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     add_data_argument(ap)
     ap.add_argument("--amplitude", type=int, default=4, help="largest offset (px) in x and y")
     ap.add_argument("--seeds", type=int, default=3, help="runs per row (shake and KNN seeds)")
+    ap.add_argument("--cost", type=int, default=0, metavar="ROUNDS",
+                    help="time whole track processes with and without compensation instead")
     args = ap.parse_args()
     data, a = Path(args.data), args.amplitude
     video = data / "pets09-s2l1" / "video.avi"
+    if args.cost:
+        if not video.is_file():
+            sys.exit(f"PETS clip not found: {video} (set MOTIONTRACK_DATA or --data)")
+        cost(video, args.cost)
+        return
     highway = data / "cdnet-highway"
     if not video.is_file() or not (highway / "input").is_dir():
         sys.exit(f"PETS clip or CDnet highway not found in {data} (set MOTIONTRACK_DATA or --data)")

@@ -244,3 +244,21 @@ def test_tracker_carries_its_tracks_with_the_camera():
     assert a.box.x == pytest.approx(130.0, abs=0.5)            # no velocity learnt from the pan
     assert abs(moved.x[0, 4]) < 0.5 < abs(still.x[0, 4])
     assert a.history[-2][0] == pytest.approx(140.0, abs=0.5)   # its trail moved with the view
+
+
+def test_a_fixed_camera_is_measured_every_fourth_frame_until_it_moves(textured):
+    stab = Stabilizer(StabilizeConfig())
+    measured = []
+    real = stab._measure
+    stab._measure = lambda gray: (measured.append(1), real(gray))[1]
+    for _ in range(41):
+        assert stab.apply(textured).transform is None
+    # frame 1 is the anchor; frames 2-26 measured (25 near the anchor: fixed), then 1 in 4
+    assert len(measured) == 25 + 15 // 4
+    shaken = _moved(textured, _similarity(3.0, -3.0))
+    waited = next(k for k in range(1, 6) if stab.apply(shaken).transform is not None)
+    assert waited <= 4
+    before = len(measured)
+    for _ in range(4):                                         # moving: every frame measured
+        assert stab.apply(shaken).transform is not None
+    assert len(measured) == before + 4

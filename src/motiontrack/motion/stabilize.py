@@ -10,7 +10,8 @@ frame-to-frame estimates keeps a steady camera's estimate from drifting.
 
 * A transform that moves no corner of the image more than ``min_motion`` pixels is no camera
   motion: the frame is passed on as it is (a fixed camera's masks and tracks are those of the
-  pipeline without compensation).
+  pipeline without compensation). A camera found within half of that for 25 frames in a row
+  counts as fixed and is measured every 4th frame only, until it moves.
 * Otherwise the frame is warped into the anchor's coordinates (:meth:`Stabilizer.apply`) and the
   mask found there is warped back into the frame's (:meth:`Stabilizer.unwarp`): masks, regions
   and tracks stay in the coordinates of the frame the user sees. Anchor pixels the frame does not
@@ -49,6 +50,10 @@ _K3 = np.ones((3, 3), np.uint8)
 #: frames a flat anchor is kept before the next frame is tried, and frames a lost anchor's last
 #: transform is kept before the frame becomes the anchor
 _RETRY = 10
+#: a camera that stayed within half of ``min_motion`` of the anchor for ``_SETTLED`` measured
+#: frames in a row counts as fixed: from then on only every ``_EVERY``-th frame is measured (the
+#: others are passed on as they are) until one shows it moving
+_SETTLED, _EVERY = 25, 4
 _IDENTITY = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
 
 
@@ -114,6 +119,8 @@ class Stabilizer:
         self._shape: tuple[int, int] | None = None  # (h, w) of the frames
         self._factor = 1.0                            # processing px per measuring-image px
         self._lost = 0                                # frames in a row not measured
+        self._still = 0                               # measured frames in a row near the anchor
+        self._skipped = 0                             # frames passed on unmeasured since then
         self._points: np.ndarray | None = None      # (N, 1, 2) float32 corners of the anchor
         self._last = _IDENTITY.copy()                # anchor → previous frame
         self._steady: np.ndarray | None = None      # anchor-coordinates image the model last saw
@@ -124,19 +131,26 @@ class Stabilizer:
         """Forget the anchor: the next frame is the new one (a source discontinuity)."""
         self._anchor = self._points = self._steady = self._shape = None
         self._last = _IDENTITY.copy()
+        self._still = self._skipped = 0
 
     def apply(self, image: np.ndarray) -> StabilizedFrame:
         """The frame ``image`` ((h, w) or (h, w, 3) uint8, processing scale) in the anchor's
         coordinates."""
-        gray = self._measuring(image)
         h, w = image.shape[:2]
+        if self._anchor is not None and self._shape == (h, w) and self._fixed():
+            self._steady = image
+            return StabilizedFrame(image)
+        gray = self._measuring(image)
         if self._anchor is None or self._shape != (h, w):
             self._take_anchor(gray, image)
             return StabilizedFrame(image)
         m = self._measure(gray)
         if m is None:
+            self._still = 0
             return self._unmeasured(gray, image)
         self._lost = 0
+        near = corner_shift(m, w, h) <= self.cfg.min_motion / 2
+        self._still = self._still + 1 if near else 0
         step = self._step(m, w, h)
         if corner_shift(m, w, h) > self.cfg.reanchor * min(w, h):
             self._take_anchor(gray, image)
@@ -175,6 +189,17 @@ class Stabilizer:
         return out
 
     # ---------------------------------------------------------------------------------- steps
+    def _fixed(self) -> bool:
+        """Whether this frame is passed on unmeasured: the camera counts as fixed and this is
+        not one of every ``_EVERY`` frames."""
+        if self._still < _SETTLED:
+            return False
+        self._skipped += 1
+        if self._skipped < _EVERY:
+            return True
+        self._skipped = 0
+        return False
+
     def _unmeasured(self, gray: np.ndarray, image: np.ndarray) -> StabilizedFrame:
         """A frame whose motion could not be measured.
 
@@ -239,7 +264,7 @@ class Stabilizer:
         self._shape = image.shape[:2]
         self._last = _IDENTITY.copy()
         self._steady = image
-        self._lost = 0
+        self._lost = self._still = self._skipped = 0
         self.anchors += 1
 
     def _measure(self, gray: np.ndarray) -> np.ndarray | None:
