@@ -17,7 +17,10 @@ against the moved ground-truth masks over the temporal ROI (frames 470-1000, ROI
 With ``--cost ROUNDS`` it instead times whole ``motiontrack track PETS --no-video`` processes
 (300 frames, fixed camera) with and without compensation and sudden-change check, the two
 alternating, and prints the medians over the rounds of wall time and CPU time (user + sys)
-and of each round's difference.
+and of each round's difference; then, in one thread with OpenCV held to one thread and the
+frames preprocessed beforehand, ms per frame (medians over the rounds) of the stabilizer alone
+(``Stabilizer.apply``) on the steady and the shaking PETS window, and of the motion stage
+(``Pipeline.stage.apply``) on the shaking window with and without compensation.
 
 Run: .venv/bin/python benchmarks/jitter.py [--data ../shared/data] [--amplitude 4] [--seeds 3]
      .venv/bin/python benchmarks/jitter.py --cost 5
@@ -37,10 +40,11 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from motiontrack.config import load_config
+from motiontrack.config import StabilizeConfig, load_config
 from motiontrack.evaluate.masks import MaskCounts, compare_masks, read_temporal_roi
 from motiontrack.evaluate.mot import evaluate_tracking
 from motiontrack.io.mot import read_mot
+from motiontrack.motion.stabilize import Stabilizer
 from motiontrack.pipeline import Pipeline
 from motiontrack.synth.camera import shake_offsets, shift_annotations
 from motiontrack.types import Annotations, Frame, frame_number
@@ -162,6 +166,50 @@ def cost(video: Path, rounds: int) -> None:
         print(f"{name:<30}wall {med(r[0] for r in runs):6.2f} s   CPU {med(r[1] for r in runs):6.2f} s")
     print(f"{'difference':<30}wall {med(a[0] - b[0] for a, b in zip(on, off)):6.2f} s   "
           f"CPU {med(a[1] - b[1] for a, b in zip(on, off)):6.2f} s")
+    images, fps = _read_video(video, PETS_FRAMES)
+    a = 4
+    steady = _frames(images, a, np.zeros((len(images), 2), int), fps)
+    shaken = _frames(images, a, shake_offsets(len(images), a, 0), fps)
+    threads = cv2.getNumThreads()
+    cv2.setNumThreads(1)
+    try:
+        on_ms, off_ms, alone = [], [], {"steady": [], "shaking": []}
+        for _ in range(rounds):
+            on_ms.append(_stage_ms(shaken, [], fps))
+            off_ms.append(_stage_ms(shaken, BARE, fps))
+            for name, frames in (("steady", steady), ("shaking", shaken)):
+                alone[name].append(_stabilizer_ms(frames, fps))
+    finally:
+        cv2.setNumThreads(threads)
+    print(f"one thread, ms per frame (medians of {rounds}):")
+    for name, runs in alone.items():
+        print(f"  stabilizer alone, {name} window{'':<14}{med(runs):6.2f}")
+    print(f"  motion stage, shaking window, with     {med(on_ms):6.2f}")
+    print(f"  motion stage, shaking window, without  {med(off_ms):6.2f}  (difference "
+          f"{med(x - y for x, y in zip(on_ms, off_ms)):.2f})")
+
+
+def _stabilizer_ms(frames: list[Frame], fps: float) -> float:
+    """Milliseconds per frame of :meth:`Stabilizer.apply` over ``frames`` (preprocessed first)."""
+    h, w = frames[0].image.shape[:2]
+    pipe = Pipeline(load_config(), (w, h), fps=fps)
+    smalls = [pipe.prepare(f) for f in frames]
+    stab = Stabilizer(StabilizeConfig())
+    t = time.perf_counter()
+    for small in smalls:
+        stab.apply(small)
+    return (time.perf_counter() - t) * 1000 / len(smalls)
+
+
+def _stage_ms(frames: list[Frame], overrides: list[str], fps: float) -> float:
+    """Milliseconds per frame of ``Pipeline.stage.apply`` over ``frames`` (preprocessed first)."""
+    h, w = frames[0].image.shape[:2]
+    pipe = Pipeline(load_config(None, overrides), (w, h), fps=fps)
+    smalls = [pipe.prepare(f) for f in frames]
+    t = time.perf_counter()
+    for small in smalls:
+        pipe.stage.apply(small)
+    return (time.perf_counter() - t) * 1000 / len(smalls)
 
 
 def main() -> None:
