@@ -1,9 +1,9 @@
 """A shaking camera, simulated on real footage: PETS 2009 S2L1 frames 1-300 and CDnet 2014
 highway frames 1-1000, each frame seen through a window moved by a known random whole-pixel
 offset (uniform in [-A, A] in x and y, drawn anew every frame, seeded), the ground truth moved
-with it. Printed side by side: the steady window (fixed at the centre), the shaking window with
-camera-motion compensation (the default), and the shaking window without it
-(``stabilize.enabled=false``). One run's HOTA moves by a few hundredths with any change of the
+with it. Printed side by side: the steady window (fixed at the centre) with camera-motion
+compensation (the default) and without it (``stabilize.enabled=false``: what compensation costs
+a fixed camera), and the shaking window with and without it. One run's HOTA moves by a few hundredths with any change of the
 masks (a swap of two identities), so each row is the mean over ``--seeds`` runs: run ``k`` draws
 the shake with seed ``k`` and seeds the KNN model with ``k`` (``motion.knn.seed``), the steady
 row too; the range over the runs follows the first score.
@@ -23,6 +23,7 @@ frames preprocessed beforehand, ms per frame (medians over the rounds) of the st
 (``Pipeline.stage.apply``) on the shaking window with and without compensation.
 
 Run: .venv/bin/python benchmarks/jitter.py [--data ../shared/data] [--amplitude 4] [--seeds 3]
+         [--set KEY=VALUE ...]   (config overrides for every row)
      .venv/bin/python benchmarks/jitter.py --cost 5
 """
 
@@ -123,14 +124,16 @@ def _table(title: str, rows: list[tuple[str, list[dict], float]]) -> None:
               + f"{min(first):>10.3f}-{max(first):.3f}{secs:>7.1f}")
 
 
-def _rows(score, a: int, n: int, seeds: int) -> list[tuple[str, list[dict], float]]:
+def _rows(score, a: int, n: int, seeds: int, extra: list[str]
+          ) -> list[tuple[str, list[dict], float]]:
     out = []
     for name, shaking, ov in (("steady", False, []),
+                              ("steady, not compensated", False, OFF),
                               (f"shaking +-{a} px, compensated", True, []),
                               (f"shaking +-{a} px, not compensated", True, OFF)):
         t = time.perf_counter()
         runs = [score(shake_offsets(n, a, k) if shaking else np.zeros((n, 2), int),
-                      [*ov, f"motion.knn.seed={k}"]) for k in range(seeds)]
+                      [*extra, *ov, f"motion.knn.seed={k}"]) for k in range(seeds)]
         out.append((name, runs, time.perf_counter() - t))
     return out
 
@@ -218,6 +221,8 @@ def main() -> None:
     add_data_argument(ap)
     ap.add_argument("--amplitude", type=int, default=4, help="largest offset (px) in x and y")
     ap.add_argument("--seeds", type=int, default=3, help="runs per row (shake and KNN seeds)")
+    ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                    help="config override for every row (repeatable)")
     ap.add_argument("--cost", type=int, default=0, metavar="ROUNDS",
                     help="time whole track processes with and without compensation instead")
     args = ap.parse_args()
@@ -238,7 +243,7 @@ def main() -> None:
     _table(f"PETS09-S2L1 frames 1-{len(images)}, window {images[0].shape[1] - 2 * a}x"
            f"{images[0].shape[0] - 2 * a}",
            _rows(lambda off, ov: pets_scores(images, gt, a, off, fps, ov), a, len(images),
-                 args.seeds))
+                 args.seeds, args.set))
 
     first, last = read_temporal_roi(highway / "temporalROI.txt")
     last = min(last, HIGHWAY_FRAMES)
@@ -251,7 +256,7 @@ def main() -> None:
     _table(f"CDnet highway frames {first}-{last} (run from 1), window "
            f"{images[0].shape[1] - 2 * a}x{images[0].shape[0] - 2 * a}",
            _rows(lambda off, ov: highway_f(images, gts, roi, first, a, off, 25.0, ov), a,
-                 len(images), args.seeds))
+                 len(images), args.seeds, args.set))
 
 
 if __name__ == "__main__":

@@ -173,7 +173,7 @@ class StabilizeConfig(_Section):
                                  "10 such frames in a row becomes the reference (the model "
                                  "re-learns); a reference with fewer corners is not followed",
                              when={"enabled": True})
-    min_motion: float = param(0.5, lo=0.0, hi=100.0,
+    min_motion: float = param(1.0, lo=0.0, hi=100.0,
                               doc="camera motion (px at processing scale, largest shift of an "
                                   "image corner) below which a frame is not warped: a fixed "
                                   "camera's masks are those without compensation",
