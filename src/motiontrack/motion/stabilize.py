@@ -11,7 +11,9 @@ frame-to-frame estimates keeps a steady camera's estimate from drifting.
 * A transform that moves no corner of the image more than ``min_motion`` pixels is no camera
   motion: the frame is passed on as it is (a fixed camera's masks and tracks are those of the
   pipeline without compensation). A camera found within half of that for 25 frames in a row
-  counts as fixed and is measured every 4th frame only, until it moves.
+  counts as fixed and is measured every 4th frame only, until it moves. Once a frame has moved
+  more than ``min_motion``, every frame that moved more than 0.1 px is warped, until 25 frames
+  in a row stay within ``min_motion`` (a shaking camera's small shifts are compensated too).
 * Otherwise the frame is warped into the anchor's coordinates (:meth:`Stabilizer.apply`) and the
   mask found there is warped back into the frame's (:meth:`Stabilizer.unwarp`): masks, regions
   and tracks stay in the coordinates of the frame the user sees. Anchor pixels the frame does not
@@ -54,6 +56,8 @@ _RETRY = 10
 #: frames in a row counts as fixed: from then on only every ``_EVERY``-th frame is measured (the
 #: others are passed on as they are) until one shows it moving
 _SETTLED, _EVERY = 25, 4
+#: while the camera moves, frames are warped from this much motion (px) on
+_FINE = 0.1
 _IDENTITY = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
 
 
@@ -121,6 +125,7 @@ class Stabilizer:
         self._lost = 0                                # frames in a row not measured
         self._still = 0                               # measured frames in a row near the anchor
         self._skipped = 0                             # frames passed on unmeasured since then
+        self._since = _SETTLED                        # measured frames since one moved
         self._points: np.ndarray | None = None      # (N, 1, 2) float32 corners of the anchor
         self._last = _IDENTITY.copy()                # anchor → previous frame
         self._steady: np.ndarray | None = None      # anchor-coordinates image the model last saw
@@ -132,6 +137,7 @@ class Stabilizer:
         self._anchor = self._points = self._steady = self._shape = None
         self._last = _IDENTITY.copy()
         self._still = self._skipped = 0
+        self._since = _SETTLED
 
     def apply(self, image: np.ndarray) -> StabilizedFrame:
         """The frame ``image`` ((h, w) or (h, w, 3) uint8, processing scale) in the anchor's
@@ -149,8 +155,9 @@ class Stabilizer:
             self._still = 0
             return self._unmeasured(gray, image)
         self._lost = 0
-        near = corner_shift(m, w, h) <= self.cfg.min_motion / 2
-        self._still = self._still + 1 if near else 0
+        shift = corner_shift(m, w, h)
+        self._still = self._still + 1 if shift <= self.cfg.min_motion / 2 else 0
+        self._since = 0 if shift > self.cfg.min_motion else self._since + 1
         step = self._step(m, w, h)
         if corner_shift(m, w, h) > self.cfg.reanchor * min(w, h):
             self._take_anchor(gray, image)
@@ -220,11 +227,17 @@ class Stabilizer:
             return StabilizedFrame(image, reanchored=True)
         return self._warp(image, self._last)
 
+    def _least(self) -> float:
+        """The motion below which a frame is not warped: ``min_motion``, but only ``_FINE``
+        while the camera moves (a frame moved more than ``min_motion`` within the last
+        ``_SETTLED`` frames), so a shaking camera's small shifts are compensated too."""
+        return _FINE if self._since < _SETTLED else self.cfg.min_motion
+
     def _step(self, m: np.ndarray, w: int, h: int) -> np.ndarray | None:
         """The camera's motion from the previous frame (anchor → it: ``self._last``) to this
         one (anchor → it: ``m``), while the camera moves; None while both stay within
-        ``min_motion`` of the anchor (a fixed camera's tracks are left as they are)."""
-        least = self.cfg.min_motion
+        :meth:`_least` of the anchor (a fixed camera's tracks are left as they are)."""
+        least = self._least()
         if corner_shift(m, w, h) <= least and corner_shift(self._last, w, h) <= least:
             return None
         return compose(m, cv2.invertAffineTransform(self._last))
@@ -232,7 +245,7 @@ class Stabilizer:
     def _warp(self, image: np.ndarray, m: np.ndarray) -> StabilizedFrame:
         """``image`` warped by ``m`` into the anchor's coordinates."""
         h, w = image.shape[:2]
-        if corner_shift(m, w, h) <= self.cfg.min_motion:
+        if corner_shift(m, w, h) <= self._least():
             self._steady = image
             return StabilizedFrame(image)
         # the frame in anchor coordinates; anchor pixels it does not cover keep what the model
