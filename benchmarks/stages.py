@@ -8,7 +8,8 @@ per frame of each (best of ``--repeat`` runs over the clip):
 
   decode             cv2.VideoCapture.read()
   preprocess         resize to the processing scale (and blur)
-  motion detector    the KNN model (Pipeline.detector.apply)
+  motion detector    the motion stage (Pipeline.stage.apply): camera-motion compensation, the
+                     KNN model, the sudden-change check
   mask clean-up      motion.cleanup
   ghosts + regions   the ghost filter and the mask's regions (Pipeline.regions_of, without
                      the head splitting)
@@ -19,16 +20,23 @@ The last three are the tracking thread's work. Stage times measured one at a tim
 effects of the stages around them (the KNN model is 9 MB at 384x288), so they add up to more than
 the motion-mask-only row of ``benchmarks/throughput.py``.
 
+It then times the motion stage again without compensation and sudden-change check
+(``stabilize.enabled=false``, ``motion.relearn_fraction=0``, ``motion.relearn_brightness=0``),
+the two runs interleaved, and prints the medians over the repeats of both and of their
+difference: what compensation costs a frame on a fixed camera (it measures the camera's motion
+every frame and warps nothing).
+
 Run: .venv/bin/python benchmarks/stages.py [--data ../shared/data] [--frames 300] [--repeat 5]
 """
 
 from __future__ import annotations
 
+import statistics
 import time
 
 import cv2
 
-from motiontrack.config import PipelineConfig
+from motiontrack.config import PipelineConfig, load_config
 from motiontrack.motion.cleanup import clean_mask
 from motiontrack.pipeline import Detection, Motion, Pipeline
 from motiontrack.preprocess import preprocess
@@ -51,7 +59,7 @@ def one_run(frames: list, cfg: PipelineConfig, fps: float) -> dict[str, float]:
         t0 = clock()
         small = preprocess(image, pipe.pre_cfg)
         t1 = clock()
-        raw = pipe.detector.apply(small, None)
+        raw = pipe.stage.apply(small, None).raw
         t2 = clock()
         mask = clean_mask(raw, cfg.cleanup)
         t3 = clock()
@@ -93,8 +101,13 @@ def main() -> None:
         for _ in frames:
             cap.read()
         decode = (time.perf_counter() - t) * 1000 / max(len(frames), 1)
+        bare = load_config(None, ["stabilize.enabled=false", "motion.relearn_fraction=0",
+                                  "motion.relearn_brightness=0"])
         one_run(frames[:20], cfg, fps)   # imports and first calls outside the timing
-        runs = [one_run(frames, cfg, fps) for _ in range(args.repeat)]
+        runs, bares = [], []
+        for _ in range(args.repeat):
+            runs.append(one_run(frames, cfg, fps))
+            bares.append(one_run(frames, bare, fps))
     finally:
         cv2.setNumThreads(threads)
     best = {k: min(r[k] for r in runs) for k in STAGES}
@@ -107,6 +120,11 @@ def main() -> None:
     tracking = sum(best[k] for k in STAGES[3:])
     print(f"{'all stages':<20}{work:>7.2f}  (+ decode {work + decode:.2f}); tracking thread's "
           f"share {tracking:.2f}")
+    key = "motion detector"
+    with_, without = ([r[key] for r in rs] for rs in (runs, bares))
+    print(f"motion stage, medians of {args.repeat}: {statistics.median(with_):.2f} ms, without "
+          f"compensation and sudden-change check {statistics.median(without):.2f} ms, "
+          f"difference {statistics.median(a - b for a, b in zip(with_, without)):.2f} ms")
 
 
 if __name__ == "__main__":

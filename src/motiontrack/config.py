@@ -41,6 +41,7 @@ __all__ = [
     "Not",
     "SourceConfig",
     "PreprocessConfig",
+    "StabilizeConfig",
     "FrameDiffParams",
     "MOG2Params",
     "KNNParams",
@@ -155,6 +156,35 @@ class PreprocessConfig(_Section):
         if 0 < self.scale < MIN_SCALE:
             raise ConfigError(f"preprocess.scale must be 0 (automatic) or in [{MIN_SCALE}, 1.0], "
                               f"got {self.scale!r}")
+
+
+@dataclass(frozen=True)
+class StabilizeConfig(_Section):
+    """Camera-motion compensation (:mod:`motiontrack.motion.stabilize`): each frame is warped
+    into a reference frame before the motion detector, and its mask back into the frame's own
+    coordinates."""
+
+    enabled: bool = param(True, doc="compensate a shaking or panning camera; a frame whose "
+                                    "measured motion is below min_motion is left as it is")
+    features: int = param(60, lo=10, hi=5000, doc="corners of the reference frame followed into "
+                                                   "each frame (more is steadier and slower)",
+                          when={"enabled": True})
+    min_inliers: int = param(12, lo=3, hi=5000,
+                             doc="corners that must agree on the camera's motion (RANSAC inliers); "
+                                 "a frame with fewer keeps the previous frame's motion, and after "
+                                 "10 such frames in a row becomes the reference (the model "
+                                 "re-learns); a reference with fewer corners is not followed",
+                             when={"enabled": True})
+    min_motion: float = param(1.0, lo=0.0, hi=100.0,
+                              doc="camera motion (px at processing scale, largest shift of an "
+                                  "image corner) below which a frame is not warped: a fixed "
+                                  "camera's masks are those without compensation",
+                              when={"enabled": True})
+    reanchor: float = param(0.1, lo=0.01, hi=0.5,
+                            doc="the current frame becomes the reference once the camera has "
+                                "moved this fraction of the frame's smaller side from it (a pan); "
+                                "the background model is moved with it",
+                            when={"enabled": True})
 
 
 @dataclass(frozen=True)
@@ -336,6 +366,18 @@ class MotionConfig(_Section):
                    "foreground (long-term foreground, short-term background) inside the box of a "
                    "track that has moved is added to the motion mask (about 3 ms a frame at "
                    "384x288; see docs/benchmarks.md)")
+    relearn_fraction: float = param(
+        0.5, lo=0.0, hi=1.0,
+        doc="sudden change: when more than this fraction of the frame turns foreground at once, "
+            "the background model re-learns the scene (tracks coast through it); 0 = off")
+    relearn_brightness: float = param(
+        20.0, lo=0.0, hi=255.0,
+        doc="sudden change: a jump of the frame's mean brightness (grey levels) from the previous "
+            "frame that makes the background model re-learn the scene; 0 = off")
+    relearn_frames: int = param(2, lo=1, hi=1000,
+                                doc="frames from a sudden change on (that frame included) whose "
+                                    "regions are ignored while the model settles (tracks coast); "
+                                    "no further change is looked for in them")
     frame_diff: FrameDiffParams = field(default_factory=FrameDiffParams)
     mog2: MOG2Params = field(default_factory=MOG2Params)
     knn: KNNParams = field(default_factory=KNNParams)
@@ -598,6 +640,7 @@ class MeasureConfig(_Section):
 class PipelineConfig(_Section):
     source: SourceConfig = field(default_factory=SourceConfig)
     preprocess: PreprocessConfig = field(default_factory=PreprocessConfig)
+    stabilize: StabilizeConfig = field(default_factory=StabilizeConfig)
     motion: MotionConfig = field(default_factory=MotionConfig)
     cleanup: CleanupConfig = field(default_factory=CleanupConfig)
     regions: RegionsConfig = field(default_factory=RegionsConfig)

@@ -37,6 +37,7 @@ from .io.sources import Source, open_source, prefetch
 from .motion import create_detector
 from .motion.cleanup import clean_mask
 from .motion.ghosts import GhostFilter
+from .motion.stage import MotionStage
 from .motion.static import DualBackground
 from .motion.regions import find_regions
 from .people import PeopleStage, head_params
@@ -114,6 +115,11 @@ class Motion:
     background: np.ndarray | None = None
     #: the frame's discontinuity: the models were reset before it
     discontinuity: Discontinuity | None = None
+    #: the background model re-learnt at this frame after a sudden change of the whole picture
+    relearned: bool = False
+    #: the camera's motion since the previous frame while it moves ((2, 3), previous frame's
+    #: pixels → this frame's, processing scale): the tracker carries its tracks with it
+    step: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -155,7 +161,9 @@ class Pipeline:
         self.detections = detections
         self._det_index = detections.by_frame() if detections is not None else None
         self.fps = fps
-        self.detector = create_detector(cfg.motion, fps) if detections is None else None
+        #: the motion stage: detector, camera-motion compensation, sudden-change handling
+        self.stage = (MotionStage(create_detector(cfg.motion, fps), cfg.motion, cfg.stabilize)
+                      if detections is None else None)
         pre = cfg.preprocess
         if self.detector is not None and self.detector.wants_color and pre.grayscale:
             pre = replace(pre, grayscale=False)
@@ -214,6 +222,8 @@ class Pipeline:
         #: the run's frame count (``index`` of :meth:`regions_of`) at the last reset: the
         #: warm-up counts from there
         self._warm_from = 0
+        #: regions are ignored before this frame count (after a sudden change)
+        self._quiet_until = 0
         #: the people stage's shapes read the detector's background image of each frame: it is
         #: taken right after the detector's update, in the detector's thread, and travels with
         #: the frame's Motion, so detection of the next frame can run meanwhile
@@ -225,6 +235,11 @@ class Pipeline:
         #: while the worker detects the next frame (measured faster than running head splitting
         #: in the worker, which it would slow down).
         self.sequential = False
+
+    @property
+    def detector(self):
+        """The motion detector (None with external detections)."""
+        return self.stage.detector if self.stage is not None else None
 
     def reset(self, discontinuity: Discontinuity) -> None:
         """Every stage's state after ``discontinuity``, in the order a frame meets them:
@@ -238,8 +253,8 @@ class Pipeline:
     def reset_motion(self) -> None:
         """New motion and dual-background models: they re-learn the scene from the next frame
         (a model of the frames before a jump would see the whole picture change)."""
-        if self.detector is not None:
-            self.detector = create_detector(self.cfg.motion, self.fps)
+        if self.stage is not None:
+            self.stage.reset(create_detector(self.cfg.motion, self.fps))
         self._static_prev = None
         if self.static is not None:
             self.static = DualBackground(self.static.fps, self.scale)
@@ -250,6 +265,7 @@ class Pipeline:
             self.ghosts = GhostFilter(self.cfg.motion.ghost_ratio,
                                       pixels=self.cfg.motion.ghost_pixels)
         self._warm_from = index
+        self._quiet_until = 0
 
     def reset_tracking(self) -> None:
         """The tracker ends every track (ids keep counting); the bridge and the people stage
@@ -337,17 +353,18 @@ class Pipeline:
         if cut is not None:
             self.reset_motion()
         protect, relearn = feedback
-        if self.detector.relearns:
-            raw = self.detector.apply(small, protect, relearn)
-        else:
-            raw = self.detector.apply(small, protect)
+        out = self.stage.apply(small, protect, relearn)
+        raw = out.raw
         if self.roi is not None:
             raw = np.bitwise_and(raw, self.roi)
-        static = self.static.apply(small) if self.static is not None else None
+        if self.static is not None and (out.relearned or out.reanchored):
+            self.static = DualBackground(self.static.fps, self.scale)
+        static = self.static.apply(out.view) if self.static is not None else None
         self._static_prev = static
         background = self.detector.background() if self._wants_background else None
         return Motion(clean_mask(raw, self.cfg.cleanup), raw_mask=raw, small=small, static=static,
-                      background=background, discontinuity=cut)
+                      background=background, discontinuity=cut, relearned=out.relearned,
+                      step=out.step)
 
     def regions_of(self, index: int, motion: Motion) -> Detection:
         """Second half of :meth:`detect`: the mask's regions, split between heads while the
@@ -366,7 +383,9 @@ class Pipeline:
                 self._relearn = self.ghosts.ghost_pixels(mask.shape[:2])
         else:
             regions = self._find(mask)
-        if index - self._warm_from < self.cfg.motion.warmup:
+        if motion.relearned:
+            self._quiet_until = index + self.cfg.motion.relearn_frames
+        if index - self._warm_from < self.cfg.motion.warmup or index < self._quiet_until:
             regions = []
         heads = None
         if regions:
@@ -449,6 +468,12 @@ class Pipeline:
                 hyps = {tid: r.box.as_array() for tid, r in people.hypotheses_by_track.items()}
             # fitted outlines of tracked people: where each one is inside a merged region
             located = people.located_by_track or None
+        moved = getattr(self.tracker, "camera_moved", None)   # the motion-blob tracker's
+        if det.motion.step is not None and moved is not None:
+            # processing pixels → original: the same rotation and scale, the shift 1/scale
+            step = det.motion.step.copy()
+            step[:, 2] /= self.scale
+            moved(step)
         image, scale = small, self.scale
         if small is None and self.detector is None and self.tracker_sees_pictures:
             # external detections: the detection tracker's appearance reads the frame itself (an

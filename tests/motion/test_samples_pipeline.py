@@ -90,7 +90,7 @@ def test_the_ghost_filters_ghost_pixels_reach_the_detector_with_the_next_frame()
     cfg = load_config(None, ["motion.method=vibe", "preprocess.scale=1.0"])
     pipe = Pipeline(cfg, (scene.width, scene.height), fps=FPS)
     rec = _Recorder()
-    pipe.detector = rec
+    pipe.stage.detector = rec
     ghost = np.zeros((scene.height, scene.width), bool)
     ghost[10:20, 10:20] = True
     pipe.ghosts.ghost_pixels = lambda shape: ghost       # as if a ghost was just found
@@ -131,7 +131,7 @@ def test_two_thread_order_gives_no_feedback_across_a_discontinuity(monkeypatch):
     pipe = Pipeline(load_config(None, ["motion.method=vibe", "preprocess.scale=1.0"]),
                     (64, 48), fps=FPS)
     rec = _Recorder()
-    pipe.detector = rec
+    pipe.stage.detector = rec
     pipe.reset_motion = lambda: None                     # keep the recorder across the cut
     ghost = np.zeros((48, 64), bool)
     monkeypatch.setattr(GhostFilter, "ghost_pixels", lambda self, shape: ghost)  # (also anew)

@@ -37,6 +37,16 @@ class MotionDetector:
     def set_rate(self, fps: float) -> None:
         """The source's frame rate, for detectors with durations in seconds (default: none)."""
 
+    def relearn(self, image: np.ndarray | None = None) -> None:  # pragma: no cover
+        """Forget the background model and learn the scene afresh: after a sudden change of the
+        whole picture (a light switched on, the camera's reference frame moved).
+
+        ``image`` (optional, like :meth:`apply`'s input) is a background the caller already
+        knows, in the coordinates of the frames that follow: the new model starts from it, so
+        the next frame's objects stand out at once. Without it the model starts from the next
+        frame (which then shows no motion)."""
+        raise NotImplementedError
+
     def background(self) -> np.ndarray | None:
         """Current background estimate (for `--save background`), or None."""
         return None

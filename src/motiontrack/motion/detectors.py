@@ -3,6 +3,8 @@ Tracker's temporal-median background, and dense optical flow (Farnebäck)."""
 
 from __future__ import annotations
 
+from typing import Any, Callable
+
 import cv2
 import numpy as np
 
@@ -53,19 +55,39 @@ class FrameDiff(MotionDetector):
         _, mask = cv2.threshold(diff, self.threshold, 255, cv2.THRESH_BINARY)
         return mask
 
+    def relearn(self, image: np.ndarray | None = None) -> None:
+        self._ring = [image.copy()] if image is not None else []
+
     def background(self) -> np.ndarray | None:
         return self._ring[0] if self._ring else None
 
 
 class _OpenCVSubtractor(MotionDetector):
-    """Wraps a ``cv2.BackgroundSubtractor``; ``learning_rate`` −1 lets OpenCV choose."""
+    """Wraps a ``cv2.BackgroundSubtractor`` that ``make()`` creates; ``learning_rate`` −1 lets
+    OpenCV choose."""
 
-    def __init__(self, subtractor, learning_rate: float = -1.0) -> None:
-        self.sub = subtractor
+    #: times :meth:`relearn` feeds its image to the new model (a model that wants a pixel
+    #: stable for some frames before it calls it background: CNT)
+    relearn_repeats = 1
+
+    def __init__(self, make: Callable[[], Any], learning_rate: float = -1.0) -> None:
+        self._make = make
+        self.sub = make()
         self.learning_rate = float(learning_rate)
 
     def apply(self, image: np.ndarray, protect: np.ndarray | None = None) -> np.ndarray:
         return _binary(self.sub.apply(image, learningRate=self.learning_rate))
+
+    def relearn(self, image: np.ndarray | None = None) -> None:
+        """A new model from ``make()``, which learns ``image`` first when given."""
+        self.sub = self._make()
+        self._restart()
+        if image is not None:
+            for _ in range(self.relearn_repeats):
+                self.apply(image)
+
+    def _restart(self) -> None:
+        """Reset the wrapper's own per-model state (after a new model)."""
 
 
 class _SelectiveSubtractor(_OpenCVSubtractor):
@@ -86,13 +108,20 @@ class _SelectiveSubtractor(_OpenCVSubtractor):
     #: matching samples (KNN) otherwise reports every pixel as foreground for that many frames
     prime = 0
 
-    def __init__(self, subtractor, learning_rate: float = -1.0, protect: bool = False,
-                 protect_threshold: int = 30) -> None:
-        super().__init__(subtractor, learning_rate)
+    def __init__(self, make: Callable[[], Any], learning_rate: float = -1.0,
+                 protect: bool = False, protect_threshold: int = 30) -> None:
+        super().__init__(make, learning_rate)
         self.protect = bool(protect)
         self.protect_threshold = int(protect_threshold)
         self._bg: np.ndarray | None = None
         self._frames = 0
+        #: frames of earlier models: the random generator's seeds go on from there
+        self._before = 0
+
+    def _restart(self) -> None:
+        self._before += self._frames
+        self._frames = 0
+        self._bg = None
 
     def apply(self, image: np.ndarray, protect: np.ndarray | None = None) -> np.ndarray:
         self._frames += 1
@@ -100,7 +129,7 @@ class _SelectiveSubtractor(_OpenCVSubtractor):
             # OpenCV's random generator is per thread and shared with everything else that runs
             # there: seeded per frame, the model's random choices (and so the masks) are the same
             # in whatever thread, and after whatever else, the detector runs.
-            cv2.setRNGSeed(self.seed * _SEED_STRIDE + self._frames)
+            cv2.setRNGSeed(self.seed * _SEED_STRIDE + self._before + self._frames)
         if self._frames == 1:
             for _ in range(self.prime):
                 self.sub.apply(image, learningRate=self.learning_rate)
@@ -132,9 +161,9 @@ class MOG2(_SelectiveSubtractor):
 
     def __init__(self, history: int = 500, var_threshold: float = 16.0, detect_shadows: bool = True,
                  learning_rate: float = -1.0, protect: bool = False, protect_threshold: int = 30) -> None:
-        super().__init__(cv2.createBackgroundSubtractorMOG2(int(history), float(var_threshold),
-                                                            bool(detect_shadows)), learning_rate,
-                         protect, protect_threshold)
+        super().__init__(lambda: cv2.createBackgroundSubtractorMOG2(
+            int(history), float(var_threshold), bool(detect_shadows)), learning_rate, protect,
+            protect_threshold)
 
 
 @DETECTORS.register("knn")
@@ -150,11 +179,15 @@ class KNN(_SelectiveSubtractor):
                  seed: int = 0, n_samples: int = 7, knn_samples: int = 2) -> None:
         check_knn_samples(int(n_samples), int(knn_samples))
         self.seed = int(seed)
-        sub = cv2.createBackgroundSubtractorKNN(int(history), float(dist2_threshold),
-                                                bool(detect_shadows))
-        sub.setNSamples(int(n_samples))
-        sub.setkNNSamples(int(knn_samples))
-        super().__init__(sub, learning_rate, protect, protect_threshold)
+
+        def make():
+            sub = cv2.createBackgroundSubtractorKNN(int(history), float(dist2_threshold),
+                                                    bool(detect_shadows))
+            sub.setNSamples(int(n_samples))
+            sub.setkNNSamples(int(knn_samples))
+            return sub
+
+        super().__init__(make, learning_rate, protect, protect_threshold)
 
 
 @DETECTORS.register("cnt")
@@ -163,7 +196,8 @@ class CNT(_OpenCVSubtractor):
 
     def __init__(self, min_pixel_stability: int = 15, max_pixel_stability: int = 900,
                  use_history: bool = True, is_parallel: bool = True) -> None:
-        super().__init__(cv2.bgsegm.createBackgroundSubtractorCNT(
+        self.relearn_repeats = int(min_pixel_stability) + 1
+        super().__init__(lambda: cv2.bgsegm.createBackgroundSubtractorCNT(
             int(min_pixel_stability), bool(use_history), int(max_pixel_stability), bool(is_parallel)))
 
 
@@ -175,7 +209,7 @@ class GSOC(_OpenCVSubtractor):
 
     def __init__(self, n_samples: int = 20, replace_rate: float = 0.003, propagation_rate: float = 0.01,
                  hits_threshold: int = 32) -> None:
-        super().__init__(cv2.bgsegm.createBackgroundSubtractorGSOC(
+        super().__init__(lambda: cv2.bgsegm.createBackgroundSubtractorGSOC(
             nSamples=int(n_samples), replaceRate=float(replace_rate),
             propagationRate=float(propagation_rate), hitsThreshold=int(hits_threshold)))
 
@@ -190,7 +224,7 @@ class MOG(_OpenCVSubtractor):
     """Gaussian-mixture background (KaewTraKulPong & Bowden 2001) from bgsegm."""
 
     def __init__(self) -> None:
-        super().__init__(cv2.bgsegm.createBackgroundSubtractorMOG())
+        super().__init__(cv2.bgsegm.createBackgroundSubtractorMOG)
 
 
 @DETECTORS.register("gmg")
@@ -198,8 +232,8 @@ class GMG(_OpenCVSubtractor):
     """Bayesian per-pixel background (Godbehere, Matsukawa & Goldberg 2012) from bgsegm."""
 
     def __init__(self, initialization_frames: int = 20, decision_threshold: float = 0.8) -> None:
-        super().__init__(cv2.bgsegm.createBackgroundSubtractorGMG(int(initialization_frames),
-                                                                 float(decision_threshold)))
+        super().__init__(lambda: cv2.bgsegm.createBackgroundSubtractorGMG(
+            int(initialization_frames), float(decision_threshold)))
 
 
 @DETECTORS.register("lsbp")
@@ -207,7 +241,7 @@ class LSBP(_OpenCVSubtractor):
     """Local SVD binary pattern background subtractor from bgsegm (slow, robust to illumination)."""
 
     def __init__(self) -> None:
-        super().__init__(cv2.bgsegm.createBackgroundSubtractorLSBP())
+        super().__init__(cv2.bgsegm.createBackgroundSubtractorLSBP)
 
 
 @DETECTORS.register("median")
@@ -258,6 +292,12 @@ class TemporalMedian(MotionDetector):
         _, mask = cv2.threshold(diff, self.threshold * 255.0, 255, cv2.THRESH_BINARY)
         return mask
 
+    def relearn(self, image: np.ndarray | None = None) -> None:
+        self._ring = self._bg = None
+        self._count = self._frames = 0
+        if image is not None:
+            self.apply(image)
+
     def background(self) -> np.ndarray | None:
         return self._bg
 
@@ -294,3 +334,8 @@ class FarnebackMotion(MotionDetector):
         # window beyond the object: erode that margin away.
         k = self._erode
         return cv2.erode(mask, k) if k is not None else mask
+
+    def relearn(self, image: np.ndarray | None = None) -> None:
+        """Flow is measured between frames: the next one is measured from ``image`` when
+        given, else it starts afresh."""
+        self._prev = to_gray(image).copy() if image is not None else None

@@ -111,6 +111,14 @@ class SampleBackground(MotionDetector):
         """Frames per second of the source: ``accept_s`` is counted in frames of it."""
         self.fps = float(fps) if fps and fps > 0 else 25.0
 
+    def relearn(self, image: np.ndarray | None = None) -> None:
+        """Learn the scene afresh (:meth:`MotionDetector.relearn`): every sample from
+        ``image`` (a background the caller knows) and its neighbours, or from the next frame."""
+        if image is None:
+            self.reset()
+        else:
+            self._init(image)
+
     def reset(self) -> None:
         """Forget the model: the next frame initialises it again."""
         self._rng = np.random.default_rng(self.seed)

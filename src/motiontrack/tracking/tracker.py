@@ -500,6 +500,28 @@ class MultiObjectTracker:
         grow = margin * b[:, 2:4]
         return np.column_stack([b[:, :2] - grow, b[:, 2:4] + 2 * grow])
 
+    def camera_moved(self, step: np.ndarray) -> None:
+        """The camera moved between the previous frame and the next: every track's state, its
+        trail and where it started are carried by ``step`` ((2, 3) similarity, previous frame's
+        pixels → the next frame's, original-frame pixels), so prediction and association see the
+        objects' own motion rather than the camera's (camera-motion compensation of the track
+        states, as BoT-SORT's)."""
+        if not len(self.meta):
+            return
+        lin, t = np.asarray(step[:, :2], float), np.asarray(step[:, 2], float)
+        k = float(np.sqrt(abs(np.linalg.det(lin))))       # the similarity's scale
+        self.x[:, 0:2] = self.x[:, 0:2] @ lin.T + t
+        self.x[:, 4:6] = self.x[:, 4:6] @ lin.T
+        self.x[:, 2:4] *= k
+        self.x[:, 6:8] *= k
+        for m in self.meta:
+            if m.history:
+                pts = np.asarray(m.history, float) @ lin.T + t
+                m.history = deque(map(tuple, pts), maxlen=m.history.maxlen)
+            if m.origin is not None:
+                ox, oy = np.asarray(m.origin, float) @ lin.T + t
+                m.origin = (float(ox), float(oy))
+
     @property
     def active_count(self) -> int:
         """Tracks currently held (any state)."""

@@ -1,0 +1,190 @@
+"""The motion stage: a motion detector behind camera-motion compensation, with sudden-change
+handling.
+
+Each frame (:meth:`MotionStage.apply`):
+
+1. **Compensation** (``stabilize``, :mod:`~motiontrack.motion.stabilize`): the frame is warped
+   into the reference frame, so the background model sees a steady scene. When the reference
+   moves on (a pan), the model is moved with it: it re-learns from its own background image
+   carried into the new reference (:meth:`Stabilizer.to_anchor`), the new view filling what the
+   old one did not reach.
+2. **Detection**: the detector's mask of the warped frame.
+3. **Sudden change** (``motion.relearn_*``): when more than ``relearn_fraction`` of the frame
+   turns foreground at once (once the model is 25 frames old), or its mean brightness jumps by more than ``relearn_brightness``
+   grey levels, the model re-learns (:meth:`MotionStage.relearn`) from the frame itself,
+   except where the previous frame showed motion: there it takes its old background, scaled
+   by the change of the mean brightness, so the objects present stand out at once rather than
+   being learnt. The frame is then detected again by the new model; the pipeline ignores the
+   regions of ``relearn_frames`` frames from there (its tracks coast).
+4. The mask is warped back into the frame's coordinates (:meth:`Stabilizer.unwarp`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from ..config import MotionConfig, StabilizeConfig
+from .base import MotionDetector
+from .stabilize import StabilizedFrame, Stabilizer
+
+__all__ = ["MotionStage", "StageOutput", "sudden_change"]
+
+#: the previous frame's motion is widened by this many pixels (a 2r+1 square) where the new
+#: model takes the old background: objects move a little from one frame to the next
+_REACH = 4
+_WIDEN = cv2.getStructuringElement(cv2.MORPH_RECT, (2 * _REACH + 1, 2 * _REACH + 1))
+#: frames of a new model in which the share of foreground is not taken as a sudden change:
+#: some models call much of the frame foreground while they settle (CNT for its
+#: min_pixel_stability frames, 15 by default)
+_YOUNG = 25
+
+
+@dataclass(frozen=True)
+class StageOutput:
+    """One frame of :meth:`MotionStage.apply`: the detector's ``raw`` mask in the frame's own
+    coordinates (h, w uint8 0/255), the image the model saw (``view``: the frame in the
+    reference frame's coordinates, or the frame itself), whether the model re-learnt at this
+    frame after a sudden change (``relearned``), whether the reference moved on
+    (``reanchored``), and the camera's motion since the previous frame while it moves (``step``:
+    (2, 3), previous frame's pixels → this frame's, processing scale; see
+    :attr:`StabilizedFrame.step`)."""
+
+    raw: np.ndarray
+    view: np.ndarray
+    relearned: bool = False
+    reanchored: bool = False
+    step: np.ndarray | None = None
+
+
+def sudden_change(fraction: float, jump: float, cfg: MotionConfig) -> bool:
+    """Whether a frame with ``fraction`` of its pixels foreground and a mean brightness
+    ``jump`` (grey levels, absolute) from the previous frame is a sudden change of the whole
+    scene (``motion.relearn_fraction``, ``motion.relearn_brightness``; 0 switches either off)."""
+    return ((cfg.relearn_fraction > 0 and fraction > cfg.relearn_fraction)
+            or (cfg.relearn_brightness > 0 and jump > cfg.relearn_brightness))
+
+
+def _to_view(mask: np.ndarray | bool | None, seen: StabilizedFrame) -> np.ndarray | bool | None:
+    """A (h, w) bool mask of the frame in the reference frame's coordinates (others as given)."""
+    if not isinstance(mask, np.ndarray):
+        return mask
+    h, w = mask.shape
+    return cv2.warpAffine(mask.view(np.uint8), seen.transform, (w, h),
+                          flags=cv2.INTER_NEAREST | cv2.WARP_INVERSE_MAP) > 0
+
+
+def _mean(image: np.ndarray) -> float:
+    """Mean grey level of ``image`` over all its channels."""
+    m = cv2.mean(image)
+    return float(np.mean(m[:image.shape[2]] if image.ndim == 3 else m[:1]))
+
+
+class MotionStage:
+    """The detector with compensation and sudden-change handling (see the module notes).
+
+    Parameters
+    ----------
+    detector : the motion detector (:data:`~motiontrack.motion.DETECTORS`).
+    motion : MotionConfig (its ``relearn_*`` keys).
+    stabilize : StabilizeConfig (``enabled`` false: no compensation).
+    """
+
+    def __init__(self, detector: MotionDetector, motion: MotionConfig,
+                 stabilize: StabilizeConfig) -> None:
+        self.detector = detector
+        self.cfg = motion
+        self.stabilizer = Stabilizer(stabilize) if stabilize.enabled else None
+        self._mean: float | None = None          # previous frame's mean brightness
+        self._moving: np.ndarray | None = None   # previous frame's mask (model coordinates)
+        self._calm = 0                           # frames before the next change is looked for
+        self._young = _YOUNG                     # frames before the foreground share counts
+        #: sudden changes the model re-learnt at, and reference frames taken after the first
+        self.relearned = 0
+        self.reanchored = 0
+
+    def reset(self, detector: MotionDetector) -> None:
+        """Start afresh with ``detector`` (a source discontinuity): new reference, no history."""
+        self.detector = detector
+        if self.stabilizer is not None:
+            self.stabilizer.reset()
+        self._mean = self._moving = None
+        self._calm = 0
+        self._young = _YOUNG
+
+    def relearn(self, image: np.ndarray | None = None) -> None:
+        """The detector forgets its model and learns the scene afresh (from ``image``, a
+        background in the coordinates of the frames the model sees, when given); see
+        :meth:`MotionDetector.relearn`."""
+        self.detector.relearn(image)
+        self._moving = None
+        self._young = _YOUNG
+
+    def apply(self, image: np.ndarray, protect: np.ndarray | None = None,
+              relearn: np.ndarray | bool | None = None) -> StageOutput:
+        """The motion of ``image`` (the preprocessed frame); ``protect`` and ``relearn`` as
+        :meth:`MotionDetector.apply`'s, masks in the frame's coordinates (``relearn`` goes only
+        to a detector that ``relearns``)."""
+        seen = self.stabilizer.apply(image) if self.stabilizer is not None else None
+        view = image if seen is None else seen.image
+        if seen is not None and seen.reanchored:
+            self._follow(seen)
+        if seen is not None and seen.transform is not None:
+            protect, relearn = (_to_view(m, seen) for m in (protect, relearn))
+        if self.detector.relearns:
+            raw = self.detector.apply(view, protect, relearn)
+        else:
+            raw = self.detector.apply(view, protect)
+        relearned = self._sudden(view, raw)
+        if relearned:
+            raw = self.detector.apply(view, None)
+        self._moving = raw
+        if seen is not None:
+            raw = self.stabilizer.unwarp(raw, seen)
+        if seen is None:
+            return StageOutput(raw, view, relearned)
+        return StageOutput(raw, view, relearned, seen.reanchored, seen.step)
+
+    def _follow(self, seen: StabilizedFrame) -> None:
+        """The reference moved on at ``seen``: the model re-learns from its background carried
+        into the new reference."""
+        old = self.detector.background()
+        fill = seen.image
+        if old is not None and old.ndim != fill.ndim:
+            old = None
+        self.relearn(self.stabilizer.to_anchor(old, seen, fill) if old is not None else fill)
+        self.reanchored += 1
+
+    def _sudden(self, view: np.ndarray, raw: np.ndarray) -> bool:
+        """Look for a sudden change at this frame and re-learn when there is one."""
+        mean, before = _mean(view), self._mean
+        self._mean = mean
+        if self._calm > 0:
+            self._calm -= 1
+            return False
+        jump = abs(mean - before) if before is not None else 0.0
+        self._young = max(0, self._young - 1)
+        share = cv2.countNonZero(raw) / raw.size if not self._young else 0.0
+        if not sudden_change(share, jump, self.cfg):
+            return False
+        self.relearn(self._seed(view, before, mean))
+        self.relearned += 1
+        self._calm = self.cfg.relearn_frames
+        return True
+
+    def _seed(self, view: np.ndarray, before: float | None, mean: float) -> np.ndarray:
+        """The background the new model starts from after a sudden change: ``view``, except
+        where the previous frame moved, which takes the old background scaled by the change of
+        the mean brightness (``before`` → ``mean``)."""
+        old, moving = self.detector.background(), self._moving
+        if (old is None or moving is None or before is None or before <= 0
+                or old.shape != view.shape or moving.shape != view.shape[:2]):
+            return view
+        near = cv2.dilate(moving, _WIDEN) > 0
+        if not near.any():
+            return view
+        seed = view.copy()
+        seed[near] = cv2.convertScaleAbs(old, alpha=mean / before)[near]
+        return seed
