@@ -109,3 +109,9 @@ def test_an_events_snapshot_object_and_clip_are_served(tmp_path):
     assert mjpg.headers["content-type"].startswith("multipart/x-mixed-replace")
     assert mjpg.content.count(b"Content-Type: image/jpeg") == 5      # every frame of the clip
     assert bad.status_code == none.status_code == kind.status_code == 404   # outside the folder
+
+
+def test_the_token_in_the_query_is_not_taken_for_a_filter(store):
+    app = create_app(Hub([("door", False)]), token="t0k", store=store)
+    (r,) = _get(app, "/api/events/search?token=t0k&camera=door&limit=1")
+    assert r.status_code == 200 and r.json()["total"] == 600
