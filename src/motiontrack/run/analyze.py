@@ -19,6 +19,7 @@ from typing import Any, Callable, Iterator
 import numpy as np
 
 from ..analytics import Analytics, Scene
+from ..classify import class_name
 from ..errors import InputError, location
 from ..io.sources import Source, SourceInfo
 from ..types import Annotations, Event, FrameResult
@@ -45,11 +46,13 @@ def tracks_extent(tracks: Annotations) -> tuple[int, int]:
 @dataclass(frozen=True)
 class TrackRows:
     """The rows of one frame of a tracks file: ``ids`` (N,) int64, ``boxes`` (N, 4) float64
-    ``x, y, w, h`` in pixels (N may be 0)."""
+    ``x, y, w, h`` in pixels (N may be 0), ``labels`` (N,) the tracks' classes when the file
+    has a class column (:mod:`motiontrack.classify`), else None."""
 
     frame: int
     ids: np.ndarray = field(repr=False)
     boxes: np.ndarray = field(repr=False)
+    labels: np.ndarray | None = field(default=None, repr=False)
 
 
 @dataclass(frozen=True)
@@ -83,9 +86,13 @@ class TracksSource(Source):
     def __iter__(self) -> Iterator[TrackRows]:  # type: ignore[override]
         t, rows = self.tracks, self.tracks.by_frame()
         empty_ids, empty = np.zeros(0, dtype=np.int64), np.zeros((0, 4))
+        labels = None
+        if len(t) and (t.classes >= 0).all():   # a tracks file with its tracks' classes
+            labels = np.array([class_name(k) for k in t.classes.tolist()], dtype=object)
         for f in range(1, self.last + 1):
             idx = rows.get(f)
-            yield (TrackRows(f, t.ids[idx], t.boxes[idx]) if idx is not None
+            yield (TrackRows(f, t.ids[idx], t.boxes[idx],
+                             None if labels is None else labels[idx]) if idx is not None
                    else TrackRows(f, empty_ids, empty))
 
 
@@ -98,7 +105,7 @@ class AnalyticsProcessor:
     def results(self, source: TracksSource) -> Iterator[TracksFrameResult]:
         fps = source.info.fps or 25.0
         for rows in source:
-            scene = self.analytics.step(rows.frame, rows.ids, rows.boxes)
+            scene = self.analytics.step(rows.frame, rows.ids, rows.boxes, labels=rows.labels)
             yield TracksFrameResult(index=rows.frame - 1, timestamp=(rows.frame - 1) / fps,
                                     frame=None, mask=None, regions=(), tracks=(), scene=scene,
                                     boxes=rows.boxes)

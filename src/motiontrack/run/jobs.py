@@ -110,7 +110,8 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
             fitted = fit_to_image(camera, src.info.width, src.info.height, cfg.measure.camera)
         analytics = _analytics(scene, fitted, src.info.fps) if scene is not None else None
         proc = TrackProcessor(cfg, src.info, detections,
-                              needs_background="background" in streams, analytics=analytics)
+                              needs_background="background" in streams, analytics=analytics,
+                              camera=fitted)
         if not external:
             info, scale = src.info, proc.pipe.scale
             log.info("processing at scale %.3g (%dx%d)", scale,
