@@ -31,8 +31,8 @@ def _type_text(typ: Any, m: typing.Mapping[str, Any]) -> str:
     args = [a for a in typing.get_args(typ) if a is not type(None)]
     if typing.get_origin(typ) is not tuple and type(None) in typing.get_args(typ):
         typ = args[0]                        # optional: "none" is its default
-    if typing.get_origin(typ) is tuple:     # an array of points
-        return "array of `[x, y]`"
+    if typing.get_origin(typ) is tuple:     # an array of points, or of names
+        return ("array of text" if typing.get_args(typ)[0] is str else "array of `[x, y]`")
     if m.get("choices"):
         return " \\| ".join(f"`{c}`" for c in m["choices"])
     text = _NAMES.get(typ, getattr(typ, "__name__", str(typ)))

@@ -16,10 +16,12 @@ from typing import ClassVar
 
 import numpy as np
 
+from ..classify import CLASS_NAMES
+from ..errors import ConfigError
 from ..schema import REQUIRED, Section, param
 from ..speed import SPEED_WINDOW_S
 
-__all__ = ["COORD_LIMIT", "MAX_POLYGON_POINTS", "MAX_TABLES", "SceneSection", "LineSpec",
+__all__ = ["CLASSES_DOC", "classes_param", "checked_classes", "COORD_LIMIT", "MAX_POLYGON_POINTS", "MAX_TABLES", "SceneSection", "LineSpec",
            "ZoneSpec", "StationarySpec", "AbandonedSpec", "SpeedSpec"]
 
 #: largest number accepted (pixels, metres, seconds): far beyond any frame, small enough for
@@ -42,6 +44,29 @@ class SceneSection(Section):
     schema_noun: ClassVar[str] = "scene "
 
 
+#: the meaning of every rule's ``classes`` key
+CLASSES_DOC = ("the track classes this applies to, of person, vehicle, other (needs classified "
+               "tracks: `classes.enabled`, or a tracks file with a class column); none: every "
+               "track")
+
+
+def classes_param() -> tuple[str, ...] | None:
+    """The ``classes = ["person", ...]`` key of a rule's table."""
+    return param(None, max_items=len(CLASS_NAMES), doc=CLASSES_DOC)
+
+
+def checked_classes(classes: tuple[str, ...] | None, where: str) -> tuple[str, ...] | None:
+    """A rule's ``classes`` with each name checked (``where`` names the table), repeats
+    dropped."""
+    if classes is None:
+        return None
+    for i, name in enumerate(classes, 1):
+        if name not in CLASS_NAMES:
+            raise ConfigError(f"{where}.classes[{i}] must be one of {', '.join(CLASS_NAMES)}, "
+                              f"got {name!r}")
+    return tuple(dict.fromkeys(classes))
+
+
 def positive(default: float | None, doc: str) -> float | None:
     """A number > 0 (and at most :data:`COORD_LIMIT`), as most scene keys are."""
     return param(default, lo=0.0, lo_open=True, hi=COORD_LIMIT, doc=doc)
@@ -54,6 +79,8 @@ class LineSpec:
     name: str
     a: tuple[float, float]
     b: tuple[float, float]
+    #: the track classes the line counts (None = every track)
+    classes: tuple[str, ...] | None = None
 
     @property
     def length(self) -> float:

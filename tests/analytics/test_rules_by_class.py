@@ -1,0 +1,59 @@
+"""Rules by class: a line with ``classes`` counts the crossings of those classes only."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from motiontrack.analytics import Analytics, parse_scene
+from motiontrack.errors import ConfigError
+
+FPS = 10.0
+GATE = {"name": "gate", "points": [[100, 0], [100, 200]]}
+
+
+def _cross(an: Analytics, labels: list[str] | None) -> list:
+    """Two tracks walk left to right across x = 100 (anchors at the boxes' bottom centre)
+    over frames 1-6; ``labels`` their classes."""
+    events = []
+    for f in range(1, 7):
+        x = 60.0 + 15 * f            # anchor x: 75, 90, 105, 120, 135, 150
+        boxes = [[x - 5, 50, 10, 30], [x - 5, 120, 10, 30]]
+        events += an.step(f, [1, 2], boxes, labels=labels).events
+    return events
+
+
+def test_a_line_with_classes_counts_only_those_classes() -> None:
+    scene = parse_scene({"line": [{**GATE, "classes": ["person"]},
+                                  {**GATE, "name": "all"}]})
+    events = _cross(an := Analytics(scene, FPS), ["person", "vehicle"])
+    crossings = sorted((e.line, e.track, e.label) for e in events)
+    # the person (track 1) crosses both lines; the vehicle (track 2) only the one for all
+    assert crossings == [("all", 1, "person"), ("all", 2, "vehicle"), ("gate", 1, "person")]
+    # left to right across a line drawn downwards is "out"
+    assert an.counts_by_line() == {"gate": (0, 1), "all": (0, 2)}
+    assert an.summary()["lines_by_class"] == {
+        "gate": {"person": {"in": 0, "out": 1}},
+        "all": {"person": {"in": 0, "out": 1}, "vehicle": {"in": 0, "out": 1}}}
+
+
+def test_a_line_with_classes_counts_nothing_of_unclassified_tracks() -> None:
+    scene = parse_scene({"line": [{**GATE, "classes": ["person"]}]})
+    events = _cross(an := Analytics(scene, FPS), None)
+    assert events == [] and an.counts_by_line() == {"gate": (0, 0)}
+    assert "lines_by_class" not in an.summary()
+
+
+def test_events_of_classified_tracks_carry_their_class() -> None:
+    events = _cross(Analytics(parse_scene({"line": [GATE]}), FPS), ["other", "person"])
+    assert [(e.track, e.label) for e in events] == [(1, "other"), (2, "person")]
+    assert events[0].to_json()["label"] == "other"
+
+
+@pytest.mark.parametrize("classes, message", [
+    (["cat"], "line[1].classes[1] must be one of person, vehicle, other"),
+    ("person", "classes"),
+])
+def test_an_unknown_class_is_refused_naming_the_key(classes, message) -> None:
+    with pytest.raises(ConfigError, match=message.replace("[", r"\[").replace("]", r"\]")):
+        parse_scene({"line": [{**GATE, "classes": classes}]})
