@@ -57,3 +57,36 @@ def test_events_of_classified_tracks_carry_their_class() -> None:
 def test_an_unknown_class_is_refused_naming_the_key(classes, message) -> None:
     with pytest.raises(ConfigError, match=message.replace("[", r"\[").replace("]", r"\]")):
         parse_scene({"line": [{**GATE, "classes": classes}]})
+
+
+PLAZA = {"name": "plaza", "polygon": [[50, 0], [150, 0], [150, 200], [50, 200]]}
+
+
+def _enter_and_stay(an: Analytics, labels: list[str], frames: int = 6) -> list:
+    """Tracks 1 and 2 step into the plaza at frame 2 (anchors x 40 → 80) and stand there."""
+    events = []
+    for f in range(1, frames + 1):
+        x = 40.0 if f == 1 else 80.0
+        boxes = [[x - 5, 50, 10, 30], [x - 5, 120, 10, 30]]
+        events += an.step(f, [1, 2], boxes, labels=labels).events
+    return events
+
+
+def test_a_zone_with_classes_holds_only_those_classes() -> None:
+    scene = parse_scene({"zone": [{**PLAZA, "classes": ["vehicle"], "loiter_s": 0.3}]})
+    events = _enter_and_stay(an := Analytics(scene, FPS), ["person", "vehicle"])
+    # frame 2: the vehicle enters; frame 5 (0.3 s = 3 frames later) it loiters; the person
+    # is never inside
+    assert [(e.type, e.frame, e.track, e.label) for e in events] == [
+        ("zone_enter", 2, 2, "vehicle"), ("loiter", 5, 2, "vehicle")]
+    assert an.occupancy_by_zone() == {"plaza": 1}
+
+
+def test_stationary_with_classes_reports_only_those_classes() -> None:
+    scene = parse_scene({"stationary": {"after_s": 0.3, "radius_px": 5,
+                                        "classes": ["person"]}})
+    events = _enter_and_stay(Analytics(scene, FPS), ["person", "vehicle"])
+    assert [(e.type, e.track) for e in events] == [("stationary_start", 1)]
+    with pytest.raises(ConfigError, match=r"stationary.classes\[2\] must be one of"):
+        parse_scene({"stationary": {"after_s": 1, "radius_px": 5,
+                                    "classes": ["person", "dog"]}})

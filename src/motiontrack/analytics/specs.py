@@ -21,7 +21,8 @@ from ..errors import ConfigError
 from ..schema import REQUIRED, Section, param
 from ..speed import SPEED_WINDOW_S
 
-__all__ = ["CLASSES_DOC", "classes_param", "checked_classes", "COORD_LIMIT", "MAX_POLYGON_POINTS", "MAX_TABLES", "SceneSection", "LineSpec",
+__all__ = ["CLASSES_DOC", "classes_param", "checked_classes",
+           "COORD_LIMIT", "MAX_POLYGON_POINTS", "MAX_TABLES", "SceneSection", "LineSpec",
            "ZoneSpec", "StationarySpec", "AbandonedSpec", "SpeedSpec"]
 
 #: largest number accepted (pixels, metres, seconds): far beyond any frame, small enough for
@@ -94,6 +95,8 @@ class ZoneSpec:
     name: str
     polygon: tuple[tuple[float, float], ...]
     loiter_s: float | None = None
+    #: the track classes the zone holds (None = every track)
+    classes: tuple[str, ...] | None = None
 
     def vertices(self) -> np.ndarray:
         """(K, 2) float64 vertices."""
@@ -108,6 +111,8 @@ class StationarySpec(SceneSection):
     radius_px: float | None = positive(None, "the radius in pixels (exactly one of radius_px "
                                              "and radius_m)")
     radius_m: float | None = positive(None, "the radius in metres on the ground; needs a camera")
+    classes: tuple[str, ...] | None = param(
+        None, max_items=3, doc=CLASSES_DOC + "; static objects the tracker lost count as other")
 
 
 @dataclass(frozen=True)
