@@ -530,6 +530,41 @@ class ClassesConfig(_Section):
 
 
 @dataclass(frozen=True)
+class DetectorConfig(_Section):
+    """The user's own object detector (docs/classes.md): its boxes replace the motion regions
+    or are fused with them, and give the tracks they match their class."""
+
+    model: str = param("", doc="onnx:PATH, a YOLO-family ONNX model (YOLOv5 [1, N, 5+C], "
+                               "YOLOv8/YOLO11 [1, 4+C, N]) run by OpenCV's DNN module; empty = none "
+                               "(`--detector`)")
+    names: str = param("", doc="class names, one a line (`--detector-names`); empty = the "
+                               "model's metadata", when={"model": Not("", "onnx:yolo.onnx")})
+    input_size: int = param(640, lo=32, hi=4096, doc="side of the model's square input (px): the "
+                                                      "frame is letterboxed into it",
+                            when={"model": Not("", "onnx:yolo.onnx")})
+    score: float = param(0.25, lo=0.0, hi=1.0, doc="lowest detection score kept",
+                         when={"model": Not("", "onnx:yolo.onnx")})
+    nms: float = param(0.45, lo=0.0, hi=1.0, doc="IoU above which non-maximum suppression drops "
+                                                 "the weaker box of a class",
+                       when={"model": Not("", "onnx:yolo.onnx")})
+    every: int = param(1, lo=1, hi=1000, doc="run the detector every N frames",
+                       when={"model": Not("", "onnx:yolo.onnx")})
+    mode: str = param("fuse", choices=("fuse", "replace"),
+                      doc="fuse: motion regions stay, a detection gives the tracks it matches its "
+                          "class; replace: the detections are the regions",
+                      when={"model": Not("", "onnx:yolo.onnx")})
+    start_tracks: bool = param(False, doc="fuse: a detection no motion region matches becomes a "
+                                          "region too (it can start a track)",
+                               when={"mode": "fuse"})
+    match_iou: float = param(0.3, lo=0.0, hi=1.0, doc="IoU at which a detection matches a motion "
+                                                      "region or a track",
+                             when={"model": Not("", "onnx:yolo.onnx")})
+    vote: int = param(5, lo=1, hi=1000, doc="votes a matched detection casts for its class "
+                                            "(classes.enabled)",
+                      when={"model": Not("", "onnx:yolo.onnx")})
+
+
+@dataclass(frozen=True)
 class MeasureConfig(_Section):
     """Measurements in metres from a calibrated camera (see docs/calibration.md)."""
 
@@ -548,6 +583,7 @@ class PipelineConfig(_Section):
     measure: MeasureConfig = field(default_factory=MeasureConfig)
     people: PeopleConfig = field(default_factory=PeopleConfig)
     classes: ClassesConfig = field(default_factory=ClassesConfig)
+    detector: DetectorConfig = field(default_factory=DetectorConfig)
 
 
 # ---------------------------------------------------------------------------------- source size

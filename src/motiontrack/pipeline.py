@@ -30,6 +30,8 @@ import numpy as np
 from . import synth as _synth  # noqa: F401  (registers the synth: sources)
 from .classify import TrackClassifier
 from .config import PipelineConfig, SourceConfig, load_config, warn_if_oversized
+from .detect import create as create_detector_model
+from .detect import detector_regions
 from .imaging import pixel_window, resolve_scale, scaled_size
 from .io.imagesize import too_many_pixels
 from .io.sources import Source, open_source, prefetch
@@ -172,6 +174,12 @@ class Pipeline:
         # a confirmed track's tentative frames (FrameResult.earlier)
         self.tracker.keep_tentative = (cfg.tracker.backfill
                                        and completes_tracks(cfg, detections is not None))
+        #: the user's detector (``detector.model``): its boxes join or replace the regions
+        self.onnx = None
+        if cfg.detector.model:
+            d = cfg.detector
+            self.onnx = create_detector_model(d.model, names=d.names, input_size=d.input_size,
+                                              score=d.score, nms=d.nms)
         #: the class of each track (``classes.enabled``), after the tracker
         self.classes = (TrackClassifier(cfg.classes, fps, camera) if cfg.classes.enabled
                         else None)
@@ -391,6 +399,9 @@ class Pipeline:
                 log.info("frame %d: source discontinuity (%s): models and tracks reset",
                          frame.index, frame.discontinuity.reason)
             self.reset_tracking()
+        dets = None
+        if self.onnx is not None:
+            regions, dets = self._detected(frame, regions)
         people = PeopleFrame(heads=det.heads) if det.heads is not None else None
         if self.people is not None:
             background = det.motion.background
@@ -416,7 +427,8 @@ class Pipeline:
             self.bridge.remember(frame.image, tracks)
         earlier = tuple(self.tracker.confirmed_earlier)
         if self.classes is not None:
-            tracks = self.classes.update(tracks)
+            tracks = self.classes.update(tracks, dets, self.cfg.detector.match_iou,
+                                         self.cfg.detector.vote)
             earlier = tuple((f, replace(t, label=n, label_score=s))
                             for f, t in earlier for n, s in [self.classes.label(t.id)])
         self._prev_tracks = tuple(tracks)
@@ -427,6 +439,15 @@ class Pipeline:
                            earlier=earlier,
                            static=det.motion.static if self.report_static else None,
                            discontinuity=frame.discontinuity)
+
+    def _detected(self, frame: Frame, regions: list[Region]) -> tuple[list[Region], Any]:
+        """The user's detector on this frame (every ``detector.every`` frames): the regions as
+        ``detector.mode`` makes them, and the detections (None in a frame it skips)."""
+        d = self.cfg.detector
+        if self.frames_seen % d.every:
+            return ([] if d.mode == "replace" else regions), None
+        dets = self.onnx.detect(frame.image)
+        return detector_regions(regions, dets, d.mode, d.start_tracks, d.match_iou), dets
 
     def process(self, frame: Frame) -> FrameResult:
         """Both stages of one frame."""

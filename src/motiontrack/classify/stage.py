@@ -16,7 +16,12 @@ Each frame a track is measured in (``time_since_update == 0``) casts one vote:
   ``person_max_speed``; a ``vehicle`` is at most ``vehicle_aspect`` tall for its width or
   faster than a person.
 
-A frame that fits neither votes ``other``. A track's class is the class with the most votes
+A frame that fits neither votes ``other``. With the user's detector (``detector.model``), a
+detection matched to a measured track (IoU at least ``detector.match_iou``) casts
+``detector.vote`` more votes for its class (:func:`class_of`: ``person``; ``bicycle``, ``car``,
+``motorcycle``, ``bus``, ``truck``... a ``vehicle``; any other name ``other``).
+
+A track's class is the class with the most votes
 once it has ``min_frames`` of them (``other`` before), its confidence that class's share of
 the votes. Per-frame votes, not per-frame classes: a person merged for a few frames with
 a neighbour into a wide blob keeps the class of the rest of its life.
@@ -34,7 +39,7 @@ from ..config import ClassesConfig
 from ..speed import WindowSpeed
 from ..types import Track
 
-__all__ = ["CLASS_NAMES", "CLASS_IDS", "TrackClassifier", "class_id", "class_name"]
+__all__ = ["CLASS_NAMES", "CLASS_IDS", "TrackClassifier", "class_id", "class_name", "class_of"]
 
 #: the classes a track can have
 CLASS_NAMES = ("person", "vehicle", "other")
@@ -43,6 +48,19 @@ CLASS_NAMES = ("person", "vehicle", "other")
 CLASS_IDS = {"person": 1, "vehicle": 3, "other": 0}
 _NAMES_BY_ID = {v: k for k, v in CLASS_IDS.items()}
 _PERSON, _VEHICLE, _OTHER = range(3)
+
+
+#: detector class names (COCO's and common others) that are a ``vehicle``
+VEHICLE_NAMES = frozenset({"bicycle", "car", "motorcycle", "motorbike", "bus", "truck", "van",
+                           "train", "vehicle", "tram", "scooter"})
+
+
+def class_of(detector_name: str) -> str:
+    """Our class of a detector's class name (``person``, ``car``...)."""
+    name = detector_name.strip().lower()
+    if name in ("person", "pedestrian", "people"):
+        return "person"
+    return "vehicle" if name in VEHICLE_NAMES else "other"
 
 
 def class_id(name: str) -> int:
@@ -94,13 +112,17 @@ class TrackClassifier:
         ev = self._tracks.get(tid)
         return ("other", 0.0) if ev is None else self._decide(ev.votes)
 
-    def update(self, tracks: Sequence[Track]) -> list[Track]:
+    def update(self, tracks: Sequence[Track], detections: Any = None,
+               match_iou: float = 0.3, weight: int = 5) -> list[Track]:
         """The tracks of one frame with :attr:`Track.label` and :attr:`Track.label_score` set,
-        after the votes of the measured ones were counted."""
+        after the votes of the measured ones were counted: their own, and ``weight`` for the
+        class of the detection (``boxes``, :meth:`name`; the user's detector) each matches."""
         self._frames += 1
         measured = [t for t in tracks if t.time_since_update == 0]
         if measured:
             self._vote(measured)
+            if detections is not None and len(detections):
+                self._detector_votes(measured, detections, match_iou, weight)
         if len(self._tracks) > 64 and self._frames % 256 == 0:
             self._forget()
         out = []
@@ -125,6 +147,15 @@ class TrackClassifier:
             votes = np.where(metric >= 0, metric, votes)
         for ev, v in zip(evs, votes.tolist()):
             ev.votes[v] += 1
+
+    def _detector_votes(self, tracks: Sequence[Track], detections: Any, match_iou: float,
+                        weight: int) -> None:
+        from ..detect.fuse import matches   # with the user's detector only
+
+        boxes = np.array([t.box.as_array() for t in tracks], dtype=np.float64)
+        for i, j in matches(boxes, detections.boxes, match_iou):
+            k = CLASS_NAMES.index(class_of(detections.name(j)))
+            self._tracks[tracks[i].id].votes[k] += weight
 
     def _image_votes(self, boxes: np.ndarray, evs: list[_Evidence]) -> np.ndarray:
         """(N,) votes from the boxes' aspect and their speed in heights per second."""

@@ -45,6 +45,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--min-score", type=float, default=None,
                    help="with --detections: drop detections below this confidence")
     add_flag(p, "--camera")
+    add_flag(p, "--detector", metavar="onnx:MODEL")
+    add_flag(p, "--detector-names", metavar="FILE")
     p.add_argument("--scene", help="scene file (TOML): line crossings, zone dwell, stationary and "
                                    "speeding events in events.jsonl and counts.csv, lines and zones "
                                    "on the annotated video (docs/analytics.md)")
@@ -71,7 +73,7 @@ def _build_config(args):
     from ._common import run_overrides
 
     overrides = run_overrides(args, ("start", "max_frames", "fps", "codec", "no_video",
-                                     "mask_video", "camera"))
+                                     "mask_video", "camera", "detector", "detector_names"))
     cfg = load_config(args.config, overrides, preset=args.preset)
     warn_inactive_overrides(cfg, args.overrides)
     return cfg
