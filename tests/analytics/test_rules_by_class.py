@@ -90,3 +90,16 @@ def test_stationary_with_classes_reports_only_those_classes() -> None:
     with pytest.raises(ConfigError, match=r"stationary.classes\[2\] must be one of"):
         parse_scene({"stationary": {"after_s": 1, "radius_px": 5,
                                     "classes": ["person", "dog"]}})
+
+
+def test_a_tracks_files_class_column_drives_the_rules_of_analyze_and_evaluate_events() -> None:
+    from motiontrack.io.mot import parse_mot
+    from motiontrack.run.analyze import analysed_events
+
+    # tracks.txt rows with the class column: track 1 a person, track 2 a vehicle, both walking
+    # left to right across x = 100 (anchor x = left + 5)
+    rows = "".join(f"{f},{tid},{55 + 15 * f},{y},10,30,1,-1,-1,-1,{k}\n"
+                   for f in range(1, 7) for tid, y, k in ((1, 50, 1), (2, 120, 3)))
+    scene = parse_scene({"line": [{**GATE, "classes": ["person"]}]})
+    events = analysed_events(parse_mot(rows), scene, FPS)
+    assert [(e.track, e.line, e.label) for e in events] == [(1, "gate", "person")]

@@ -90,7 +90,9 @@ def test_with_a_camera_the_metric_evidence_decides(data) -> None:
 
 def test_class_numbers_of_the_tracks_file() -> None:
     assert [class_id(n) for n in ("person", "vehicle", "other", "")] == [1, 3, 0, -1]
-    assert [class_name(k) for k in (1, 3, 0, -1, 7)] == ["person", "vehicle", "other", "", ""]
+    assert [class_name(k) for k in (1, 3, 0, -1, 13)] == ["person", "vehicle", "other", "", ""]
+    # MOT17 ground truth: static person 7, bicycle 4, distractor 8
+    assert [class_name(k) for k in (7, 4, 8)] == ["person", "vehicle", "other"]
 
 
 def test_the_class_column_is_an_eleventh_column_that_readers_keep() -> None:

@@ -46,7 +46,12 @@ CLASS_NAMES = ("person", "vehicle", "other")
 #: each class's number in the class column of ``tracks.txt`` (MOT17's numbering: 1
 #: pedestrian, 3 car; 0 other); -1 is a row without a class
 CLASS_IDS = {"person": 1, "vehicle": 3, "other": 0}
-_NAMES_BY_ID = {v: k for k, v in CLASS_IDS.items()}
+#: our class of each MOT16/17/20 ground-truth class: pedestrian, person on vehicle and static
+#: person are people; car, bicycle, motorbike and non-motorized vehicle vehicles; distractors,
+#: occluders and reflections (8-12) other
+_NAMES_BY_ID = {0: "other", 1: "person", 2: "person", 3: "vehicle", 4: "vehicle", 5: "vehicle",
+                6: "vehicle", 7: "person", 8: "other", 9: "other", 10: "other", 11: "other",
+                12: "other"}
 _PERSON, _VEHICLE, _OTHER = range(3)
 
 
@@ -69,7 +74,8 @@ def class_id(name: str) -> int:
 
 
 def class_name(number: int) -> str:
-    """The class of a class column's number (``""`` for -1 or an unknown number)."""
+    """The class of a class column's number: ours (:data:`CLASS_IDS`) or a MOTChallenge
+    ground truth's (1-12); ``""`` for -1 or an unknown number."""
     return _NAMES_BY_ID.get(int(number), "")
 
 
