@@ -164,3 +164,18 @@ def test_track_refuses_a_bad_detector_with_one_line_and_exit_2(tmp_path, capsys,
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and len(err) == 1 and message in err[0] and "Traceback" not in err[0]
     assert not (tmp_path / "run").exists()
+
+
+def test_a_names_file_without_names_or_unreadable_is_one_clear_message(tmp_path) -> None:
+    from motiontrack.detect.onnx_yolo import read_names
+
+    empty = tmp_path / "empty.names"
+    empty.write_text("# nothing\n\n")
+    with pytest.raises(InputError, match="empty.names: no class names"):
+        read_names(empty)
+    binary = tmp_path / "bin.names"
+    binary.write_bytes(b"\xff\xfe\x00")
+    with pytest.raises(InputError, match="bin.names: the class names are not UTF-8 text"):
+        read_names(binary)
+    with pytest.raises(InputError, match="missing.names: cannot read the class names"):
+        read_names(tmp_path / "missing.names")
