@@ -103,3 +103,26 @@ def test_a_tracks_files_class_column_drives_the_rules_of_analyze_and_evaluate_ev
     scene = parse_scene({"line": [{**GATE, "classes": ["person"]}]})
     events = analysed_events(parse_mot(rows), scene, FPS)
     assert [(e.track, e.line, e.label) for e in events] == [(1, "gate", "person")]
+
+
+def test_counts_and_heat_maps_split_by_class(tmp_path) -> None:
+    import csv
+
+    from motiontrack.io.mot import parse_mot
+    from motiontrack.run.analyze import analyze_job
+
+    rows = "".join(f"{f},{tid},{55 + 15 * f},{y},10,30,1,-1,-1,-1,{k}\n"
+                   for f in range(1, 7) for tid, y, k in ((1, 50, 1), (2, 120, 3)))
+    scene = parse_scene({"line": [GATE]})
+    job = analyze_job(parse_mot(rows), scene, FPS, tmp_path, size=(200, 200), by_class=True)
+    summary = job.run()
+    with open(tmp_path / "counts.csv") as fh:
+        (row,) = list(csv.DictReader(fh))
+    # both tracks cross "out"; the class columns split them
+    assert (row["line:gate:out"], row["line:gate:person:out"], row["line:gate:vehicle:out"],
+            row["line:gate:other:out"]) == ("2", "1", "1", "0")
+    # 6 frames of each track: each class's map counts its own rows only
+    assert summary.extra["heatmap"]["visits"] == 12
+    assert [summary.extra[f"heatmap_{c}"]["visits"] for c in ("person", "vehicle", "other")] \
+        == [6, 6, 0]
+    assert all((tmp_path / f"heatmap_{c}.png").is_file() for c in ("person", "vehicle", "other"))

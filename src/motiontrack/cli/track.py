@@ -52,6 +52,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                                    "on the annotated video (docs/analytics.md)")
     p.add_argument("--bin-s", type=float, default=60.0,
                    help="with --scene: seconds per row of counts.csv (default 60)")
+    p.add_argument("--by-class", action="store_true",
+                   help="with --scene: each class's line crossings in counts.csv and a heat map "
+                        "of each class, heatmap_person.png ... (docs/classes.md)")
     p.add_argument("--show", action="store_true",
                    help="live view, a file played at its own frame rate: a window (q quits, "
                         "space pauses) with OpenCV's GUI build; with the headless build the serve "
@@ -149,7 +152,8 @@ def cmd_track(args) -> int:
         job = track_job(args.source, cfg, output_folder(args, "track"), force=args.force, gt=gt,
                         detections=det, show=_viewer() if window else None, save=args.save,
                         mask_images=args.mask_images, scoring=args.scoring, scene=args.scene,
-                        bin_s=args.bin_s, sinks=sinks, camera_name=args.camera_name,
+                        bin_s=args.bin_s, by_class=args.by_class, sinks=sinks,
+                        camera_name=args.camera_name,
                         sink_settings=settings, pace=args.show,
                         writers=[view.writer()] if view else ())
         log.info("source %s", job.info.describe())

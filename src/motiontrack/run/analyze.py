@@ -19,7 +19,7 @@ from typing import Any, Callable, Iterator
 import numpy as np
 
 from ..analytics import Analytics, Scene
-from ..classify import class_name
+from ..classify import CLASS_NAMES, class_name
 from ..errors import InputError, location
 from ..io.sources import Source, SourceInfo
 from ..types import Annotations, Event, FrameResult
@@ -62,6 +62,13 @@ class TracksFrameResult(FrameResult):
     refuses, such as zero-sized ones), the scene analytics of the frame in :attr:`scene`."""
 
     boxes: np.ndarray = field(default_factory=lambda: np.zeros((0, 4)), repr=False)
+    labels: np.ndarray | None = field(default=None, repr=False)
+
+    def boxes_of(self, label: str) -> np.ndarray:
+        """The rows' boxes of tracks of class ``label`` (none without a class column)."""
+        if self.labels is None:
+            return np.zeros((0, 4))
+        return self.boxes[self.labels == label]
 
 
 class TracksSource(Source):
@@ -108,7 +115,7 @@ class AnalyticsProcessor:
             scene = self.analytics.step(rows.frame, rows.ids, rows.boxes, labels=rows.labels)
             yield TracksFrameResult(index=rows.frame - 1, timestamp=(rows.frame - 1) / fps,
                                     frame=None, mask=None, regions=(), tracks=(), scene=scene,
-                                    boxes=rows.boxes)
+                                    boxes=rows.boxes, labels=rows.labels)
 
     def annotate(self, result: FrameResult) -> np.ndarray:  # pragma: no cover - no video
         raise NotImplementedError("a tracks file has no pictures to annotate")
@@ -166,9 +173,10 @@ def analyze_job(tracks: Annotations, scene: Scene, fps: float, out: str | Path, 
                 camera: Any = None, bin_s: float = 60.0, force: bool = False,
                 source: str = "", size: tuple[int, int] | None = None,
                 background: np.ndarray | None = None,
-                sinks: EventSinksWriter | None = None) -> Job:
+                sinks: EventSinksWriter | None = None, by_class: bool = False) -> Job:
     """The job writing ``events.jsonl``, ``counts.csv``, ``heatmap.png`` (``heatmap_world.png``
-    with a camera) and ``summary.json`` for ``tracks`` in ``out``.
+    with a camera) and ``summary.json`` for ``tracks`` in ``out``; ``by_class``: each class's
+    line crossings in ``counts.csv`` and a heat map of each class (the file's class column).
 
     The heat map is ``size`` pixels (default: the extent of the tracks) over ``background``
     (default: black).
@@ -176,12 +184,16 @@ def analyze_job(tracks: Annotations, scene: Scene, fps: float, out: str | Path, 
     out = Path(out)
     src, proc = analysis(tracks, scene, fps, camera=camera, source=source, size=size)
     writers = [EventsWriter(out, source, scene.source),
-               CountsWriter(out, scene.lines, scene.zones, bin_s)]
+               CountsWriter(out, scene.lines, scene.zones, bin_s, by_class=by_class)]
     if sinks is not None:
         writers.append(sinks)
+    geometry = scene_geometry(scene.lines, scene.zones)
     writers.append(HeatmapWriter(out, scene.anchor, camera=camera, background=background,
-                                 geometry=scene_geometry(scene.lines, scene.zones),
-                                 boxes_of=lambda r: r.boxes))
+                                 geometry=geometry, boxes_of=lambda r: r.boxes))
+    if by_class:
+        writers += [HeatmapWriter(out, scene.anchor, background=background, geometry=geometry,
+                                  boxes_of=lambda r, c: r.boxes_of(c), label=c)
+                    for c in CLASS_NAMES]
     n = int(len(np.unique(src.tracks.ids)))
     # the folder is often the tracked run's own: --force replaces the analysis, not its tracks
     return Job(src, proc, writers, out, force=force, layout=_layout(fps, n), replace_listed=False)

@@ -63,7 +63,8 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
               scene: str | Path | Callable[[Any], Any] | None = None,
               bin_s: float = 60.0, sinks: Sequence[Any] = (),
               camera_name: str | None = None, sink_settings: Any = None,
-              writers: Sequence[Writer] = (), pace: bool = False) -> Job:
+              writers: Sequence[Writer] = (), pace: bool = False,
+              by_class: bool = False) -> Job:
     """``motiontrack track``: ``tracks.txt``, the annotated video, the mask video and the
     intermediate movies as ``cfg.output`` and ``save`` ask, the mask of every frame as
     ``bin%06d.png`` in the folder ``mask_images``, the live view with ``show``, ``gt.txt`` and
@@ -77,7 +78,9 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
     last valid scene this way). ``sinks`` (webhook and MQTT
     targets, :mod:`motiontrack.io.sinks`) receive every event too, named ``camera_name``
     (default: the source's name, :func:`~motiontrack.run.folders.source_name`), sent as
-    ``sink_settings`` say (a :class:`~motiontrack.io.sinks.SinkSettings`). ``writers``
+    ``sink_settings`` say (a :class:`~motiontrack.io.sinks.SinkSettings`). ``by_class``
+    adds each class's line crossings to ``counts.csv`` and a heat map of each class
+    (``heatmap_person.png``...). ``writers``
     are more outputs, given every frame after the others (``serve``'s live view). ``pace``
     plays a recorded source at its own frame rate (:class:`~motiontrack.io.pacing.PacedSource`:
     ``track --show``, someone is watching)."""
@@ -121,7 +124,8 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
         tracks = TracksWriter(out, fitted, fill)
         writers: list[Writer] = [tracks]
         if analytics is not None:
-            writers += _scene_writers(out, str(source), analytics.scene, fitted, bin_s)
+            writers += _scene_writers(out, str(source), analytics.scene, fitted, bin_s,
+                                      by_class)
         writers += _picture_writers(out, cfg, streams, mask_images, force, show)
         if truth is not None:
             from ..evaluate.score import score_run
@@ -159,14 +163,23 @@ def _sink_camera_name(sinks: Sequence[Any], scene: Any, camera_name: str | None,
     return check_camera_name(camera_name or source_name(source))
 
 
-def _scene_writers(out: Path, source: str, sc: Any, camera: Any, bin_s: float) -> list[Writer]:
-    """``events.jsonl``, ``counts.csv`` and the heat maps of the scene ``sc``."""
+def _scene_writers(out: Path, source: str, sc: Any, camera: Any, bin_s: float,
+                   by_class: bool = False) -> list[Writer]:
+    """``events.jsonl``, ``counts.csv`` and the heat maps of the scene ``sc`` (``by_class``:
+    the crossings of each class in ``counts.csv`` and a heat map of each class)."""
+    from ..classify import CLASS_NAMES
     from .analytics_writers import CountsWriter, EventsWriter
     from .heatmaps import HeatmapWriter, scene_geometry
 
-    return [EventsWriter(out, source, sc.source), CountsWriter(out, sc.lines, sc.zones, bin_s),
-            HeatmapWriter(out, sc.anchor, camera=camera,
-                          geometry=scene_geometry(sc.lines, sc.zones))]
+    geometry = scene_geometry(sc.lines, sc.zones)
+    writers: list[Writer] = [
+        EventsWriter(out, source, sc.source),
+        CountsWriter(out, sc.lines, sc.zones, bin_s, by_class=by_class),
+        HeatmapWriter(out, sc.anchor, camera=camera, geometry=geometry)]
+    if by_class:
+        writers += [HeatmapWriter(out, sc.anchor, geometry=geometry, label=c)
+                    for c in CLASS_NAMES]
+    return writers
 
 
 def _picture_writers(out: Path, cfg: PipelineConfig, streams: Sequence[str],
