@@ -126,3 +126,33 @@ def test_counts_and_heat_maps_split_by_class(tmp_path) -> None:
     assert [summary.extra[f"heatmap_{c}"]["visits"] for c in ("person", "vehicle", "other")] \
         == [6, 6, 0]
     assert all((tmp_path / f"heatmap_{c}.png").is_file() for c in ("person", "vehicle", "other"))
+
+
+def _left_object(classes: list[str] | None, owner_label: str) -> list:
+    """A track (100 px tall) stands at x 100-140 until frame 10, then walks right at 10 px a
+    frame out of view after frame 40; from frame 11 a still object lies beside where it stood
+    (the hand-built scene of tests/analytics/test_abandoned.py)."""
+    from motiontrack.types import Box, StaticFrame, StaticObject
+
+    rule = {"after_s": 2.0, "distance_heights": 1.5}
+    if classes is not None:
+        rule["classes"] = classes
+    an = Analytics(parse_scene({"abandoned": rule}), FPS)
+    events = []
+    for f in range(1, 71):
+        x = 100 + 10 * max(0, f - 10)
+        ids, boxes = ([1], [(x, 100, 40, 100)]) if f <= 40 else ([], [])
+        static = StaticFrame()
+        if f >= 11:
+            static = StaticFrame((StaticObject(Box(145, 180, 20, 20), 400, f - 10, 1.0),))
+        labels = [owner_label] * len(ids)
+        events += [e for e in an.step(f, ids, boxes, static, labels=labels).events
+                   if e.type == "abandoned"]
+    return events
+
+
+def test_abandoned_with_classes_reports_objects_left_by_tracks_of_those_classes() -> None:
+    assert [(e.frame, e.owner) for e in _left_object(None, "vehicle")] == [(49, 1)]
+    assert [(e.frame, e.owner) for e in _left_object(["person"], "person")] == [(49, 1)]
+    # a parked car's "object" (its owner a vehicle) is not abandoned luggage
+    assert _left_object(["person"], "vehicle") == []

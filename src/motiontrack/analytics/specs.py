@@ -125,6 +125,9 @@ class AbandonedSpec(SceneSection):
                                               "distance_m and distance_heights)")
     distance_heights: float | None = positive(None, "the owner is away farther than this many "
                                                     "of the owner's box heights")
+    classes: tuple[str, ...] | None = param(
+        None, max_items=3, doc="the classes of the track that left the object (its owner: "
+                               "person, vehicle, other; needs classified tracks); none: any")
 
 
 @dataclass(frozen=True)
