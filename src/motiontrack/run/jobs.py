@@ -63,8 +63,7 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
               scene: str | Path | Callable[[Any], Any] | None = None,
               bin_s: float = 60.0, sinks: Sequence[Any] = (),
               camera_name: str | None = None, sink_settings: Any = None,
-              writers: Sequence[Writer] = (), pace: bool = False,
-              by_class: bool = False) -> Job:
+              writers: Sequence[Writer] = (), pace: bool = False, by_class: bool = False) -> Job:
     """``motiontrack track``: ``tracks.txt``, the annotated video, the mask video and the
     intermediate movies as ``cfg.output`` and ``save`` ask, the mask of every frame as
     ``bin%06d.png`` in the folder ``mask_images``, the live view with ``show``, ``gt.txt`` and
@@ -75,15 +74,13 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
     the lines and zones with their counts on the annotated video; ``scene`` may also be a
     function of the camera model fitted to the source (None without one) that returns the
     :class:`~motiontrack.analytics.Scene` to run, or None for none (``serve`` keeps a camera's
-    last valid scene this way). ``sinks`` (webhook and MQTT
-    targets, :mod:`motiontrack.io.sinks`) receive every event too, named ``camera_name``
-    (default: the source's name, :func:`~motiontrack.run.folders.source_name`), sent as
-    ``sink_settings`` say (a :class:`~motiontrack.io.sinks.SinkSettings`). ``by_class``
-    adds each class's line crossings to ``counts.csv`` and a heat map of each class
-    (``heatmap_person.png``...). ``writers``
-    are more outputs, given every frame after the others (``serve``'s live view). ``pace``
-    plays a recorded source at its own frame rate (:class:`~motiontrack.io.pacing.PacedSource`:
-    ``track --show``, someone is watching)."""
+    last valid scene this way); ``by_class``: each class's crossings in ``counts.csv``, a heat
+    map of each class. ``sinks`` (webhook and MQTT targets, :mod:`motiontrack.io.sinks`)
+    receive every event too, named ``camera_name`` (default: the source's name,
+    :func:`~motiontrack.run.folders.source_name`), sent as ``sink_settings`` say (a
+    :class:`~motiontrack.io.sinks.SinkSettings`). ``writers`` are more outputs, given every
+    frame after the others (``serve``'s live view). ``pace`` plays a recorded source at its own
+    frame rate (:class:`~motiontrack.io.pacing.PacedSource`: ``track --show``)."""
     out = Path(out_dir)
     ignores_zero_marked(scoring)   # an unknown name fails before the source opens
     camera_name = _sink_camera_name(sinks, scene, camera_name, source)
@@ -95,11 +92,7 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
         log.info("--save annotated: the annotated video is written anyway")
         streams = tuple(s for s in streams if s != "annotated")
     more = list(writers)
-    camera = None
-    if cfg.measure.camera:
-        from ..calibrate import load_camera
-
-        camera = load_camera(cfg.measure.camera)
+    camera = _load_camera(cfg.measure.camera)
 
     def build(src: Source) -> Job:
         if pace:
@@ -139,6 +132,15 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
         return Job(src, proc, [*writers, *more], out, force=force, config=(save_config, cfg))
 
     return _opened(source, cfg.source, build)
+
+
+def _load_camera(path: str) -> Any:
+    """The camera model of ``measure.camera`` (None without one)."""
+    if not path:
+        return None
+    from ..calibrate import load_camera   # with a camera only
+
+    return load_camera(path)
 
 
 def _analytics(scene: str | Path | Callable[[Any], Any], camera: Any, fps: float | None
