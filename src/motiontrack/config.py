@@ -499,6 +499,10 @@ class PeopleConfig(_Section):
                            when={"hog": Not("off", "regions")})
 
 
+#: the classifier's keys take effect while it runs
+_ON = {"enabled": True}
+
+
 @dataclass(frozen=True)
 class ClassesConfig(_Section):
     """A class per track (``person``, ``vehicle``, ``other``) from evidence accumulated over its
@@ -506,27 +510,29 @@ class ClassesConfig(_Section):
     aspect and the speed in box heights per second decide."""
 
     enabled: bool = param(True, doc="give every track a class and a confidence")
-    min_frames: int = param(5, lo=1, hi=10000,
+    min_frames: int = param(5, lo=1, hi=10000, when=_ON,
                             doc="measured frames of evidence before a track is anything but other")
-    person_aspect: float = param(1.6, lo=0.1, hi=20.0,
+    person_aspect: float = param(1.6, lo=0.1, hi=20.0, when=_ON,
                                  doc="without a camera: a box at least this much taller than wide "
                                      "(height/width) looks like a person")
-    vehicle_aspect: float = param(1.2, lo=0.05, hi=20.0,
+    vehicle_aspect: float = param(1.2, lo=0.05, hi=20.0, when=_ON,
                                   doc="without a camera: a box no taller than this times its width "
                                       "(height/width) looks like a vehicle")
-    person_max_speed: float = param(2.5, lo=0.0, hi=100.0,
+    person_max_speed: float = param(2.5, lo=0.0, hi=100.0, when=_ON,
                                     doc="without a camera: fastest person in box heights per second "
                                         "(a walker covers about one height a second)")
-    person_min_height_m: float = param(1.2, lo=0.0, hi=20.0,
+    person_min_height_m: float = param(1.2, lo=0.0, hi=20.0, when=_ON,
                                        doc="with a camera: shortest person (m)")
-    person_max_height_m: float = param(2.3, lo=0.0, hi=20.0,
+    person_max_height_m: float = param(2.3, lo=0.0, hi=20.0, when=_ON,
                                        doc="with a camera: tallest person (m)")
-    person_max_width_m: float = param(1.1, lo=0.0, hi=20.0,
+    person_max_width_m: float = param(1.1, lo=0.0, hi=20.0, when=_ON,
                                       doc="with a camera: widest person (m)")
-    vehicle_min_width_m: float = param(1.6, lo=0.0, hi=50.0,
-                                       doc="with a camera: narrowest vehicle box (m), seen from any side")
-    person_max_speed_mps: float = param(4.0, lo=0.0, hi=100.0,
-                                        doc="with a camera: fastest person (m/s); faster is a vehicle")
+    vehicle_min_width_m: float = param(1.6, lo=0.0, hi=50.0, when=_ON,
+                                       doc="with a camera: narrowest vehicle box (m), seen from "
+                                           "any side")
+    person_max_speed_mps: float = param(4.0, lo=0.0, hi=100.0, when=_ON,
+                                        doc="with a camera: fastest person (m/s); faster is a "
+                                            "vehicle")
 
 
 @dataclass(frozen=True)

@@ -124,3 +124,16 @@ def test_a_camera_run_writes_each_tracks_class(pets_camera_run) -> None:
     assert {v["class"] for v in summary["classes"].values()} == {"person"}
     assert summary["class_counts"] == {"person": len(summary["classes"]), "vehicle": 0,
                                        "other": 0}
+
+
+def test_the_classifiers_keys_say_they_need_it_on_and_the_detectors_a_model() -> None:
+    from motiontrack.config import load_config
+    from motiontrack.config_activity import activity
+
+    off = load_config(None, ["classes.enabled=false"])
+    assert activity(off, "classes.min_frames").message() == (
+        "classes.min_frames has no effect while classes.enabled = false; "
+        "add --set classes.enabled=true")
+    assert activity(load_config(), "classes.min_frames").active
+    assert not activity(load_config(), "detector.every").active
+    assert activity(load_config(None, ["detector.model='onnx:m.onnx'"]), "detector.every").active
