@@ -137,3 +137,18 @@ def test_the_classifiers_keys_say_they_need_it_on_and_the_detectors_a_model() ->
     assert activity(load_config(), "classes.min_frames").active
     assert not activity(load_config(), "detector.every").active
     assert activity(load_config(None, ["detector.model='onnx:m.onnx'"]), "detector.every").active
+
+
+def test_the_class_column_goes_to_motiontrack_json_and_back(tmp_path) -> None:
+    from motiontrack.io.annotations import read_annotations, write_annotations
+
+    text = format_mot_rows([1, 2], [4, 5], np.array([[1, 2, 3, 4], [5, 6, 7, 8.]]),
+                           classes=[1, 3])
+    (tmp_path / "tracks.txt").write_text(text)
+    write_annotations(read_annotations(tmp_path / "tracks.txt"), tmp_path / "tracks.json")
+    doc = json.loads((tmp_path / "tracks.json").read_text())
+    assert [b["class"] for t in doc["tracks"] for b in t["boxes"]] == [1, 3]
+    assert read_annotations(tmp_path / "tracks.json").classes.tolist() == [1, 3]
+    # and back to the tracks layout with its class column
+    write_annotations(read_annotations(tmp_path / "tracks.json"), tmp_path / "again.txt")
+    assert (tmp_path / "again.txt").read_text() == text
