@@ -1,6 +1,10 @@
 """The pipeline: the only module that knows the stage order.
 
-    source → preprocess → motion (mask) → clean-up → regions → [people] → tracker → FrameResult
+    source → preprocess → motion (mask) → clean-up → regions → [detector] → [people] → tracker
+           → [classes] → FrameResult
+
+``[detector]`` is the user's ONNX model (``detector.model``: its boxes join or replace the
+regions), ``[classes]`` the track classifier (``classes.enabled``: a class per track).
 
 A frame that carries a :class:`~motiontrack.types.Discontinuity` (the source looped,
 reconnected, or was positioned at a start frame) resets every stage before it is processed
