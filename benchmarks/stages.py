@@ -15,6 +15,7 @@ per frame of each (best of ``--repeat`` runs over the clip):
                      the head splitting)
   head splitting     merged regions split between heads (Pipeline._split_upright)
   tracker            Pipeline.track (association, Kalman update, appearance)
+  classes            the track classifier (classes.enabled: votes of each measured track)
 
 The last three are the tracking thread's work. Stage times measured one at a time include cache
 effects of the stages around them (the KNN model is 9 MB at 384x288), so they add up to more than
@@ -45,13 +46,14 @@ from motiontrack.types import Frame
 from _pets import pets_args  # benchmarks/ is on sys.path when a script here runs
 
 STAGES = ("preprocess", "motion detector", "mask clean-up", "ghosts + regions", "head splitting",
-          "tracker")
+          "tracker", "classes")
 
 
 def one_run(frames: list, cfg: PipelineConfig, fps: float) -> dict[str, float]:
     """Milliseconds per frame of each stage over ``frames``, with a fresh pipeline."""
     h, w = frames[0].shape[:2]
     pipe = Pipeline(cfg, (w, h), None, fps)
+    classes, pipe.classes = pipe.classes, None   # timed on its own after the tracker
     spent = dict.fromkeys(STAGES, 0.0)
     clock = time.perf_counter
     for k, image in enumerate(frames):
@@ -72,9 +74,11 @@ def one_run(frames: list, cfg: PipelineConfig, fps: float) -> dict[str, float]:
         if regions:
             regions, heads = pipe._split_upright(mask, regions)
         t5 = clock()
-        pipe.track(frame, Detection(Motion(mask, raw, small), mask, regions, heads))
+        result = pipe.track(frame, Detection(Motion(mask, raw, small), mask, regions, heads))
         t6 = clock()
-        for name, a, b in zip(STAGES, (t0, t1, t2, t3, t4, t5), (t1, t2, t3, t4, t5, t6)):
+        classes.update(result.tracks)
+        t7 = clock()
+        for name, a, b in zip(STAGES, (t0, t1, t2, t3, t4, t5, t6), (t1, t2, t3, t4, t5, t6, t7)):
             spent[name] += b - a
     return {k: v * 1000 / len(frames) for k, v in spent.items()}
 

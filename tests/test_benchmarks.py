@@ -21,7 +21,7 @@ def test_stages_benchmark_reports_every_stage(data):
                          capture_output=True, text=True, timeout=120, check=True).stdout
     times = dict(re.findall(r"^(\S.*?)\s{2,}(\d+\.\d+)", out, re.M))
     stages = ["decode", "preprocess", "motion detector", "mask clean-up", "ghosts + regions",
-              "head splitting", "tracker"]
+              "head splitting", "tracker", "classes"]
     assert all(s in times for s in stages), out
     assert all(float(times[s]) > 0 for s in ("decode", "preprocess", "motion detector")), out
     # the total is the sum of the stages after decoding, each printed rounded to 0.01 ms

@@ -55,6 +55,12 @@ FLAGS: tuple[Flag, ...] = (
     Flag("--camera", "camera", "measure.camera", str,
          "calibrated camera (PETS/Tsai XML, OpenCV YAML, TOML): world positions in tracks.txt "
          "columns 8-9 (metres), per-track speed and height in summary.json"),
+    Flag("--detector", "detector", "detector.model", str,
+         "your own detector, onnx:MODEL.onnx: a YOLO-family ONNX model (YOLOv5, YOLOv8, YOLO11) "
+         "whose boxes are fused with the motion regions (detector.mode) and give tracks their "
+         "class"),
+    Flag("--detector-names", "detector_names", "detector.names", str,
+         "the detector's class names, one a line (default: the model's metadata)"),
 )
 
 _BY_DEST = {f.dest: f for f in FLAGS}

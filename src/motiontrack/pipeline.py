@@ -1,6 +1,10 @@
 """The pipeline: the only module that knows the stage order.
 
-    source → preprocess → motion (mask) → clean-up → regions → [people] → tracker → FrameResult
+    source → preprocess → motion (mask) → clean-up → regions → [detector] → [people] → tracker
+           → [classes] → FrameResult
+
+``[detector]`` is the user's ONNX model (``detector.model``: its boxes join or replace the
+regions), ``[classes]`` the track classifier (``classes.enabled``: a class per track).
 
 A frame that carries a :class:`~motiontrack.types.Discontinuity` (the source looped,
 reconnected, or was positioned at a start frame) resets every stage before it is processed
@@ -30,7 +34,10 @@ import cv2
 import numpy as np
 
 from . import synth as _synth  # noqa: F401  (registers the synth: sources)
+from .classify import TrackClassifier
 from .config import PipelineConfig, SourceConfig, load_config, warn_if_oversized
+from .detect import create as create_detector_model
+from .detect import detector_regions
 from .imaging import pixel_window, resolve_scale, scaled_size
 from .io.imagesize import too_many_pixels
 from .io.sources import Source, open_source, prefetch
@@ -52,7 +59,7 @@ from .types import (Annotations, Box, Discontinuity, Frame, FrameResult, PeopleF
 log = logging.getLogger(__name__)
 
 __all__ = ["Pipeline", "run", "TrackRun", "resolve_config", "completes_tracks",
-           "fill_gap_frames", "open_configured_source"]
+           "fill_gap_frames", "open_configured_source", "fitted_camera"]
 
 
 #: ``people.auto_split``: weight of each frame's median region height/width in the scene's
@@ -145,6 +152,7 @@ class Pipeline:
         they replace the motion stage.
     fps : the source's frame rate (None = unknown, taken as 25): converts durations in seconds
         (``tracker.max_lost_s``) to frames.
+    camera : a camera model fitted to the source: the track classifier measures in metres.
     static : keep a dual background (:class:`~motiontrack.motion.static.DualBackground`) and
         report each frame's recently stopped objects (``FrameResult.static``); only with the
         motion stage (not with external detections). It does not change the tracks.
@@ -152,7 +160,7 @@ class Pipeline:
 
     def __init__(self, cfg: PipelineConfig, image_size: tuple[int, int],
                  detections: Annotations | None = None, fps: float | None = None,
-                 static: bool = False) -> None:
+                 static: bool = False, camera: Any = None) -> None:
         self.cfg = cfg
         self._min_gap: float | None = None   # shortest time between frames seen: one period
         self._last_ts: float | None = None
@@ -184,6 +192,15 @@ class Pipeline:
         # a confirmed track's tentative frames (FrameResult.earlier)
         self.tracker.keep_tentative = (cfg.tracker.backfill
                                        and completes_tracks(cfg, detections is not None))
+        #: the user's detector (``detector.model``): its boxes join or replace the regions
+        self.onnx = None
+        if cfg.detector.model:
+            d = cfg.detector
+            self.onnx = create_detector_model(d.model, names=d.names, input_size=d.input_size,
+                                              score=d.score, nms=d.nms)
+        #: the class of each track (``classes.enabled``), after the tracker
+        self.classes = (TrackClassifier(cfg.classes, fps, camera) if cfg.classes.enabled
+                        else None)
         self.people = None
         if cfg.people.enabled:
             self.people = PeopleStage(cfg.people)
@@ -271,6 +288,8 @@ class Pipeline:
         """The tracker ends every track (ids keep counting); the bridge and the people stage
         forget theirs; the gap to the next frame is not a gap."""
         self.tracker.reset()
+        if self.classes is not None:
+            self.classes.reset()
         if self.bridge is not None:
             self.bridge = Bridge(self.cfg.tracker.bridge, self.cfg.tracker.bridge_frames)
         if self.people is not None:
@@ -450,6 +469,9 @@ class Pipeline:
                 log.info("frame %d: source discontinuity (%s): models and tracks reset",
                          frame.index, frame.discontinuity.reason)
             self.reset_tracking()
+        dets = None
+        if self.onnx is not None:
+            regions, dets = self._detected(frame, regions)
         people = PeopleFrame(heads=det.heads) if det.heads is not None else None
         if self.people is not None:
             background = det.motion.background
@@ -484,14 +506,29 @@ class Pipeline:
                                      frame=frame.index, hypotheses=hyps)
         if self.bridge is not None:
             self.bridge.remember(frame.image, tracks)
+        earlier = tuple(self.tracker.confirmed_earlier)
+        if self.classes is not None:
+            tracks = self.classes.update(tracks, dets, self.cfg.detector.match_iou,
+                                         self.cfg.detector.vote)
+            earlier = tuple((f, replace(t, label=n, label_score=s))
+                            for f, t in earlier for n, s in [self.classes.label(t.id)])
         self._prev_tracks = tuple(tracks)
         self.frames_seen += 1
         return FrameResult(index=frame.index, timestamp=frame.timestamp, frame=frame.image,
                            mask=mask, regions=tuple(regions), tracks=tuple(tracks),
                            raw_mask=det.motion.raw_mask, people=people,
-                           earlier=tuple(self.tracker.confirmed_earlier),
+                           earlier=earlier,
                            static=det.motion.static if self.report_static else None,
                            discontinuity=frame.discontinuity)
+
+    def _detected(self, frame: Frame, regions: list[Region]) -> tuple[list[Region], Any]:
+        """The user's detector on this frame (every ``detector.every`` frames): the regions as
+        ``detector.mode`` makes them, and the detections (None in a frame it skips)."""
+        d = self.cfg.detector
+        if self.frames_seen % d.every:
+            return ([] if d.mode == "replace" else regions), None
+        dets = self.onnx.detect(frame.image)
+        return detector_regions(regions, dets, d.mode, d.start_tracks, d.match_iou), dets
 
     def process(self, frame: Frame) -> FrameResult:
         """Both stages of one frame."""
@@ -586,8 +623,9 @@ class TrackRun:
         cfg = resolve_config(config)
         self.source = open_configured_source(source, cfg.source)
         try:
-            self.pipeline = Pipeline(cfg, (self.source.info.width, self.source.info.height),
-                                     detections, self.source.info.fps)
+            info = self.source.info
+            self.pipeline = Pipeline(cfg, (info.width, info.height), detections, info.fps,
+                                     camera=fitted_camera(cfg, info.width, info.height))
         except BaseException:
             self.source.close()
             raise
@@ -623,6 +661,16 @@ _OPEN_RUNS: "weakref.WeakSet[TrackRun]" = weakref.WeakSet()
 def _close_open_runs() -> None:
     for r in list(_OPEN_RUNS):
         r.close()
+
+
+def fitted_camera(cfg: PipelineConfig, width: int, height: int) -> Any:
+    """``measure.camera`` fitted to frames of ``width`` x ``height`` when the track classifier
+    measures with it (``classes.enabled``), else None."""
+    if not (cfg.measure.camera and cfg.classes.enabled):
+        return None
+    from .calibrate import fit_to_image, load_camera   # with a camera only
+
+    return fit_to_image(load_camera(cfg.measure.camera), width, height, cfg.measure.camera)
 
 
 def run(source: Any, config: PipelineConfig | str | Path | None = None,

@@ -169,6 +169,11 @@ class Track:
         Frames since the last associated measurement (0 = measured this frame).
     history : tuple
         Recent centre points ``((x, y), ...)`` for trails; bounded length.
+    label : str
+        The track's class (``person``, ``vehicle``, ``other``; :mod:`motiontrack.classify`),
+        ``""`` when no classifier ran.
+    label_score : float
+        The confidence of ``label`` in [0, 1]: its share of the track's votes so far.
     """
 
     id: int
@@ -180,6 +185,8 @@ class Track:
     time_since_update: int = 0
     history: tuple[tuple[float, float], ...] = ()
     score: float = 1.0
+    label: str = ""
+    label_score: float = 0.0
 
     def __post_init__(self) -> None:
         if self.id < 1:
@@ -478,10 +485,10 @@ _EVENT_ORDER = list(EVENT_TYPES)
 #: the JSON key order of every event (absent keys are left out)
 _EVENT_KEYS = (
     "type", "frame", "t", "track", "x", "y", "X", "Y", "line", "direction", "zone", "dwell_s",
-    "speed_mps", "speed_px_s", "duration_s", "owner",
+    "speed_mps", "speed_px_s", "duration_s", "owner", "label",
 )  # fmt: skip
 _EVENT_EXTRA = ("line", "direction", "zone", "dwell_s", "speed_mps", "speed_px_s", "duration_s", "owner")
-_EVENT_STR = ("line", "direction", "zone")
+_EVENT_STR = ("line", "direction", "zone", "label")
 _EVENT_INT = ("frame", "track", "owner")
 
 
@@ -557,6 +564,9 @@ class Event:
         ``stationary_end``, ``abandoned``: seconds the object has been static.
     owner : int or None
         ``abandoned``: the track that left the object, when known.
+    label : str or None
+        The track's class at the event (``person``, ``vehicle``, ``other``), when the tracks
+        were classified (``classes.enabled``); any type may carry it.
     """
 
     type: str
@@ -575,6 +585,7 @@ class Event:
     speed_px_s: float | None = None
     duration_s: float | None = None
     owner: int | None = None
+    label: str | None = None
 
     def __post_init__(self) -> None:
         if self.type not in _EVENT_REQUIRED:

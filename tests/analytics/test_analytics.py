@@ -276,7 +276,7 @@ def test_speeding_once_per_episode_in_pixels_per_second():
         ({"zone": [{"name": "z", "polygon": [[0, 0], [10, 10], [10, 0], [0, 10]]}]}, "simple polygon"),
         ({"zone": [{"name": "z", "polygon": [[0, 0], [5, 5], [10, 10]]}]}, "encloses no area"),
         ({"zone": [{**U_ZONE, "loiter_s": 0}]}, r"zone\[1\].loiter_s must be in \(0.0, 10000000\], got 0.0"),
-        ({"zone": [{**U_ZONE, "dwell": 3}]}, r"unknown scene key\(s\) zone\[1\].dwell; valid keys in zone\[1\]: loiter_s, name"),
+        ({"zone": [{**U_ZONE, "dwell": 3}]}, r"unknown scene key\(s\) zone\[1\].dwell; valid keys in zone\[1\]: classes, loiter_s, name"),
         ({"stationary": {"after_s": 3}}, "stationary needs exactly one of radius_px and radius_m"),
         ({"stationary": {"radius_px": 3}}, "stationary.after_s is required"),
         ({"stationary": {"after_s": 3, "radius_m": 1}}, "stationary.radius_m is in metres"),

@@ -83,7 +83,7 @@ def test_config_toml_is_the_resolved_config_as_a_file(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("argv, message", [
-    (["config", "motion.nope"], "no config key or section 'motion.nope'; sections: cleanup,"),
+    (["config", "motion.nope"], "no config key or section 'motion.nope'; sections: classes, cleanup, detector,"),
     (["config", "--toml", "motion"], "--toml prints the whole config; give no KEY with it"),
     (["config", "--set", "motion.knn.history=0"], "motion.knn.history must be in [1, 2147483647]"),
     (["config", "--preset", "nope"], "unknown preset 'nope'"),

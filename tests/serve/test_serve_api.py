@@ -384,6 +384,12 @@ def test_live_events_since_sse_and_counts(server):
     assert seqs == list(range(1, len(seqs) + 1))
     assert {e["type"] for e in events} >= {"zone_enter", "line_cross"}
     assert all("frame" in e and "t" in e and "track" in e and "wall" in e for e in events)
+    # the walker's events name its track's class, and the camera lists its tracks with theirs
+    assert {e.get("label") for e in events} == {"person"}
+    listed = server.wait("walker's track listed as a person", lambda: next(
+        (c["tracks"] for c in server.client.get("/api/cameras").json()
+         if c["name"] == "walker" and any(t["class"] == "person" for t in c["tracks"])), None), 30)
+    assert all(set(t) == {"id", "class"} for t in listed)
     later = server.client.get(f"/api/cameras/walker/events?since={seqs[0]}").json()
     assert [e["seq"] for e in later][:len(seqs) - 1] == seqs[1:]
     counts = server.client.get("/api/cameras/walker/counts").json()

@@ -34,8 +34,8 @@ def _type_text(typ: Any, m: typing.Mapping[str, Any]) -> str:
     if typing.get_origin(typ) is tuple and typing.get_args(typ)[-1] is not Ellipsis:
         n, lo, hi = len(typing.get_args(typ)), m.get("lo"), m.get("hi")
         return f"{n} numbers in [{_number(lo)}, {_number(hi)}]"   # a pair such as clip_s
-    if typing.get_origin(typ) is tuple:     # an array of points
-        return "array of `[x, y]`"
+    if typing.get_origin(typ) is tuple:     # an array of points, or of names
+        return ("array of text" if typing.get_args(typ)[0] is str else "array of `[x, y]`")
     if m.get("choices"):
         return " \\| ".join(f"`{c}`" for c in m["choices"])
     text = _NAMES.get(typ, getattr(typ, "__name__", str(typ)))

@@ -109,15 +109,17 @@ class Analytics:
                static: StaticFrame | None = None) -> list[Event]:
         """The events of frame ``frame`` (1-based) with these tracks (each with ``.id`` and
         ``.box`` ``x, y, w, h``) and the frame's static objects."""
+        labels = [getattr(t, "label", "") for t in tracks]
         return list(self.step(frame, [t.id for t in tracks],
                               [(t.box.x, t.box.y, t.box.w, t.box.h) for t in tracks],
-                              static).events)
+                              static, labels=labels if any(labels) else None).events)
 
     def step(self, frame: int, ids: Any, boxes: Any, static: StaticFrame | None = None,
-             discontinuity: Discontinuity | None = None) -> SceneFrame:
+             discontinuity: Discontinuity | None = None, labels: Any = None) -> SceneFrame:
         """One frame from columns: ``ids`` (N,) int and ``boxes`` (N, 4) ``x, y, w, h``
         pixels, and the frame's static objects (``FrameResult.static``; the ``abandoned`` rule
-        needs them). Frames must come in increasing order; a frame without tracks is a step too
+        needs them); ``labels`` (N,) the tracks' classes, when they were classified (events
+        carry them; rule items with ``classes`` apply to those classes only). Frames must come in increasing order; a frame without tracks is a step too
         (it is how tracks are forgotten and occupancy averaged). A ``discontinuity`` resets
         (:meth:`reset`) before the frame."""
         frame = int(frame)
@@ -126,11 +128,14 @@ class Analytics:
                              f"after {self.last_frame}")
         if discontinuity is not None:
             self.reset(discontinuity)
-        ids, boxes = _first_of_each(np.asarray(ids, dtype=np.int64).reshape(-1),
-                                    np.asarray(boxes, dtype=np.float64).reshape(-1, 4))
+        ids = np.asarray(ids, dtype=np.int64).reshape(-1)
+        first = _first_of_each(ids)
+        ids, boxes = ids[first], np.asarray(boxes, dtype=np.float64).reshape(-1, 4)[first]
+        if labels is not None:
+            labels = np.asarray(labels, dtype=object).reshape(-1)[first]
         gone = [] if self.objects is None else self.objects.step(frame, ids, boxes, static)
         events = self._forget(frame)
-        table, states = self._table(frame, ids, boxes, static, gone)
+        table, states = self._table(frame, ids, boxes, static, gone, labels)
         for rule in self.rules.values():
             events += rule.step(table)
         self._remember(table, states)
@@ -176,7 +181,8 @@ class Analytics:
         return events
 
     def _table(self, frame: int, ids: np.ndarray, boxes: np.ndarray,
-               static: StaticFrame | None, gone: list) -> tuple[FrameTable, list[TrackMemory]]:
+               static: StaticFrame | None, gone: list, labels: np.ndarray | None = None
+               ) -> tuple[FrameTable, list[TrackMemory]]:
         """The frame's :class:`FrameTable`, new tracks given a row."""
         states, fresh = [], []
         for tid in ids.tolist():
@@ -189,7 +195,8 @@ class Analytics:
         known = np.fromiter((st.last_frame > 0 for st in states), dtype=bool, count=len(states))
         table = FrameTable(frame, ids, boxes, self.context.anchors(boxes),
                            self.context.world(boxes), rows, known, self._rows.point[rows],
-                           np.asarray(fresh, dtype=np.int64), self.context, static, gone)
+                           np.asarray(fresh, dtype=np.int64), self.context, static, gone,
+                           labels)
         return table, states
 
     def _remember(self, table: FrameTable, states: list[TrackMemory]) -> None:
@@ -236,11 +243,10 @@ class Analytics:
         return out
 
 
-def _first_of_each(ids: np.ndarray, boxes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The rows of a frame with a repeated track id left out but the first."""
+def _first_of_each(ids: np.ndarray) -> np.ndarray | slice:
+    """The rows of a frame with a repeated track id left out but the first (an index)."""
     id_list = ids.tolist()
     if len(set(id_list)) == len(id_list):
-        return ids, boxes
+        return slice(None)
     _, first = np.unique(ids, return_index=True)
-    first = np.sort(first)
-    return ids[first], boxes[first]
+    return np.sort(first)

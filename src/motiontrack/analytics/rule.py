@@ -171,6 +171,9 @@ class FrameTable:
         The frame's static objects (``track --scene`` with a rule that uses them).
     gone : list
         Static objects forgotten in this frame (:meth:`.objects.StaticObjects.step`).
+    labels : (N,) object array of str, or None
+        Each track's class (``person``, ``vehicle``, ``other``) when the tracks were
+        classified; events carry it and rules with ``classes`` count only those classes.
     """
 
     frame: int
@@ -185,14 +188,26 @@ class FrameTable:
     context: RuleContext
     static: StaticFrame | None = None
     gone: Sequence[Any] = ()
+    labels: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.ids)
 
     def event(self, kind: str, i: int, **fields: Any) -> Event:
-        """An event of this frame about track row ``i`` at its anchor."""
+        """An event of this frame about track row ``i`` at its anchor (with its class)."""
+        if self.labels is not None and self.labels[i]:
+            fields.setdefault("label", str(self.labels[i]))
         return self.context.event(kind, self.frame, self.ids[i], self.points[i],
                                   row_of(self.world, i), **fields)
+
+    def of_classes(self, classes: Sequence[str] | None) -> np.ndarray:
+        """(N,) bool: the tracks a rule item with ``classes`` applies to (every track when
+        ``classes`` is None; none of an unclassified frame otherwise)."""
+        if classes is None:
+            return np.ones(len(self.ids), dtype=bool)
+        if self.labels is None:
+            return np.zeros(len(self.ids), dtype=bool)
+        return np.isin(self.labels, list(classes))
 
 
 @runtime_checkable

@@ -16,10 +16,13 @@ from typing import ClassVar
 
 import numpy as np
 
+from ..classify import CLASS_NAMES
+from ..errors import ConfigError
 from ..schema import REQUIRED, Section, param
 from ..speed import SPEED_WINDOW_S
 
-__all__ = ["COORD_LIMIT", "MAX_POLYGON_POINTS", "MAX_TABLES", "SceneSection", "LineSpec",
+__all__ = ["CLASSES_DOC", "classes_param", "checked_classes",
+           "COORD_LIMIT", "MAX_POLYGON_POINTS", "MAX_TABLES", "SceneSection", "LineSpec",
            "ZoneSpec", "StationarySpec", "AbandonedSpec", "SpeedSpec"]
 
 #: largest number accepted (pixels, metres, seconds): far beyond any frame, small enough for
@@ -42,6 +45,29 @@ class SceneSection(Section):
     schema_noun: ClassVar[str] = "scene "
 
 
+#: the meaning of every rule's ``classes`` key
+CLASSES_DOC = ("the track classes this applies to, of person, vehicle, other (needs classified "
+               "tracks: `classes.enabled`, or a tracks file with a class column); none: every "
+               "track")
+
+
+def classes_param() -> tuple[str, ...] | None:
+    """The ``classes = ["person", ...]`` key of a rule's table."""
+    return param(None, max_items=len(CLASS_NAMES), doc=CLASSES_DOC)
+
+
+def checked_classes(classes: tuple[str, ...] | None, where: str) -> tuple[str, ...] | None:
+    """A rule's ``classes`` with each name checked (``where`` names the table), repeats
+    dropped."""
+    if classes is None:
+        return None
+    for i, name in enumerate(classes, 1):
+        if name not in CLASS_NAMES:
+            raise ConfigError(f"{where}.classes[{i}] must be one of {', '.join(CLASS_NAMES)}, "
+                              f"got {name!r}")
+    return tuple(dict.fromkeys(classes))
+
+
 def positive(default: float | None, doc: str) -> float | None:
     """A number > 0 (and at most :data:`COORD_LIMIT`), as most scene keys are."""
     return param(default, lo=0.0, lo_open=True, hi=COORD_LIMIT, doc=doc)
@@ -54,6 +80,8 @@ class LineSpec:
     name: str
     a: tuple[float, float]
     b: tuple[float, float]
+    #: the track classes the line counts (None = every track)
+    classes: tuple[str, ...] | None = None
 
     @property
     def length(self) -> float:
@@ -67,6 +95,8 @@ class ZoneSpec:
     name: str
     polygon: tuple[tuple[float, float], ...]
     loiter_s: float | None = None
+    #: the track classes the zone holds (None = every track)
+    classes: tuple[str, ...] | None = None
 
     def vertices(self) -> np.ndarray:
         """(K, 2) float64 vertices."""
@@ -81,6 +111,8 @@ class StationarySpec(SceneSection):
     radius_px: float | None = positive(None, "the radius in pixels (exactly one of radius_px "
                                              "and radius_m)")
     radius_m: float | None = positive(None, "the radius in metres on the ground; needs a camera")
+    classes: tuple[str, ...] | None = param(
+        None, max_items=3, doc=CLASSES_DOC + "; static objects the tracker lost count as other")
 
 
 @dataclass(frozen=True)
@@ -93,6 +125,9 @@ class AbandonedSpec(SceneSection):
                                               "distance_m and distance_heights)")
     distance_heights: float | None = positive(None, "the owner is away farther than this many "
                                                     "of the owner's box heights")
+    classes: tuple[str, ...] | None = param(
+        None, max_items=3, doc="the classes of the track that left the object (its owner: "
+                               "person, vehicle, other; needs classified tracks); none: any")
 
 
 @dataclass(frozen=True)

@@ -36,6 +36,9 @@ def register(subparsers) -> None:
     p.add_argument("-o", "--out", type=Path, required=True, help="output folder")
     p.add_argument("--bin-s", type=float, default=60.0,
                    help="seconds per row of counts.csv (default 60)")
+    p.add_argument("--by-class", action="store_true",
+                   help="each class's line crossings in counts.csv and a heat map of each class "
+                        "(heatmap_person.png ...), from the tracks file's class column")
     p.add_argument("--force", action="store_true", help="replace existing outputs")
     add_sink_options(p, "the name of the tracks file's folder")
     p.set_defaults(func=cmd_analyze)
@@ -66,6 +69,7 @@ def cmd_analyze(args: argparse.Namespace) -> int:
     size = ((background.shape[1], background.shape[0]) if background is not None
             else beside.frame_size())
     job = analyze_job(tracks, scene, fps, args.out, camera=camera, bin_s=args.bin_s,
+                      by_class=args.by_class,
                       force=args.force, source=str(args.tracks), size=size,
                       background=background,
                       sinks=sinks_writer(targets, args.camera_name,

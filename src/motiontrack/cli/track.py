@@ -57,11 +57,16 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--min-score", type=float, default=None,
                    help="with --detections: drop detections below this confidence")
     add_flag(p, "--camera")
+    add_flag(p, "--detector", metavar="onnx:MODEL")
+    add_flag(p, "--detector-names", metavar="FILE")
     p.add_argument("--scene", help="scene file (TOML): line crossings, zone dwell, stationary and "
                                    "speeding events in events.jsonl and counts.csv, lines and zones "
                                    "on the annotated video (docs/analytics.md)")
     p.add_argument("--bin-s", type=float, default=60.0,
                    help="with --scene: seconds per row of counts.csv (default 60)")
+    p.add_argument("--by-class", action="store_true",
+                   help="with --scene: each class's line crossings in counts.csv and a heat map "
+                        "of each class, heatmap_person.png ... (docs/classes.md)")
     p.add_argument("--show", action="store_true",
                    help="live view, a file played at its own frame rate: a window (q quits, "
                         "space pauses) with OpenCV's GUI build; with the headless build the serve "
@@ -83,7 +88,7 @@ def _build_config(args):
     from ._common import run_overrides
 
     overrides = run_overrides(args, ("start", "max_frames", "fps", "codec", "no_video",
-                                     "mask_video", "camera"))
+                                     "mask_video", "camera", "detector", "detector_names"))
     preset = args.preset
     if preset is None and (args.detections or args.detections_folder):
         preset = "detections"   # a detector's boxes: the detection-driven tracker
@@ -226,7 +231,8 @@ def cmd_track(args) -> int:
                         force=args.force, gt=gt,
                         detections=det, show=_viewer() if window else None, save=args.save,
                         mask_images=args.mask_images, scoring=args.scoring, scene=args.scene,
-                        bin_s=args.bin_s, sinks=sinks, camera_name=args.camera_name,
+                        bin_s=args.bin_s, by_class=args.by_class, sinks=sinks,
+                        camera_name=args.camera_name,
                         sink_settings=settings, pace=args.show,
                         writers=[view.writer()] if view else ())
         log.info("source %s", job.info.describe())

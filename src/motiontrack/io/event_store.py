@@ -16,7 +16,7 @@ guess at columns it does not know).
 Columns of ``events``: ``id`` (order of arrival), ``camera`` (the camera, or the video of a
 ``track``/``batch`` run), ``segment`` (the run folder's name within the store's folder),
 ``type``, ``rule`` (the line or zone the event is about, when it has one), ``class`` (the
-object's class when the event carries one), ``track``, ``frame``, ``t`` (seconds into the
+object's class when the event carries one: its ``label``), ``track``, ``frame``, ``t`` (seconds into the
 source), ``start``/``end`` (epoch seconds: ``end`` is when the event happened, ``start`` is
 ``end`` minus its ``dwell_s`` or ``duration_s``, else equal), ``x``, ``y``, ``snapshot``,
 ``clip`` (paths relative to the store's folder, or NULL) and ``data`` (the event's JSON object as
@@ -75,6 +75,8 @@ SCHEMA_VERSION = len(MIGRATIONS)
 
 #: the event keys that name the rule's line or zone, in the order they are looked for
 _RULE_KEYS = ("line", "zone", "rule")
+#: the event keys that name the object's class (``label``: the class of the event's track)
+_CLASS_KEYS = ("class", "label")
 #: the event keys that say how long the event lasted before it was reported
 _DURATION_KEYS = ("dwell_s", "duration_s")
 _COLUMNS = ("id", "camera", "segment", "type", "rule", "class", "track", "frame", "t", "start",
@@ -238,11 +240,12 @@ class EventStore:
         duration = next((float(event[k]) for k in _DURATION_KEYS
                          if isinstance(event.get(k), (int, float))), 0.0)
         rule = next((str(event[k]) for k in _RULE_KEYS if event.get(k) is not None), None)
+        klass = next((str(event[k]) for k in _CLASS_KEYS if event.get(k) is not None), None)
         with self._full():
             cur = self._db.execute(
                 'INSERT INTO events (camera, segment, type, rule, class, track, frame, t, start, '
                 '"end", x, y, snapshot, clip, data) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)',
-                (camera, segment, str(event.get("type")), rule, event.get("class"),
+                (camera, segment, str(event.get("type")), rule, klass,
                  event.get("track"), event.get("frame"), event.get("t"), when - duration, when,
                  event.get("x"), event.get("y"), snapshot, clip, json.dumps(event)))
         self._pending += 1

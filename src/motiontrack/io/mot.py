@@ -6,6 +6,9 @@ Layouts (columns, 1-based):
   ``frame, id, left, top, width, height, conf|consider, world_x, world_y, world_z``
 * MOT16/17/20 ground truth (9 columns): ``frame, id, left, top, width, height, consider, class,
   visibility``
+* motiontrack tracks with classes (11 columns): the 10 of results, then ``class`` (1 person,
+  3 vehicle, 0 other: :mod:`motiontrack.classify`). Readers of the 10-column layout (and
+  TrackEval's) read the first ten and ignore it.
 
 In ground truth, column 7 is the *consider* flag (0 = ignore); in results and detections it is the
 confidence. Frames are 1-based.
@@ -66,16 +69,18 @@ def _fast_rows(text: str) -> tuple[np.ndarray, int] | None:
     if a.size == 0 or a.shape[1] < 6:
         return None
     ncols = a.shape[1]
-    a = a[:, :10]
+    a = a[:, :11]
     frame, ident = a[:, 0], a[:, 1]
     klass = a[:, 7] if a.shape[1] > 7 else np.zeros(len(a))
+    if a.shape[1] > 10:
+        klass = np.column_stack([klass, a[:, 10]])
     ok = (np.isfinite(a).all() and (frame >= 1).all() and (frame == np.floor(frame)).all()
           and (a[:, 4] > 0).all() and (a[:, 5] > 0).all()
           and (np.abs(np.column_stack([frame, ident, klass])) < INT_LIMIT).all())
     if not ok:
         return None
-    if a.shape[1] < 10:
-        a = np.hstack([a, np.full((len(a), 10 - a.shape[1]), -1.0)])
+    if a.shape[1] < 11:
+        a = np.hstack([a, np.full((len(a), 11 - a.shape[1]), -1.0)])
     return a, ncols
 
 
@@ -97,9 +102,10 @@ def parse_mot(text: str, kind: str = "results", name: str = "<string>") -> Annot
             raise InputError(f"{location(name, lineno)}: expected at least 6 comma-separated "
                              f"values (frame,id,left,top,width,height), got {len(fields)}")
         vals = [finite_number(tok, location(name, lineno, col), _field(k))
-                for k, (col, tok) in enumerate(fields[:10])]
-        # frame, id and (9-column gt) class become int64: refuse values that cannot be one
-        for k in (0, 1, 7):
+                for k, (col, tok) in enumerate(fields[:11])]
+        # frame, id, (9-column gt) class and (11-column) class become int64: refuse values
+        # that cannot be one
+        for k in (0, 1, 7, 10):
             if k < len(vals) and abs(vals[k]) >= INT_LIMIT:
                 col, tok = fields[k]
                 raise InputError(f"{location(name, lineno, col)}: {_field(k)} out of range "
@@ -113,7 +119,7 @@ def parse_mot(text: str, kind: str = "results", name: str = "<string>") -> Annot
                 raise InputError(f"{location(name, lineno, col)}: box width and height must be "
                                  f"> 0, got {_field(k)} {excerpt(tok)}")
         ncols = len(fields) if ncols is None else ncols
-        rows.append(vals + [-1.0] * (10 - len(vals)))
+        rows.append(vals + [-1.0] * (11 - len(vals)))
     if not rows:
         return Annotations.empty()
     return _annotations(np.asarray(rows, dtype=np.float64), ncols, kind)
@@ -141,7 +147,7 @@ def _split_fields(line: str) -> list[tuple[int, str]]:
 
 
 def _annotations(a: np.ndarray, ncols: int | None, kind: str) -> Annotations:
-    """Rows padded to 10 columns → :class:`Annotations` for the given ``kind``."""
+    """Rows padded to 11 columns → :class:`Annotations` for the given ``kind``."""
     n = len(a)
     if kind == "gt":
         consider = a[:, 6] != 0
@@ -156,6 +162,8 @@ def _annotations(a: np.ndarray, ncols: int | None, kind: str) -> Annotations:
     else:
         classes, visibility = np.full(n, -1, dtype=np.int64), np.full(n, -1.0)
         world = a[:, 7:10]
+        if ncols is not None and ncols >= 11 and kind != "gt":
+            classes = a[:, 10].astype(np.int64)
     return Annotations.from_columns(
         frames=a[:, 0].astype(np.int64), ids=a[:, 1].astype(np.int64), boxes=a[:, 2:6],
         scores=scores, consider=consider, classes=classes, visibility=visibility, world=world,
@@ -167,8 +175,10 @@ def _fmt(v: float) -> str:
 
 
 def format_mot_rows(frames: Iterable[int], ids: Iterable[int], boxes: np.ndarray,
-                    scores: Iterable[float] | None = None, world: np.ndarray | None = None) -> str:
-    """Rows of a MOTChallenge *results* file (10 columns), newline-terminated."""
+                    scores: Iterable[float] | None = None, world: np.ndarray | None = None,
+                    classes: Iterable[int] | None = None) -> str:
+    """Rows of a MOTChallenge *results* file (10 columns), newline-terminated; with
+    ``classes``, each row's class number in an 11th column."""
     boxes = np.asarray(boxes, dtype=np.float64).reshape(-1, 4)
     n = len(boxes)
     scores = np.ones(n) if scores is None else np.asarray(list(scores), dtype=np.float64)
@@ -179,6 +189,8 @@ def format_mot_rows(frames: Iterable[int], ids: Iterable[int], boxes: np.ndarray
             f"{int(f)},{int(i)},{b[0]:.2f},{b[1]:.2f},{b[2]:.2f},{b[3]:.2f},{_fmt(s)},"
             f"{_fmt(w[0])},{_fmt(w[1])},{_fmt(w[2])}\n"
         )
+    if classes is not None:
+        out = [f"{row[:-1]},{int(k)}\n" for row, k in zip(out, classes)]
     return "".join(out)
 
 
@@ -192,7 +204,9 @@ def write_mot(ann: Annotations, path: str | Path, kind: str = "results") -> None
                 fh.write(f"{f},{i},{b[0]:.2f},{b[1]:.2f},{b[2]:.2f},{b[3]:.2f},{int(c)},{k},{_fmt(v)}\n")
         else:
             col7 = a.consider.astype(np.float64) if kind == "gt" else a.scores
-            fh.write(format_mot_rows(a.frames, a.ids, a.boxes, col7, a.world))
+            # results with classes (a track file of a run that classified its tracks)
+            classes = a.classes if kind != "gt" and len(a) and (a.classes >= 0).all() else None
+            fh.write(format_mot_rows(a.frames, a.ids, a.boxes, col7, a.world, classes))
 
 
 def read_seqinfo(path: str | Path) -> dict[str, object]:

@@ -19,7 +19,8 @@ from ..types import Region, Track, frame_number
 from .colors import TrackColors, palette_color
 
 __all__ = ["frame_caption", "INSETS", "LEGEND_STYLES", "text_scale", "line_width", "draw_tracks",
-           "draw_regions", "draw_mask_inset", "draw_legend", "annotate_frame", "draw_label"]
+           "draw_regions", "draw_mask_inset", "draw_legend", "annotate_frame", "draw_label",
+           "track_caption"]
 
 #: where the mask inset goes (``output.inset``)
 INSETS = ("none", "top-left", "top-right", "bottom-left", "bottom-right")
@@ -68,6 +69,12 @@ def draw_label(img: np.ndarray, text: str, org: tuple[int, int], color: tuple[in
                 (0, 0, 0) if luminance > 128 else (255, 255, 255), thickness, cv2.LINE_AA)
 
 
+def track_caption(t: Track) -> str:
+    """A track's label on the picture: its id, and its class once it has one other than
+    ``other`` (``7 person``)."""
+    return f"{t.id} {t.label}" if t.label and t.label != "other" else str(t.id)
+
+
 def _colors_of(tracks: Sequence[Track], colors: Mapping[int, BGR] | None) -> Mapping[int, BGR]:
     # without a video's TrackColors, the tracks of this one frame still get distinct colours
     return colors if colors is not None else TrackColors().assign(t.id for t in tracks)
@@ -93,7 +100,7 @@ def draw_tracks(img: np.ndarray, tracks: Sequence[Track], trail: int = 32,
         if trail > 1 and len(t.history) > 1:
             pts = np.round(np.array(t.history[-trail:])).astype(np.int32).reshape(-1, 1, 2)
             cv2.polylines(img, [pts], False, color, seen_width, cv2.LINE_AA)
-        draw_label(img, str(t.id), (p1[0], p1[1] - 2), color, scale, thick)
+        draw_label(img, track_caption(t), (p1[0], p1[1] - 2), color, scale, thick)
 
 
 def draw_regions(img: np.ndarray, regions: Sequence[Region], color: BGR = REGION_COLOR) -> None:

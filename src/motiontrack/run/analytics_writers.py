@@ -17,6 +17,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from ..classify import CLASS_NAMES
 from ..errors import ConfigError
 from ..io.atomic import AtomicFile
 from ..types import FrameResult, SceneFrame, events_header
@@ -61,17 +62,20 @@ class CountsWriter(Writer):
     crossings in the bin, each zone's mean and peak occupancy over the bin's frames.
 
     Columns: ``bin, start_s, end_s, frames``, then ``line:NAME:in``, ``line:NAME:out`` per line
-    and ``zone:NAME:mean``, ``zone:NAME:peak`` per zone, in the scene's order.
+    and ``zone:NAME:mean``, ``zone:NAME:peak`` per zone, in the scene's order; ``by_class``
+    adds ``line:NAME:CLASS:in``, ``line:NAME:CLASS:out`` for each line and class
+    (:data:`~motiontrack.classify.CLASS_NAMES`, by the events' ``label``).
     """
 
     def __init__(self, out: Path, lines: Sequence[Any], zones: Sequence[Any],
-                 bin_s: float = 60.0) -> None:
+                 bin_s: float = 60.0, by_class: bool = False) -> None:
         if not (math.isfinite(bin_s) and bin_s > 0):
             raise ConfigError(f"--bin-s must be > 0 seconds, got {bin_s!r}")
         self.paths = {"counts": RunFolder(out).counts}
         self.lines = [ln.name for ln in lines]
         self.zones = [z.name for z in zones]
         self.bin_s = float(bin_s)
+        self.classes = CLASS_NAMES if by_class else ()
         self._file: AtomicFile | None = None
         self._fps = 25.0
         self._bin: int | None = None
@@ -82,6 +86,8 @@ class CountsWriter(Writer):
         head = ["bin", "start_s", "end_s", "frames"]
         head += [f"line:{n}:{d}" for n in self.lines for d in ("in", "out")]
         head += [f"zone:{n}:{s}" for n in self.zones for s in ("mean", "peak")]
+        head += [f"line:{n}:{c}:{d}" for n in self.lines for c in self.classes
+                 for d in ("in", "out")]
         self._file.write(self._row(head))
 
     def write(self, result: FrameResult) -> None:
@@ -98,10 +104,14 @@ class CountsWriter(Writer):
             self._out = np.zeros(len(self.lines), dtype=np.int64)
             self._sum = np.zeros(len(self.zones), dtype=np.int64)
             self._peak = np.zeros(len(self.zones), dtype=np.int64)
+            self._by_class = np.zeros((len(self.lines), len(self.classes), 2), dtype=np.int64)
         self._frames += 1
         for e in frame.events:
             if e.type == "line_cross" and e.line in self.lines:
-                (self._in if e.direction == "in" else self._out)[self.lines.index(e.line)] += 1
+                j, k = self.lines.index(e.line), 0 if e.direction == "in" else 1
+                (self._in if k == 0 else self._out)[j] += 1
+                if e.label in self.classes:
+                    self._by_class[j, self.classes.index(e.label), k] += 1
         occ = np.array([frame.occupancy.get(n, 0) for n in self.zones], dtype=np.int64)
         self._sum += occ
         self._peak = np.maximum(self._peak, occ)
@@ -115,6 +125,7 @@ class CountsWriter(Writer):
             row += [int(self._in[i]), int(self._out[i])]
         for k in range(len(self.zones)):
             row += [round(float(self._sum[k]) / self._frames, 4), int(self._peak[k])]
+        row += [int(v) for v in self._by_class.reshape(-1)]
         self._file.write(self._row(row))
         self._bin = None
 

@@ -19,6 +19,7 @@ from typing import Any, Callable, Iterator
 import numpy as np
 
 from ..analytics import Analytics, Scene
+from ..classify import CLASS_NAMES, class_name
 from ..errors import InputError, location
 from ..io.sources import Source, SourceInfo
 from ..types import Annotations, Event, FrameResult
@@ -48,11 +49,13 @@ def tracks_extent(tracks: Annotations) -> tuple[int, int]:
 @dataclass(frozen=True)
 class TrackRows:
     """The rows of one frame of a tracks file: ``ids`` (N,) int64, ``boxes`` (N, 4) float64
-    ``x, y, w, h`` in pixels (N may be 0)."""
+    ``x, y, w, h`` in pixels (N may be 0), ``labels`` (N,) the tracks' classes when the file
+    has a class column (:mod:`motiontrack.classify`), else None."""
 
     frame: int
     ids: np.ndarray = field(repr=False)
     boxes: np.ndarray = field(repr=False)
+    labels: np.ndarray | None = field(default=None, repr=False)
 
 
 @dataclass(frozen=True)
@@ -62,6 +65,13 @@ class TracksFrameResult(FrameResult):
     refuses, such as zero-sized ones), the scene analytics of the frame in :attr:`scene`."""
 
     boxes: np.ndarray = field(default_factory=lambda: np.zeros((0, 4)), repr=False)
+    labels: np.ndarray | None = field(default=None, repr=False)
+
+    def boxes_of(self, label: str) -> np.ndarray:
+        """The rows' boxes of tracks of class ``label`` (none without a class column)."""
+        if self.labels is None:
+            return np.zeros((0, 4))
+        return self.boxes[self.labels == label]
 
 
 class TracksSource(Source):
@@ -86,9 +96,13 @@ class TracksSource(Source):
     def __iter__(self) -> Iterator[TrackRows]:  # type: ignore[override]
         t, rows = self.tracks, self.tracks.by_frame()
         empty_ids, empty = np.zeros(0, dtype=np.int64), np.zeros((0, 4))
+        labels = None
+        if len(t) and (t.classes >= 0).all():   # a tracks file with its tracks' classes
+            labels = np.array([class_name(k) for k in t.classes.tolist()], dtype=object)
         for f in range(1, self.last + 1):
             idx = rows.get(f)
-            yield (TrackRows(f, t.ids[idx], t.boxes[idx]) if idx is not None
+            yield (TrackRows(f, t.ids[idx], t.boxes[idx],
+                             None if labels is None else labels[idx]) if idx is not None
                    else TrackRows(f, empty_ids, empty))
 
 
@@ -101,10 +115,10 @@ class AnalyticsProcessor:
     def results(self, source: TracksSource) -> Iterator[TracksFrameResult]:
         fps = source.info.fps or 25.0
         for rows in source:
-            scene = self.analytics.step(rows.frame, rows.ids, rows.boxes)
+            scene = self.analytics.step(rows.frame, rows.ids, rows.boxes, labels=rows.labels)
             yield TracksFrameResult(index=rows.frame - 1, timestamp=(rows.frame - 1) / fps,
                                     frame=None, mask=None, regions=(), tracks=(), scene=scene,
-                                    boxes=rows.boxes)
+                                    boxes=rows.boxes, labels=rows.labels)
 
     def annotate(self, result: FrameResult) -> np.ndarray:  # pragma: no cover - no video
         raise NotImplementedError("a tracks file has no pictures to annotate")
@@ -164,10 +178,11 @@ def analyze_job(tracks: Annotations, scene: Scene, fps: float, out: str | Path, 
                 camera: Any = None, bin_s: float = 60.0, force: bool = False,
                 source: str = "", size: tuple[int, int] | None = None,
                 background: np.ndarray | None = None,
-                sinks: EventSinksWriter | None = None) -> Job:
+                sinks: EventSinksWriter | None = None, by_class: bool = False) -> Job:
     """The job writing ``events.jsonl``, ``events.db`` (no snapshots: a tracks file has no
     pictures), ``counts.csv``, ``heatmap.png`` (``heatmap_world.png`` with a camera) and
-    ``summary.json`` for ``tracks`` in ``out``.
+    ``summary.json`` for ``tracks`` in ``out``; ``by_class``: each class's line crossings in
+    ``counts.csv`` and a heat map of each class (the file's class column).
 
     The heat map is ``size`` pixels (default: the extent of the tracks) over ``background``
     (default: black).
@@ -176,12 +191,16 @@ def analyze_job(tracks: Annotations, scene: Scene, fps: float, out: str | Path, 
     src, proc = analysis(tracks, scene, fps, camera=camera, source=source, size=size)
     writers = [EventsWriter(out, source, scene.source),
                EventStoreWriter(RunFolder(out).event_store, source_name(source or out)),
-               CountsWriter(out, scene.lines, scene.zones, bin_s)]
+               CountsWriter(out, scene.lines, scene.zones, bin_s, by_class=by_class)]
     if sinks is not None:
         writers.append(sinks)
+    geometry = scene_geometry(scene.lines, scene.zones)
     writers.append(HeatmapWriter(out, scene.anchor, camera=camera, background=background,
-                                 geometry=scene_geometry(scene.lines, scene.zones),
-                                 boxes_of=lambda r: r.boxes))
+                                 geometry=geometry, boxes_of=lambda r: r.boxes))
+    if by_class:
+        writers += [HeatmapWriter(out, scene.anchor, background=background, geometry=geometry,
+                                  boxes_of=lambda r, c: r.boxes_of(c), label=c)
+                    for c in CLASS_NAMES]
     n = int(len(np.unique(src.tracks.ids)))
     # the folder is often the tracked run's own: --force replaces the analysis, not its tracks
     return Job(src, proc, writers, out, force=force, layout=_layout(fps, n), replace_listed=False)

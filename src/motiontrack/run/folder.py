@@ -86,6 +86,10 @@ class RunFolder:
     def heatmap_world(self) -> Path:
         return self.path / self.HEATMAP_WORLD
 
+    def heatmap_of(self, label: str) -> Path:
+        """The heat map of the tracks of one class (``--by-class``): ``heatmap_person.png``."""
+        return self.path / f"heatmap_{label}.png"
+
     # ----------------------------------------------------------------------- summary
     def has_summary(self) -> bool:
         return self.summary_path.exists()

@@ -81,15 +81,22 @@ class HeatmapWriter(Writer):
         else the last frame.
     geometry : pixel polylines drawn over the maps (the scene's lines and closed zones).
     boxes_of : the boxes a frame's result counts, (N, 4) ``x, y, w, h``; default: its tracks'.
+    label : count only the tracks of this class (``--by-class``): the map is
+        ``heatmap_LABEL.png`` (no world map), its ``summary.json`` entry ``heatmap_LABEL``;
+        ``boxes_of`` then gets the class too.
     """
 
     def __init__(self, out: Path, anchor: str = "bottom_center",
                  size: tuple[int, int] | None = None, camera: Any = None,
                  background: np.ndarray | Callable[[], np.ndarray | None] | None = None,
                  geometry: Sequence[np.ndarray] = (),
-                 boxes_of: Callable[[FrameResult], Any] | None = None) -> None:
+                 boxes_of: Callable[..., Any] | None = None, label: str | None = None) -> None:
         folder = RunFolder(out)
-        self.paths = {"heatmap": folder.heatmap}
+        self.key = "heatmap" if label is None else f"heatmap_{label}"
+        self.paths = {self.key: folder.heatmap if label is None else folder.heatmap_of(label)}
+        self.label = label
+        if label is not None:
+            camera = None
         if camera is not None:
             self.paths["heatmap_world"] = folder.heatmap_world
         self.anchor, self.size, self.camera = anchor, size, camera
@@ -108,7 +115,8 @@ class HeatmapWriter(Writer):
         self.grid = HeatGrid(int(w), int(h))
 
     def write(self, result: FrameResult) -> None:
-        b = np.asarray(self.boxes_of(result), dtype=np.float64).reshape(-1, 4)
+        boxes = self.boxes_of(result) if self.label is None else self.boxes_of(result, self.label)
+        b = np.asarray(boxes, dtype=np.float64).reshape(-1, 4)
         if result.frame is not None and result.frame.size:   # a source without pictures: black
             self._last = result.frame
         if not len(b):
@@ -118,7 +126,7 @@ class HeatmapWriter(Writer):
             self.world.add(world_positions(b, self.camera))
 
     def finish(self, summary: JobSummary) -> None:
-        summary.extra["heatmap"] = self.info
+        summary.extra[self.key] = self.info
 
     def close(self, keep: bool) -> None:
         if not keep or self.grid is None:
@@ -127,7 +135,7 @@ class HeatmapWriter(Writer):
         bg, kind = self._background()
         sigma = image_sigma_px(g.width, g.height)
         img = heat_overlay(g.counts, bg, sigma, self.geometry)
-        self._save(self.paths["heatmap"], img)
+        self._save(self.paths[self.key], img)
         self.info = {"visits": g.visits, "outside": g.outside, "width": g.width,
                      "height": g.height, "sigma_px": round(sigma, 3), "background": kind}
         if self.world is not None:
@@ -168,9 +176,10 @@ class HeatmapWriter(Writer):
         atomic_write_bytes(path, buf.tobytes())
 
 
-def _track_boxes(result: FrameResult) -> np.ndarray:
-    """The boxes of a frame's tracks, (N, 4) ``x, y, w, h``."""
-    return np.array([t.box.as_array() for t in result.tracks], dtype=np.float64).reshape(-1, 4)
+def _track_boxes(result: FrameResult, label: str | None = None) -> np.ndarray:
+    """The boxes of a frame's tracks (of class ``label`` when given), (N, 4) ``x, y, w, h``."""
+    return np.array([t.box.as_array() for t in result.tracks
+                     if label is None or t.label == label], dtype=np.float64).reshape(-1, 4)
 
 
 def scene_geometry(lines: Sequence[Any], zones: Sequence[Any]) -> list[np.ndarray]:

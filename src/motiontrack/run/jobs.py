@@ -64,7 +64,7 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
               scene: str | Path | Callable[[Any], Any] | None = None,
               bin_s: float = 60.0, sinks: Sequence[Any] = (),
               camera_name: str | None = None, sink_settings: Any = None,
-              writers: Sequence[Writer] = (), pace: bool = False,
+              writers: Sequence[Writer] = (), pace: bool = False, by_class: bool = False,
               store_events: bool = True) -> Job:
     """``motiontrack track``: ``tracks.txt``, the annotated video, the mask video and the
     intermediate movies as ``cfg.output`` and ``save`` ask, the mask of every frame as
@@ -76,15 +76,16 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
     the lines and zones with their counts on the annotated video; ``scene`` may also be a
     function of the camera model fitted to the source (None without one) that returns the
     :class:`~motiontrack.analytics.Scene` to run, or None for none (``serve`` keeps a camera's
-    last valid scene this way). ``sinks`` (webhook and MQTT
-    targets, :mod:`motiontrack.io.sinks`) receive every event too, named ``camera_name``
-    (default: the source's name, :func:`~motiontrack.run.folders.source_name`), sent as
-    ``sink_settings`` say (a :class:`~motiontrack.io.sinks.SinkSettings`). ``writers``
-    are more outputs, given every frame after the others (``serve``'s live view). ``pace``
-    plays a recorded source at its own frame rate (:class:`~motiontrack.io.pacing.PacedSource`:
-    ``track --show``, someone is watching). With a scene and ``store_events``, the events are
-    also kept in the run's event store ``events.db`` under ``camera_name`` (default: the
-    source's name); ``serve`` keeps them in one store of its own instead."""
+    last valid scene this way); ``by_class``: each class's crossings in ``counts.csv``, a heat
+    map of each class. ``sinks`` (webhook and MQTT targets, :mod:`motiontrack.io.sinks`)
+    receive every event too, named ``camera_name`` (default: the source's name,
+    :func:`~motiontrack.run.folders.source_name`), sent as ``sink_settings`` say (a
+    :class:`~motiontrack.io.sinks.SinkSettings`). ``writers`` are more outputs, given every
+    frame after the others (``serve``'s live view). ``pace`` plays a recorded source at its own
+    frame rate (:class:`~motiontrack.io.pacing.PacedSource`: ``track --show``). With a scene and
+    ``store_events``, the events are also kept in the run's event store ``events.db`` under
+    ``camera_name`` (default: the source's name); ``serve`` keeps them in one store of its own
+    instead."""
     out = Path(out_dir)
     ignores_zero_marked(scoring)   # an unknown name fails before the source opens
     store_camera = camera_name or source_name(source)
@@ -97,11 +98,7 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
         log.info("--save annotated: the annotated video is written anyway")
         streams = tuple(s for s in streams if s != "annotated")
     more = list(writers)
-    camera = None
-    if cfg.measure.camera:
-        from ..calibrate import load_camera
-
-        camera = load_camera(cfg.measure.camera)
+    camera = _load_camera(cfg.measure.camera)
 
     def build(src: Source) -> Job:
         if pace:
@@ -115,7 +112,8 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
             fitted = fit_to_image(camera, src.info.width, src.info.height, cfg.measure.camera)
         analytics = _analytics(scene, fitted, src.info.fps) if scene is not None else None
         proc = TrackProcessor(cfg, src.info, detections,
-                              needs_background="background" in streams, analytics=analytics)
+                              needs_background="background" in streams, analytics=analytics,
+                              camera=fitted)
         if not external:
             info, scale = src.info, proc.pipe.scale
             log.info("processing at scale %.3g (%dx%d)", scale,
@@ -125,7 +123,8 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
         tracks = TracksWriter(out, fitted, fill)
         writers: list[Writer] = [tracks]
         if analytics is not None:
-            writers += _scene_writers(out, str(source), analytics.scene, fitted, bin_s)
+            writers += _scene_writers(out, str(source), analytics.scene, fitted, bin_s,
+                                      by_class)
             if store_events:
                 from .event_store_writer import EventStoreWriter
 
@@ -144,6 +143,15 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
         return Job(src, proc, [*writers, *more], out, force=force, config=(save_config, cfg))
 
     return _opened(source, cfg.source, build)
+
+
+def _load_camera(path: str) -> Any:
+    """The camera model of ``measure.camera`` (None without one)."""
+    if not path:
+        return None
+    from ..calibrate import load_camera   # with a camera only
+
+    return load_camera(path)
 
 
 def _analytics(scene: str | Path | Callable[[Any], Any], camera: Any, fps: float | None
@@ -168,14 +176,23 @@ def _sink_camera_name(sinks: Sequence[Any], scene: Any, camera_name: str | None,
     return check_camera_name(camera_name or source_name(source))
 
 
-def _scene_writers(out: Path, source: str, sc: Any, camera: Any, bin_s: float) -> list[Writer]:
-    """``events.jsonl``, ``counts.csv`` and the heat maps of the scene ``sc``."""
+def _scene_writers(out: Path, source: str, sc: Any, camera: Any, bin_s: float,
+                   by_class: bool = False) -> list[Writer]:
+    """``events.jsonl``, ``counts.csv`` and the heat maps of the scene ``sc`` (``by_class``:
+    the crossings of each class in ``counts.csv`` and a heat map of each class)."""
+    from ..classify import CLASS_NAMES
     from .analytics_writers import CountsWriter, EventsWriter
     from .heatmaps import HeatmapWriter, scene_geometry
 
-    return [EventsWriter(out, source, sc.source), CountsWriter(out, sc.lines, sc.zones, bin_s),
-            HeatmapWriter(out, sc.anchor, camera=camera,
-                          geometry=scene_geometry(sc.lines, sc.zones))]
+    geometry = scene_geometry(sc.lines, sc.zones)
+    writers: list[Writer] = [
+        EventsWriter(out, source, sc.source),
+        CountsWriter(out, sc.lines, sc.zones, bin_s, by_class=by_class),
+        HeatmapWriter(out, sc.anchor, camera=camera, geometry=geometry)]
+    if by_class:
+        writers += [HeatmapWriter(out, sc.anchor, geometry=geometry, label=c)
+                    for c in CLASS_NAMES]
+    return writers
 
 
 def _picture_writers(out: Path, cfg: PipelineConfig, streams: Sequence[str],

@@ -63,14 +63,15 @@ class TrackProcessor:
 
     def __init__(self, cfg: PipelineConfig, info: SourceInfo,
                  detections: Annotations | None = None, needs_background: bool = False,
-                 analytics: Analytics | None = None) -> None:
+                 analytics: Analytics | None = None, camera: Any = None) -> None:
         self.cfg = cfg
         self.external = detections is not None
         self.analytics = analytics
         # every stage is built now: a bad plug-in name or ROI fails before anything is written
         # a scene with [abandoned] needs the recently stopped objects of the dual background
         self.pipe = Pipeline(cfg, (info.width, info.height), detections, info.fps,
-                             static=analytics is not None and analytics.wants_static)
+                             static=analytics is not None and analytics.wants_static,
+                             camera=camera)
         self.pipe.sequential = self.pipe.sequential or needs_background
         self.colors = TrackColors()
         self.legend = track_legend(cfg, self.external) if cfg.output.legend else ()
@@ -87,8 +88,10 @@ class TrackProcessor:
             # sees exactly what this run saw and finds the same events
             boxes = np.array([float(f"{v:.2f}") for t in result.tracks
                               for v in t.box.as_array()]).reshape(-1, 4)
+            labels = [t.label for t in result.tracks]
             scene = self.analytics.step(frame_number(result.index), [t.id for t in result.tracks],
-                                        boxes, result.static, result.discontinuity)
+                                        boxes, result.static, result.discontinuity,
+                                        labels if any(labels) else None)
             yield replace(result, scene=scene)
 
     def annotate(self, result: FrameResult) -> np.ndarray:

@@ -9,12 +9,14 @@ from __future__ import annotations
 
 import logging
 import re
+from collections import Counter
 from pathlib import Path
 from typing import Any, Callable, Iterable
 
 import cv2
 import numpy as np
 
+from ..classify import CLASS_NAMES, class_id
 from ..errors import InputError
 from ..io.atomic import AtomicFile, DiskFullError, OutputLock, atomic_write_bytes, free_bytes
 from ..io.mot import format_mot_rows, read_mot, write_mot
@@ -48,6 +50,12 @@ class TracksWriter(Writer):
     Rows of tracks confirmed in a frame at their earlier, tentative frames
     (:attr:`FrameResult.earlier`) are streamed as they come, out of frame order; the rewrite sorts
     them.
+
+    Tracks with a class (``classes.enabled``, :attr:`Track.label`) get an 11th column, the class
+    number (:data:`~motiontrack.classify.CLASS_IDS`) the track had in that row's frame (from
+    its evidence up to then: ``analyze`` on the file sees the classes the run's rules saw);
+    ``summary.json`` gets each track's class and confidence at its end (``classes``, the
+    evidence of its whole life) and the tracks of each class (``class_counts``).
     """
 
     def __init__(self, out: Path, camera: Any = None, max_gap: int | None = None) -> None:
@@ -59,6 +67,8 @@ class TracksWriter(Writer):
         self._file: AtomicFile | None = None
         self._final: Annotations | None = None
         self._fps = 25.0
+        #: each classified track's latest class and confidence
+        self.labels: dict[int, tuple[str, float]] = {}
 
     def start(self, ctx: JobContext) -> None:
         self._fps = ctx.fps
@@ -72,8 +82,12 @@ class TracksWriter(Writer):
         boxes = np.array([t.box.as_array() for _, t in rows])
         tid = [t.id for _, t in rows]
         world = self._world(boxes) if self.camera is not None else None
+        classes = None
+        if rows[0][1].label:
+            classes = [class_id(t.label) for _, t in rows]
+            self.labels.update((t.id, (t.label, t.label_score)) for _, t in rows)
         self._file.write(format_mot_rows([frame_number(f) for f, _ in rows], tid, boxes,
-                                         [t.score for _, t in rows], world))
+                                         [t.score for _, t in rows], world, classes))
         self.ids.update(tid)
 
     def close(self, keep: bool) -> None:
@@ -92,6 +106,8 @@ class TracksWriter(Writer):
         summary.tracks = len(self.ids)
         if self.max_gap is not None:
             self._complete(summary, self.max_gap)
+        if self.labels:
+            self._classes(summary)
         if self.camera is not None:
             from ..calibrate.measure import track_measurements   # with a camera only
 
@@ -114,6 +130,14 @@ class TracksWriter(Writer):
         log.info("tracks.txt: %d rows at tentative frames, %d filled in gaps of up to %d frames",
                  self.backfilled, len(filled) - len(pred), max_gap)
         self._final = filled
+
+    def _classes(self, summary: JobSummary) -> None:
+        """Each track's class and confidence at its end, and the tracks of each class, in
+        ``summary.json``."""
+        summary.extra["classes"] = {str(tid): {"class": name, "confidence": conf}
+                                    for tid, (name, conf) in sorted(self.labels.items())}
+        counts = Counter(name for name, _ in self.labels.values())
+        summary.extra["class_counts"] = {name: counts.get(name, 0) for name in CLASS_NAMES}
 
     def _world(self, boxes: np.ndarray) -> np.ndarray:
         """Ground-plane positions ``(x, y, 0)`` in metres of the boxes' foot points."""

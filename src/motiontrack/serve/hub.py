@@ -154,7 +154,8 @@ class CameraState:
                     "fps": s.get("fps", 0.0), "frames": s.get("frames", 0),
                     "reconnects": s.get("reconnects", 0), "scene": self.has_scene,
                     "pid": s.get("pid"), "restarts": self.restarts,
-                    "segment": s.get("segment", ""), "scene_error": s.get("scene_error")}
+                    "segment": s.get("segment", ""), "scene_error": s.get("scene_error"),
+                    "tracks": s.get("tracks", [])}
 
 
 class Hub:

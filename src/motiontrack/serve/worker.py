@@ -41,7 +41,7 @@ import threading
 import time
 from dataclasses import replace
 from pathlib import Path
-from typing import Any, Iterator
+from typing import Any, Iterator, Sequence
 
 import cv2
 
@@ -68,6 +68,8 @@ __all__ = ["camera_main", "Segments", "SceneKeeper", "RepeatFilter", "VIEW_FPS",
 #: pictures a second sent to viewers at most
 VIEW_FPS = 15.0
 JPEG_QUALITY = 80
+#: most tracks a status message lists
+MAX_LISTED = 100
 #: seconds between status messages
 STATUS_EVERY = 0.5
 #: a live source silent this long is reported as reconnecting
@@ -237,7 +239,7 @@ class LiveWriter(Writer):
 
     def write(self, result: FrameResult) -> None:
         cam, now = self.cam, time.monotonic()
-        cam.frame_done(now)
+        cam.frame_done(now, result.tracks)
         wall = self.segments.wall(result.index)
         if result.scene is not None:
             cam.scene_frame(result.scene, wall)
@@ -333,6 +335,8 @@ class _Camera:
         self.last_picture = 0.0
         self.lines: dict[str, dict[str, int]] = {}
         self.zones: dict[str, dict[str, int]] = {}
+        #: the latest frame's tracks, id and class (the page's track list)
+        self.tracks: list[dict[str, Any]] = []
         self.scene_mtime = _mtime(spec.scene)
         self.scenes = SceneKeeper(spec.name, spec.scene) if spec.scene is not None else None
         self._times: list[float] = []
@@ -340,8 +344,9 @@ class _Camera:
         self.lock = threading.Lock()
 
     # ---------------------------------------------------------------- frames and events
-    def frame_done(self, now: float) -> None:
+    def frame_done(self, now: float, tracks: Sequence[Any] = ()) -> None:
         with self.lock:
+            self.tracks = [{"id": int(t.id), "class": t.label} for t in tracks[:MAX_LISTED]]
             self.frames += 1
             self.last_frame = now
             self._times.append(now)
@@ -411,6 +416,7 @@ class _Camera:
                 "height": self.source.info.height if self.source is not None else None,
                 "source_fps": self.source.info.fps if self.source is not None else None,
                 "scene_error": self.scenes.error if self.scenes is not None else None,
+                "tracks": list(self.tracks),
             })
 
 

@@ -1,14 +1,18 @@
-"""The scenes made for scene analytics: loitering in a zone and a bag left behind, each with the
-scene file whose rules they exercise."""
+"""The scenes made for scene analytics: loitering in a zone, a bag left behind, and people and
+cars passing (classes), each with the scene file whose rules they exercise."""
 
 from __future__ import annotations
 
 import math
 
-from .building import BELOW, EMPTY_FRAMES, Ctx, clothing, scene_layout
+from .building import BELOW, EMPTY_FRAMES, Ctx, _q, clothing, entering, scene_layout
 from .render import Bag, Person
+from .vehicles import Vehicle
 
-__all__ = ["build_leftbag", "build_loiter"]
+__all__ = ["build_leftbag", "build_loiter", "build_mixed"]
+
+#: colours of the cars of ``mixed`` (BGR)
+_CAR_COLOURS = [(40, 40, 170), (160, 90, 30), (200, 200, 200), (30, 120, 30)]
 
 
 def _walk_through(ctx: Ctx, pid: int, t_enter: float, start: tuple[float, float],
@@ -92,3 +96,33 @@ def build_leftbag(ctx: Ctx) -> dict:
     zx = (0.58 * W, 0.88 * W) if from_left else (0.12 * W, 0.42 * W)
     layout = scene_layout(ctx, 0.5 * W, (zx[0], 0.45 * H, zx[1], BELOW * H), 10.0)
     return {"people": (p,), "bags": (bag,), "scene_file": layout}
+
+
+def build_mixed(ctx: Ctx) -> dict:
+    """Three people walk along the pavement near the camera while two cars drive by on the road
+    behind them, one each way; the scene file's ``gate`` counts every track, ``crossing`` (a
+    line with ``classes = ["person"]``) the people only."""
+    rng, W, H = ctx.rng, ctx.width, ctx.height
+    height_ref = rng.uniform(112, 122) * ctx.sy
+    cols = clothing(rng, 3)
+    people = tuple(
+        entering(ctx, pid, EMPTY_FRAMES + t, from_left, foot * H, height_ref,
+                 rng.uniform(2.6, 3.0) * ctx.sx, colours=cols[pid - 1])
+        for pid, t, from_left, foot in ((1, 2, True, 0.86), (2, 70, False, 0.92),
+                                        (3, 140, True, 0.82)))
+    colours = rng.permutation(len(_CAR_COLOURS))
+    vehicles = []
+    for k, (t, from_left, road) in enumerate(((10, True, 0.55), (120, False, 0.62))):
+        # a car 4.5 m long and 1.5 m tall next to a person of 1.7 m at the same depth
+        person_h = height_ref * (road * H - ctx.horizon) / (H - ctx.horizon)
+        length, height = person_h * 4.5 / 1.7, person_h * 1.5 / 1.7
+        speed = rng.uniform(9.0, 11.0) * ctx.sx                 # about 30 km/h
+        x0 = -length / 2 if from_left else W + length / 2
+        vehicles.append(Vehicle(id=4 + k, x0=x0, y0=road * H, vx=speed if from_left else -speed,
+                                length=length, height=height, t0=float(EMPTY_FRAMES + t),
+                                colour=_CAR_COLOURS[int(colours[k])]))
+    layout = scene_layout(ctx, 0.62 * W, (0.1 * W, 0.72 * H, 0.3 * W, BELOW * H), 10.0)
+    layout["line"].append({"name": "crossing", "classes": ["person"],
+                           "points": [[_q(0.38 * W), _q(BELOW * H)], [_q(0.38 * W), _q(0.3 * H)]]})
+    layout["line"][0]["points"][1][1] = _q(0.3 * H)   # the gate across the road too
+    return {"people": people, "vehicles": tuple(vehicles), "scene_file": layout}

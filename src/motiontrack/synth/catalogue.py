@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Callable
 
-from .analytics_scenes import build_leftbag, build_loiter
+from .analytics_scenes import build_leftbag, build_loiter, build_mixed
 from .building import Ctx
 from .walkway import (build_column, build_crossing, build_crowd, build_lighting, build_runner,
                       build_walker)
@@ -37,6 +37,8 @@ SCENE_TYPES: dict[str, SceneType] = {
                         "one person walks in, lingers 7-9 s in the zone plaza, then leaves"),
     "leftbag": SceneType(build_leftbag, 360,
                          "one person sets a bag down and walks off out of view; the bag stays"),
+    "mixed": SceneType(build_mixed, 300,
+                       "three people on the pavement and two cars on the road behind them"),
 }
 
 #: Names of the built-in scene types.

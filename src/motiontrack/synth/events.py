@@ -186,8 +186,15 @@ def _abandoned(emit: _Emitter, frames: np.ndarray, pts: np.ndarray, owner: int,
             return
 
 
+def _applying(tables: Sequence[Mapping[str, Any]], cls: str | None) -> list:
+    """The tables whose ``classes`` (if any) include ``cls`` (all of them when ``cls`` is None)."""
+    return [t for t in tables
+            if cls is None or t.get("classes") is None or cls in t["classes"]]
+
+
 def ground_truth_events(scene_file: Mapping[str, Any], gt: Annotations, fps: float,
-                        owners: Mapping[int, int] | None = None) -> list[Event]:
+                        owners: Mapping[int, int] | None = None,
+                        classes: Mapping[int, str] | None = None) -> list[Event]:
     """Every event the rules of ``scene_file`` give on the trajectories of ``gt``.
 
     Parameters
@@ -202,6 +209,9 @@ def ground_truth_events(scene_file: Mapping[str, Any], gt: Annotations, fps: flo
         Frames per second (event times and durations).
     owners : mapping, optional
         ``{object id: owner id}`` for objects that can be abandoned (bags).
+    classes : mapping, optional
+        ``{object id: class}``: a line or zone with ``classes`` applies to the objects of
+        those classes only (every object when None).
 
     Returns
     -------
@@ -217,8 +227,9 @@ def ground_truth_events(scene_file: Mapping[str, Any], gt: Annotations, fps: flo
         rows = rows[np.argsort(gt.frames[rows], kind="stable")]
         frames, pts = gt.frames[rows], pts_all[rows]
         emit = _Emitter(fps, oid)
-        _lines(emit, frames, pts, list(scene_file.get("line", ())), hysteresis)
-        _zones(emit, frames, pts, list(scene_file.get("zone", ())), fps, hysteresis)
+        cls = None if classes is None else classes.get(oid, "other")
+        _lines(emit, frames, pts, _applying(scene_file.get("line", ()), cls), hysteresis)
+        _zones(emit, frames, pts, _applying(scene_file.get("zone", ()), cls), fps, hysteresis)
         if "stationary" in scene_file:
             _stationary(emit, frames, pts, scene_file["stationary"], fps)
         owner = (owners or {}).get(oid)

@@ -112,6 +112,7 @@ def make_scene(name: str, seed: int = 0, **overrides: Any) -> SyntheticScene:
         n_frames=n_frames,
         people=built["people"],
         bags=built.get("bags", ()),
+        vehicles=built.get("vehicles", ()),
         scene_file=built.get("scene_file") or street_layout(ctx),
         column=built.get("column"),
         noise=ov.get("noise", 3.5),

@@ -20,6 +20,7 @@ import numpy as np
 from ..types import Annotations, Event
 from .catalogue import SCENE_TYPES
 from .events import ground_truth_events, scene_toml
+from .vehicles import Vehicle, render_vehicle
 from .render import (
     Bag,
     Column,
@@ -137,6 +138,8 @@ class SyntheticScene:
     scene_file : mapping or None
         The scene-analytics lines and zones of this scene, as the scene file's TOML tables
         (pixels; see :mod:`motiontrack.synth.events`); None = none.
+    vehicles : tuple of Vehicle
+        Cars driving through (ids after the people's and bags'; ground-truth class 3).
     """
 
     name: str
@@ -154,6 +157,7 @@ class SyntheticScene:
     overrides: Mapping[str, Any] = field(default_factory=dict)
     bags: tuple[Bag, ...] = ()
     scene_file: Mapping[str, Any] | None = None
+    vehicles: tuple[Vehicle, ...] = ()
     _cache: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -171,9 +175,9 @@ class SyntheticScene:
         for b in self.bags:
             if b.owner not in ids:
                 raise ValueError(f"bag {b.id} has no owner: no person has id {b.owner}")
-        all_ids = ids + [b.id for b in self.bags]
+        all_ids = ids + [b.id for b in self.bags] + [v.id for v in self.vehicles]
         if len(set(all_ids)) != len(all_ids):
-            raise ValueError(f"person and bag ids must be unique, got {all_ids}")
+            raise ValueError(f"person, bag and vehicle ids must be unique, got {all_ids}")
 
     # ------------------------------------------------------------------ basics
     def __getstate__(self) -> dict:
@@ -437,7 +441,8 @@ class SyntheticScene:
             boxes=np.asarray(boxes, dtype=np.float64).reshape(n, 4)[order],
             scores=np.ones(n),
             consider=vis_a >= 0.5,
-            classes=np.ones(n, dtype=np.int64),
+            # MOTChallenge classes: 1 pedestrian (people, and bags as before), 3 car
+            classes=np.where(np.isin(ids_a[order], [v.id for v in self.vehicles]), 3, 1),
             visibility=vis_a,
             # the scene's frames are all annotated, those without anyone in view too
             meta={"format": "synth", "kind": "gt", "source": self.spec,
@@ -471,6 +476,8 @@ class SyntheticScene:
             if not b.carried(i):
                 box = bag_box(b, owners[b.owner], i)
                 items.append((box[1], _Item(b.id, b.palette(), render_bag(b, owners[b.owner], i))))
+        for v in self.vehicles:
+            items.append((v.y0, _Item(v.id, v.palette(), render_vehicle(v, i))))
         visible = []
         for depth, it in items:
             lh, lw = it.sprite.labels.shape
@@ -482,6 +489,11 @@ class SyntheticScene:
         visible.sort(key=lambda t: (t[0], t[1].id))
         return [it for _, it in visible]
 
+    def object_classes(self) -> dict[int, str]:
+        """Each ground-truth id's class: ``person``, ``vehicle`` or ``other`` (a bag)."""
+        return {**{p.id: "person" for p in self.people}, **{b.id: "other" for b in self.bags},
+                **{v.id: "vehicle" for v in self.vehicles}}
+
     # ------------------------------------------------------------ analytics
     def ground_truth_events(self) -> list[Event]:
         """The exact scene-analytics events of :attr:`scene_file` on the ground truth (see
@@ -492,7 +504,8 @@ class SyntheticScene:
         ev = self._cache.get("events")
         if ev is None:
             ev = [] if self.scene_file is None else ground_truth_events(
-                self.scene_file, self.ground_truth(), self.fps, {b.id: b.owner for b in self.bags})
+                self.scene_file, self.ground_truth(), self.fps, {b.id: b.owner for b in self.bags},
+                self.object_classes())
             self._cache["events"] = ev
         return list(ev)
 
@@ -525,6 +538,12 @@ class SyntheticScene:
         out = {**self._settings(), "people": people, "events": events}
         if bags:
             out["bags"] = bags
+        if self.vehicles:
+            out["vehicles"] = [{"id": v.id, "length_px": round(v.length, 1),
+                                "height_px": round(v.height, 1),
+                                "speed_px_per_frame": round(abs(v.vx), 2),
+                                "direction": "left to right" if v.vx >= 0 else "right to left"}
+                               for v in self.vehicles]
         if self.scene_file is not None:
             out["scene_file"] = copy.deepcopy(dict(self.scene_file))  # the caller's to change
             out["analytics_events"] = [e.to_json() for e in self.ground_truth_events()]

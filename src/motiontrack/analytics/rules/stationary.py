@@ -9,6 +9,7 @@ track whose place a static object of its size still holds hands its stay to the 
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -17,7 +18,7 @@ from ...types import Event
 from ..movement import Stay
 from ..objects import BAG_RATIO, TrackedObject
 from ..rule import RULES, BaseRule, EventType, FrameTable, RuleContext, TrackMemory
-from ..specs import StationarySpec
+from ..specs import StationarySpec, checked_classes
 
 __all__ = ["Stationary", "STATIONARY_STILL"]
 
@@ -57,6 +58,11 @@ class Stationary(BaseRule):
     def idle_summary(cls) -> dict[str, Any]:
         return {"stationary_at_end": 0}
 
+    @classmethod
+    def build(cls, table: StationarySpec, camera: Any, where: str,
+              earlier: tuple = ()) -> StationarySpec:
+        return replace(table, classes=checked_classes(table.classes, where))
+
     def __init__(self, spec: StationarySpec, context: RuleContext) -> None:
         super().__init__(spec, context)
         self.objects = context.objects
@@ -84,7 +90,8 @@ class Stationary(BaseRule):
     def step(self, frame: FrameTable) -> list[Event]:
         events: list[Event] = []
         self._track_stays(frame, events)
-        if self.objects is not None:
+        if self.objects is not None and (self.spec.classes is None
+                                         or "other" in self.spec.classes):
             self._object_stays(frame, events)
         return events
 
@@ -93,7 +100,8 @@ class Stationary(BaseRule):
         pos = frame.world if spec.radius_m is not None else frame.points
         radius = spec.radius_m if spec.radius_m is not None else spec.radius_px
         stays = [self.stays.setdefault(int(tid), Stay()) for tid in frame.ids.tolist()]
-        finite = np.isfinite(pos).all(axis=1).tolist()
+        # a track of a class the rule does not name never stays (``classes``)
+        finite = (np.isfinite(pos).all(axis=1) & frame.of_classes(spec.classes)).tolist()
         for i, stay in enumerate(stays):
             if not finite[i]:
                 continue

@@ -16,7 +16,8 @@ from ...schema import REQUIRED, param
 from ...types import Event
 from ..geometry import polygon_area, polygon_is_simple
 from ..rule import RULES, BaseRule, Columns, EventType, FrameTable, RuleContext, TrackMemory, rounded
-from ..specs import COORD_LIMIT, MAX_POLYGON_POINTS, SceneSection, ZoneSpec, positive
+from ..specs import (COORD_LIMIT, MAX_POLYGON_POINTS, SceneSection, ZoneSpec, checked_classes,
+                     classes_param, positive)
 from ..validate import pixels, unique_name
 from ..zones import ZoneEdges
 
@@ -37,6 +38,7 @@ class ZoneTable(SceneSection):
         None, **_POINT, doc="the polygon in ground-plane metres, projected through `--camera`")
     loiter_s: float | None = positive(None, "seconds in the zone before `loiter` (none: no "
                                             "loitering)")
+    classes: tuple[str, ...] | None = classes_param()
 
 
 @RULES.register
@@ -68,7 +70,8 @@ class Zones(BaseRule):
                               "or a point repeats")
         if abs(polygon_area(pts)) < 1.0:
             raise ConfigError(f"{where}.{used} encloses no area (its points lie on a line)")
-        return ZoneSpec(zone_name, tuple((float(x), float(y)) for x, y in pts), table.loiter_s)
+        return ZoneSpec(zone_name, tuple((float(x), float(y)) for x, y in pts), table.loiter_s,
+                        checked_classes(table.classes, where))
 
     @classmethod
     def idle_summary(cls) -> dict[str, Any]:
@@ -89,6 +92,7 @@ class Zones(BaseRule):
         self.dwell_frames = np.zeros(n, dtype=np.int64)
         self.peak = np.zeros(n, dtype=np.int64)
         self.occupancy_sum = np.zeros(n, dtype=np.int64)
+        self._filtered = any(z.classes is not None for z in spec)
 
     def forget(self, frame: int, tid: int, state: TrackMemory) -> list[Event]:
         """A forgotten track exits its zones at its last position, dwell up to its last
@@ -134,6 +138,10 @@ class Zones(BaseRule):
         was_in = t.inside[rows]
         now_in = self.edges.membership(was_in, frame.known, frame.points,
                                        self.context.hysteresis_px)
+        if self._filtered:
+            # a zone with classes holds tracks of those classes only: another class is outside
+            # (a track whose class changes to one of them enters where it is)
+            now_in &= np.column_stack([frame.of_classes(z.classes) for z in self.spec])
         for i, k in zip(*np.nonzero(now_in != was_in)):
             r, zone = rows[i], self.spec[k].name
             if now_in[i, k]:

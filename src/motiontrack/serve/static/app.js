@@ -80,7 +80,7 @@ function makeTile(cam) {
   img.src = streamUrl(name);
   const fields = {};
   const stats = el("dl", { class: "stats" });
-  for (const [key, label] of [["status", "status"], ["fps", "fps"], ["frames", "frames"], ["reconnects", "reconnects"]]) {
+  for (const [key, label] of [["status", "status"], ["fps", "fps"], ["frames", "frames"], ["reconnects", "reconnects"], ["tracks", "tracks"]]) {
     fields[key] = el("dd", { "data-testid": "camera-" + key + "-" + name });
     stats.append(el("dt", { text: label }), fields[key]);
   }
@@ -104,6 +104,7 @@ function updateTile(cam) {
   t.fields.fps.textContent = fmt(cam.fps, 1);
   t.fields.frames.textContent = fmt(cam.frames);
   t.fields.reconnects.textContent = fmt(cam.reconnects);
+  t.fields.tracks.textContent = trackList(cam.tracks);
   // a camera whose run has ended sends no more pictures, and a browser shows an MJPEG part only
   // once the next one begins: the tile shows the last picture as a still instead
   const ended = cam.status === "ended";
@@ -198,6 +199,12 @@ function renderCounts(name) {
   else box.append(fresh);
 }
 
+// each track of the latest frame with its class: "3 person · 7 vehicle"
+function trackList(tracks) {
+  if (!tracks || !tracks.length) return "none";
+  return tracks.map((t) => t.class ? t.id + " " + t.class : String(t.id)).join(" · ");
+}
+
 // ---------------------------------------------------------------- event feed
 
 function describe(ev) {
@@ -205,7 +212,7 @@ function describe(ev) {
   if (ev.reason) parts.push(ev.reason);
   if (ev.line) parts.push(ev.line + (ev.direction ? " " + ev.direction : ""));
   if (ev.zone) parts.push(ev.zone);
-  if (ev.track !== undefined) parts.push("track " + ev.track);
+  if (ev.track !== undefined) parts.push("track " + ev.track + (ev.label ? " (" + ev.label + ")" : ""));
   if (ev.dwell_s !== undefined) parts.push("dwell " + fmt(ev.dwell_s, 1) + " s");
   if (ev.duration_s !== undefined) parts.push(fmt(ev.duration_s, 1) + " s");
   return parts.join(" · ");
