@@ -16,7 +16,7 @@ guess at columns it does not know).
 Columns of ``events``: ``id`` (order of arrival), ``camera`` (the camera, or the video of a
 ``track``/``batch`` run), ``segment`` (the run folder's name within the store's folder),
 ``type``, ``rule`` (the line or zone the event is about, when it has one), ``class`` (the
-object's class when the event carries one: its ``label``), ``track``, ``frame``, ``t`` (seconds into the
+class of the event's track, its ``label``), ``track``, ``frame``, ``t`` (seconds into the
 source), ``start``/``end`` (epoch seconds: ``end`` is when the event happened, ``start`` is
 ``end`` minus its ``dwell_s`` or ``duration_s``, else equal), ``x``, ``y``, ``snapshot``,
 ``clip`` (paths relative to the store's folder, or NULL) and ``data`` (the event's JSON object as
