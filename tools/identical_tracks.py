@@ -1,5 +1,5 @@
 """Check that a change leaves the tracks byte-identical: ``motiontrack track`` on fixed inputs,
-the SHA-256 of every ``tracks.txt`` compared with a recorded set.
+the SHA-256 of the ten MOTChallenge columns of every ``tracks.txt`` compared with a recorded set.
 
 Cases: PETS 2009 S2L1 frames 1-300 with the defaults and with ``--preset people``, the synthetic
 ``crossing`` and ``column`` scenes, and PETS tracked from seeded jittered ground-truth detections
@@ -80,7 +80,11 @@ def run_case(name: str, args: list[str], tmp: Path) -> str:
     proc = subprocess.run(cmd, capture_output=True, text=True)
     if proc.returncode != 0:
         raise SystemExit(f"{name}: {' '.join(cmd)} exited {proc.returncode}:\n{proc.stderr}")
-    return hashlib.sha256((out / "tracks.txt").read_bytes()).hexdigest()
+    # the ten MOTChallenge columns: the tracks themselves; the class column after them is the
+    # classifier's (tests/classify), so a change of the classes alone is not a change of tracks
+    rows = (out / "tracks.txt").read_text().splitlines()
+    return hashlib.sha256("".join(",".join(r.split(",")[:10]) + "\n" for r in rows).encode()
+                          ).hexdigest()
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -11,17 +11,17 @@ listed once in :mod:`motiontrack.config_flags`.
 from __future__ import annotations
 
 import dataclasses
-import functools
 import logging
 import sys
-import typing
 from dataclasses import dataclass, field, is_dataclass
 from pathlib import Path
-from typing import Any, ClassVar, Iterable
+from typing import Any, Iterable
 
 import tomli_w
 
 from . import schema
+from .config_classes import ClassesConfig, DetectorConfig
+from .config_section import ConfigSection, section_path, section_paths, set_root  # noqa: F401
 from .errors import ConfigError, printable
 from .io.atomic import atomic_write_text
 from .io.imagesize import DEFAULT_MAX_PIXELS
@@ -58,6 +58,8 @@ __all__ = [
     "OutputConfig",
     "MeasureConfig",
     "PeopleConfig",
+    "ClassesConfig",
+    "DetectorConfig",
     "PipelineConfig",
     "load_config",
     "save_config",
@@ -68,36 +70,8 @@ __all__ = [
 ]
 
 
-class _Section(Section):
-    """A section of the pipeline config: unknown keys are "config" keys, and a message names the
-    section by the key path users write (:func:`section_path`)."""
-
-    schema_noun: ClassVar[str] = "config "
-
-    @classmethod
-    def schema_where(cls) -> str:
-        return section_path(cls)
-
-
-def section_path(cls: type) -> str:
-    """A section's key path as users write it (``KNNParams`` → ``"motion.knn"``), so that a
-    message names the key rather than the class, however the section was built; the class name
-    for a class outside :class:`PipelineConfig`."""
-    return _section_paths().get(cls, cls.__name__)
-
-
-@functools.cache
-def _section_paths() -> dict[type, str]:
-    paths: dict[type, str] = {}
-
-    def walk(cls: type, prefix: str) -> None:
-        for name, typ in typing.get_type_hints(cls).items():
-            if is_dataclass(typ):
-                paths.setdefault(typ, prefix + name)
-                walk(typ, f"{prefix}{name}.")
-
-    walk(PipelineConfig, "")
-    return paths
+class _Section(ConfigSection):
+    """A section of the pipeline config (:class:`~motiontrack.config_section.ConfigSection`)."""
 
 
 # --------------------------------------------------------------------------------------- stages
@@ -629,77 +603,6 @@ class PeopleConfig(_Section):
                            when={"hog": Not("off", "regions")})
 
 
-#: the classifier's keys take effect while it runs
-_ON = {"enabled": True}
-
-
-@dataclass(frozen=True)
-class ClassesConfig(_Section):
-    """A class per track (``person``, ``vehicle``, ``other``) from evidence accumulated over its
-    life (docs/classes.md). Lengths in metres need ``measure.camera``; without one the image
-    aspect and the speed in box heights per second decide."""
-
-    enabled: bool = param(True, doc="give every track a class and a confidence")
-    min_frames: int = param(5, lo=1, hi=10000, when=_ON,
-                            doc="measured frames of evidence before a track is anything but other")
-    person_aspect: float = param(1.6, lo=0.1, hi=20.0, when=_ON,
-                                 doc="without a camera: a box at least this much taller than wide "
-                                     "(height/width) looks like a person")
-    vehicle_aspect: float = param(1.2, lo=0.05, hi=20.0, when=_ON,
-                                  doc="without a camera: a box no taller than this times its width "
-                                      "(height/width) looks like a vehicle")
-    person_max_speed: float = param(2.5, lo=0.0, hi=100.0, when=_ON,
-                                    doc="without a camera: fastest person in box heights per second "
-                                        "(a walker covers about one height a second)")
-    person_min_height_m: float = param(1.2, lo=0.0, hi=20.0, when=_ON,
-                                       doc="with a camera: shortest person (m)")
-    person_max_height_m: float = param(2.3, lo=0.0, hi=20.0, when=_ON,
-                                       doc="with a camera: tallest person (m)")
-    person_max_width_m: float = param(1.1, lo=0.0, hi=20.0, when=_ON,
-                                      doc="with a camera: widest person (m)")
-    vehicle_min_width_m: float = param(1.6, lo=0.0, hi=50.0, when=_ON,
-                                       doc="with a camera: narrowest vehicle box (m), seen from "
-                                           "any side")
-    person_max_speed_mps: float = param(4.0, lo=0.0, hi=100.0, when=_ON,
-                                        doc="with a camera: fastest person (m/s); faster is a "
-                                            "vehicle")
-
-
-@dataclass(frozen=True)
-class DetectorConfig(_Section):
-    """The user's own object detector (docs/classes.md): its boxes replace the motion regions
-    or are fused with them, and give the tracks they match their class."""
-
-    model: str = param("", doc="onnx:PATH, a YOLO-family ONNX model (YOLOv5 [1, N, 5+C], "
-                               "YOLOv8/YOLO11 [1, 4+C, N]) run by OpenCV's DNN module; empty = none "
-                               "(`--detector`)")
-    names: str = param("", doc="class names, one a line (`--detector-names`); empty = the "
-                               "model's metadata", when={"model": Not("", "onnx:yolo.onnx")})
-    input_size: int = param(640, lo=32, hi=4096, doc="side of the model's square input (px): the "
-                                                      "frame is letterboxed into it",
-                            when={"model": Not("", "onnx:yolo.onnx")})
-    score: float = param(0.25, lo=0.0, hi=1.0, doc="lowest detection score kept",
-                         when={"model": Not("", "onnx:yolo.onnx")})
-    nms: float = param(0.45, lo=0.0, hi=1.0, doc="IoU above which non-maximum suppression drops "
-                                                 "the weaker box of a class",
-                       when={"model": Not("", "onnx:yolo.onnx")})
-    every: int = param(1, lo=1, hi=1000, doc="run the detector every N frames",
-                       when={"model": Not("", "onnx:yolo.onnx")})
-    mode: str = param("fuse", choices=("fuse", "replace"),
-                      doc="fuse: motion regions stay, a detection gives the tracks it matches its "
-                          "class; replace: the detections are the regions",
-                      when={"model": Not("", "onnx:yolo.onnx")})
-    start_tracks: bool = param(False, doc="fuse: a detection no motion region matches becomes a "
-                                          "region too (it can start a track)",
-                               when={"mode": "fuse"})
-    match_iou: float = param(0.3, lo=0.0, hi=1.0, doc="IoU at which a detection matches a motion "
-                                                      "region or a track",
-                             when={"model": Not("", "onnx:yolo.onnx")})
-    vote: int = param(5, lo=1, hi=1000, doc="votes a matched detection casts for its class "
-                                            "(classes.enabled)",
-                      when={"model": Not("", "onnx:yolo.onnx")})
-
-
 @dataclass(frozen=True)
 class MeasureConfig(_Section):
     """Measurements in metres from a calibrated camera (see docs/calibration.md)."""
@@ -721,6 +624,9 @@ class PipelineConfig(_Section):
     people: PeopleConfig = field(default_factory=PeopleConfig)
     classes: ClassesConfig = field(default_factory=ClassesConfig)
     detector: DetectorConfig = field(default_factory=DetectorConfig)
+
+
+set_root(PipelineConfig)   # the key paths of the sections, for messages
 
 
 # ---------------------------------------------------------------------------------- source size
@@ -757,7 +663,7 @@ def to_dict(cfg: Any) -> dict[str, Any]:
 def from_dict(cls: type, data: dict[str, Any], where: str = "") -> Any:
     """Build a config dataclass from a nested dict; unknown keys and bad types are errors
     (:func:`motiontrack.schema.from_dict`, the section named by its key path)."""
-    return schema.from_dict(cls, data, where or _section_paths().get(cls, ""))
+    return schema.from_dict(cls, data, where or section_paths().get(cls, ""))
 
 
 def presets() -> dict[str, str]:

@@ -178,6 +178,39 @@ class Pipeline:
         self.pre_cfg = replace(pre, scale=self.scale)  # the resolved (automatic) scale
         pw, ph = scaled_size(image_size[0], image_size[1], self.scale)
         self.roi = load_roi(pre.roi, pw, ph, cfg.source.max_pixels) if pre.roi else None
+        self._init_tracker(cfg, image_size, detections, fps)
+        self._init_stages(cfg, fps, camera, static)
+        #: frames a lost track may coast: its stopped pixels are kept that long
+        self._keep_unseen = self.tracker.max_lost
+        #: the previous frame's feedback to a detector that takes it (``relearns``): the ghost
+        #: filter's ghost pixels to re-learn, and the static objects not to learn
+        self._relearn: np.ndarray | None = None
+        self._static_prev: StaticFrame | None = None
+        #: the last frame given feedback carried a discontinuity (two-thread order)
+        self._fed_cut = False
+        #: feedback is made right before each frame's detection (one thread), not a frame ahead
+        self.sequential_feedback = True
+        self.frames_seen = 0
+        #: the run's frame count (``index`` of :meth:`regions_of`) at the last reset: the
+        #: warm-up counts from there
+        self._warm_from = 0
+        #: regions are ignored before this frame count (after a sudden change)
+        self._quiet_until = 0
+        #: the people stage's shapes read the detector's background image of each frame: it is
+        #: taken right after the detector's update, in the detector's thread, and travels with
+        #: the frame's Motion, so detection of the next frame can run meanwhile
+        self._wants_background = (self.people is not None and self.people.needs_background
+                                  and self.detector is not None)
+        #: run detection and tracking in one thread (needed when a later stage reads the
+        #: detector's state for the same frame: a writer of the background image). Head-based
+        #: splitting and the people stage need only what Motion carries: they run in this thread
+        #: while the worker detects the next frame (measured faster than running head splitting
+        #: in the worker, which it would slow down).
+        self.sequential = False
+
+    def _init_tracker(self, cfg: PipelineConfig, image_size: tuple[int, int],
+                      detections: Annotations | None, fps: float | None) -> None:
+        """The tracker, as ``tracker.method`` says."""
         tracker_cfg = cfg.tracker
         if detections is not None:
             # a detector's box is one object: there is no merged blob to split (split shares of a
@@ -192,6 +225,11 @@ class Pipeline:
         # a confirmed track's tentative frames (FrameResult.earlier)
         self.tracker.keep_tentative = (cfg.tracker.backfill
                                        and completes_tracks(cfg, detections is not None))
+
+    def _init_stages(self, cfg: PipelineConfig, fps: float | None, camera: Any,
+                     static: bool) -> None:
+        """The stages around the tracker: the user's detector, the classes, the people stage,
+        head splitting, the ghost filter, the bridge and the dual background."""
         #: the user's detector (``detector.model``): its boxes join or replace the regions
         self.onnx = None
         if cfg.detector.model:
@@ -225,33 +263,6 @@ class Pipeline:
                        else None)
         self.report_static = static
         self.keep_stopped = cfg.motion.keep_stopped and self.static is not None
-        #: frames a lost track may coast: its stopped pixels are kept that long
-        self._keep_unseen = self.tracker.max_lost
-        #: the previous frame's feedback to a detector that takes it (``relearns``): the ghost
-        #: filter's ghost pixels to re-learn, and the static objects not to learn
-        self._relearn: np.ndarray | None = None
-        self._static_prev: StaticFrame | None = None
-        #: the last frame given feedback carried a discontinuity (two-thread order)
-        self._fed_cut = False
-        #: feedback is made right before each frame's detection (one thread), not a frame ahead
-        self.sequential_feedback = True
-        self.frames_seen = 0
-        #: the run's frame count (``index`` of :meth:`regions_of`) at the last reset: the
-        #: warm-up counts from there
-        self._warm_from = 0
-        #: regions are ignored before this frame count (after a sudden change)
-        self._quiet_until = 0
-        #: the people stage's shapes read the detector's background image of each frame: it is
-        #: taken right after the detector's update, in the detector's thread, and travels with
-        #: the frame's Motion, so detection of the next frame can run meanwhile
-        self._wants_background = (self.people is not None and self.people.needs_background
-                                  and self.detector is not None)
-        #: run detection and tracking in one thread (needed when a later stage reads the
-        #: detector's state for the same frame: a writer of the background image). Head-based
-        #: splitting and the people stage need only what Motion carries: they run in this thread
-        #: while the worker detects the next frame (measured faster than running head splitting
-        #: in the worker, which it would slow down).
-        self.sequential = False
 
     @property
     def detector(self):

@@ -92,11 +92,7 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
     camera_name = _sink_camera_name(sinks, scene, camera_name, source)
     if mask_images is not None and detections is not None:
         raise ConfigError("--mask-images needs motion masks; with --detections there are none")
-    streams = parse_streams(save)
-    if cfg.output.video and "annotated" in streams:
-        # the movie would be written to the annotated video's own file name
-        log.info("--save annotated: the annotated video is written anyway")
-        streams = tuple(s for s in streams if s != "annotated")
+    streams = _streams(cfg, save)
     more = list(writers)
     camera = _load_camera(cfg.measure.camera)
 
@@ -105,11 +101,7 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
             src = PacedSource(src)
         truth = gt if gt is not None else src.ground_truth()
         external = detections is not None
-        fitted = None
-        if camera is not None:
-            from ..calibrate import fit_to_image
-
-            fitted = fit_to_image(camera, src.info.width, src.info.height, cfg.measure.camera)
+        fitted = _fitted(camera, src, cfg.measure.camera)
         analytics = _analytics(scene, fitted, src.info.fps) if scene is not None else None
         proc = TrackProcessor(cfg, src.info, detections,
                               needs_background="background" in streams, analytics=analytics,
@@ -143,6 +135,25 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
         return Job(src, proc, [*writers, *more], out, force=force, config=(save_config, cfg))
 
     return _opened(source, cfg.source, build)
+
+
+def _streams(cfg: PipelineConfig, save: Iterable[str] | str) -> tuple[str, ...]:
+    """The intermediate movies ``save`` asks for, but the annotated video when it is written
+    anyway (the movie would be written to its file name)."""
+    streams = parse_streams(save)
+    if cfg.output.video and "annotated" in streams:
+        log.info("--save annotated: the annotated video is written anyway")
+        streams = tuple(s for s in streams if s != "annotated")
+    return streams
+
+
+def _fitted(camera: Any, src: Source, path: str) -> Any:
+    """The camera model fitted to the source's frame size (None without one)."""
+    if camera is None:
+        return None
+    from ..calibrate import fit_to_image
+
+    return fit_to_image(camera, src.info.width, src.info.height, path)
 
 
 def _load_camera(path: str) -> Any:
