@@ -474,7 +474,7 @@ def test_analyze_onto_a_full_disk_keeps_all_its_outputs_or_none(small_disk, tmp_
     kept = set()
     # the disk fills at each output (the event store needs room for its journal while it
     # runs: about 100 pages more than the outputs)
-    for free in range(page, need + 120 * page, 5 * page):
+    for free in range(page, need + 120 * page, 9 * page):
         out = small_disk / "o"
         shutil.rmtree(out, ignore_errors=True)
         filler = small_disk / "filler"

@@ -37,6 +37,7 @@ def test_a_vehicle_sprite_spans_its_length_and_height() -> None:
         Vehicle(id=1, x0=0, y0=0, vx=1, length=2, height=40)
 
 
+@pytest.mark.slow   # the whole pipeline on the mixed scene
 def test_a_line_for_people_counts_exactly_the_people_of_the_mixed_scene(scene_runs) -> None:
     run = scene_runs("mixed", 0)
     assert run.crossings("pred") == run.crossings("gt")
