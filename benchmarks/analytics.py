@@ -3,8 +3,9 @@ with a scene of 10 lines and 10 zones (no annotated video), side by side.
 
 Each round runs both jobs (in alternating order, so that a slow phase of the machine hits both);
 the table prints each one's median and range over the rounds and the ratio of the medians. The
-job with a scene writes everything ``track --scene`` writes: events.jsonl, counts.csv,
-heatmap.png and the analytics in summary.json.
+job with a scene writes everything ``track --scene`` writes: events.jsonl, events.db,
+counts.csv, heatmap.png and the analytics in summary.json, first without the events' snapshots
+and clips (``[evidence]`` off), then with them (the default).
 
 It also times the analytics engine alone (``Analytics.step``) on the tracks of the run, per
 frame, and with 10 tracks per frame on synthetic paths, which is what to profile when the ratio
@@ -91,9 +92,13 @@ def _row(name: str, runs: list[tuple[float, float]]) -> str:
     return out
 
 
-def _ratio(what: str, plain: list[float], scened: list[float]) -> str:
+def _ratio(what: str, plain: list[float], scened: list[float], added: str = "analytics") -> str:
     ratio = statistics.median(scened) / statistics.median(plain)
-    return f"{what} ratio {ratio:.3f}: analytics add {100 * (ratio - 1):+.1f} %"
+    return f"{what} ratio {ratio:.3f}: {added} add {100 * (ratio - 1):+.1f} %"
+
+
+#: the scene's events without snapshots and clips (the [evidence] table)
+NO_EVIDENCE = "\n[evidence]\nsnapshot = false\nclip_s = [0, 0]\n"
 
 
 def main() -> None:
@@ -103,14 +108,14 @@ def main() -> None:
                   output=replace(cfg.output, video=False))
     toml = scene_toml()
     with tempfile.TemporaryDirectory() as d:
-        scene = Path(d) / "scene.toml"
+        scene, bare = Path(d) / "scene.toml", Path(d) / "bare.toml"
         scene.write_text(toml)
+        bare.write_text(toml + NO_EVIDENCE)
         run_track(video, cfg, None)   # warm-up: imports, caches, the file in the page cache
-        plain, scened = [], []
+        plain, scened, evidenced = [], [], []
+        runs = [(None, plain), (bare, scened), (scene, evidenced)]
         for r in range(args.repeat):
-            order = ((None, plain), (scene, scened)) if r % 2 == 0 else ((scene, scened),
-                                                                         (None, plain))
-            for s, acc in order:
+            for s, acc in (runs if r % 2 == 0 else runs[::-1]):
                 acc.append(run_track(video, cfg, s))
         # the engine alone, on the tracks the pipeline reports
         with tempfile.TemporaryDirectory() as d2:
@@ -128,9 +133,12 @@ def main() -> None:
     print(f"{'':<34} {'wall clock':<25} {'CPU (all threads)':<25}")
     print(_row("track", plain))
     print(_row("track --scene (10 lines, 10 zones)", scened))
+    print(_row("  + snapshots and clips", evidenced))
     print(_ratio("wall-clock", [w for w, _ in plain], [w for w, _ in scened]))
     print(_ratio("CPU", [c for _, c in plain], [c for _, c in scened])
           + f" (track alone {per_frame:.1f} ms CPU per frame)")
+    print(_ratio("CPU with evidence", [c for _, c in plain], [c for _, c in evidenced],
+                 "analytics and evidence"))
     n_tracks = len(tracks) / max(1, summary.frames)
     print(f"engine alone on the run's tracks ({n_tracks:.1f} per frame): "
           f"{engine_ms_per_frame(doc, frames, fps):.3f} ms/frame")

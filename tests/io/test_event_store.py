@@ -151,3 +151,22 @@ def test_a_new_store_appears_with_its_tables(tmp_path, monkeypatch):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["events.db"]   # no temporary file
     with EventStore(tmp_path) as again:          # an existing store is opened, not replaced
         assert again.count() == 1
+
+
+def test_a_store_of_the_first_version_gains_the_clip_offset_and_keeps_its_events(tmp_path):
+    from motiontrack.io.event_store import MIGRATIONS
+
+    db = tmp_path / "events.db"
+    with sqlite3.connect(db) as c:   # what the first version made
+        for statement in MIGRATIONS[0]:
+            c.execute(statement)
+        c.execute("INSERT INTO events (camera, type, start, \"end\", data) "
+                  "VALUES ('door', 'loiter', 1.0, 2.0, '{\"type\": \"loiter\"}')")
+        c.execute("PRAGMA user_version = 1")
+    with pytest.raises(InputError, match="version 1: open it for writing once"):
+        EventStore(db, readonly=True)
+    with EventStore(db) as s:
+        s.set_media(1, clip="evidence/1.avi", clip_offset=4.5)
+    with EventStore(db, readonly=True) as s:
+        (e,) = list(s)
+    assert (e.camera, e.clip, e.clip_offset) == ("door", "evidence/1.avi", 4.5)

@@ -35,12 +35,18 @@ def _result(n: int) -> FrameResult:
 def _run(tmp_path, scene: dict, events: dict[int, list[dict]], frames: int, fps: float = 25.0):
     keeper = EvidenceKeeper(tmp_path, tmp_path, parse_scene(scene).evidence, fps)
     clips, snaps, ids = {}, {}, 0
+    def keep(done):
+        clips.update({i: path for i, path, _ in done})
+        offsets.update({i: off for i, _, off in done})
+
+    offsets: dict[int, float] = {}
     for n in range(1, frames + 1):
-        clips.update(keeper.frame(n, _picture(n) if keeper.needs_picture(n) else None))
+        keep(keeper.frame(n, _picture(n) if keeper.needs_picture(n) else None))
         for e in events.get(n, []):
             ids += 1
             snaps[ids] = keeper.event(ids, {**e, "frame": n}, _result(n), _picture(n))
-    clips.update(keeper.close())
+    keep(keeper.close())
+    _run.offsets = offsets
     return clips, snaps
 
 
@@ -57,6 +63,21 @@ def test_a_clip_holds_the_seconds_before_and_after_its_event(tmp_path):
     assert [_number(f, range(1, 101)) for f in last] == list(range(85, 101))   # the run ended
     assert snaps == {1: "evidence/1.jpg", 2: "evidence/2.jpg"}
     assert (tmp_path / "evidence" / "1-object.jpg").is_file()
+
+
+def test_events_whose_seconds_overlap_share_one_clip(tmp_path):
+    scene = {**SCENE, "evidence": {"clip_s": [0.4, 0.8], "clip_fps": 25}}
+    clips, _ = _run(tmp_path, scene, {30: [{"type": "line_cross", "line": "gate"}],
+                                      40: [{"type": "zone_enter", "zone": "bench"}],
+                                      200: [{"type": "line_cross", "line": "gate"}]},
+                    frames=240)
+    # 30: frames 20..50; 40: 30..60, inside the open clip, which now ends at 60; 200: its own
+    assert clips == {1: "evidence/1.avi", 2: "evidence/1.avi", 3: "evidence/3.avi"}
+    frames, _ = read_clip(tmp_path / "evidence" / "1.avi")
+    assert [_number(f, range(1, 241)) for f in frames] == list(range(20, 61))
+    # where each event's own 0.4 s before it starts in the shared clip: frames 20 and 30
+    assert _run.offsets == {1: 0.0, 2: 0.4, 3: 0.0}
+    assert not (tmp_path / "evidence" / "2.avi").exists()
 
 
 def test_a_slower_clip_keeps_every_nth_frame_at_its_width(tmp_path):
@@ -102,12 +123,17 @@ def test_a_tracked_run_keeps_each_events_snapshot_and_clip(scene_runs):
     last = r.summary["frames"]
     for e in rows:
         assert (r.run_dir / e.snapshot).is_file() and e.snapshot == f"evidence/{e.id}.jpg"
-        frames, fps = read_clip(r.run_dir / e.clip)
-        # [evidence] defaults: 5 s before, 10 s after, 10 frames a second at most (every 2nd
-        # frame of 25 fps), the frames that were there
-        kept = [n for n in range(max(1, e.frame - 125), min(last, e.frame + 250) + 1)
-                if n % 2 == 0]
-        assert fps == 12.5 and len(frames) == len(kept), e
+    # [evidence] defaults: 5 s before, 10 s after, 10 frames a second at most (every 2nd frame
+    # of 25 fps); the runner's events are seconds apart, so they share one clip from 5 s before
+    # the first to 10 s after the last (or the run's end)
+    assert {e.clip for e in rows} == {f"evidence/{rows[0].id}.avi"}
+    frames, fps = read_clip(r.run_dir / rows[0].clip)
+    kept = [n for n in range(max(1, rows[0].frame - 125), min(last, rows[-1].frame + 250) + 1)
+            if n % 2 == 0]
+    assert fps == 12.5 and len(frames) == len(kept)
+    for e in rows:   # each event's own seconds start 5 s before it, or at the clip's start
+        assert e.clip_offset == pytest.approx((max(kept[0], e.frame - 125) - kept[0]) / 25,
+                                              abs=0.041), e
 
 
 @pytest.mark.slow
@@ -145,10 +171,11 @@ def test_a_run_killed_while_it_keeps_clips_leaves_each_clip_whole_and_recorded_o
     with EventStore(out, readonly=True) as store:
         rows = list(store)
     assert any(e.clip for e in rows)
+    for clip in {e.clip for e in rows if e.clip}:   # recorded: whole, 1 s either side of its
+        members = [e.frame for e in rows if e.clip == clip]   # events at 25 fps
+        frames, fps = read_clip(out / clip)
+        assert fps == 25.0 and len(frames) == max(members) + 25 - (min(members) - 25) + 1, clip
     for e in rows:
         assert e.snapshot is None or (out / e.snapshot).is_file()
-        if e.clip is not None:   # recorded: whole, 1 s either side at 25 fps
-            frames, fps = read_clip(out / e.clip)
-            assert fps == 25.0 and len(frames) == 51, e
     referenced = {e.clip for e in rows if e.clip}
     assert {f"evidence/{p.name}" for p in (out / "evidence").glob("*.avi")} >= referenced

@@ -44,7 +44,7 @@ def write_event_store(results: Path, rows: Sequence[Mapping[str, Any]]) -> int |
                     for e in video:
                         # media paths are relative to the store's folder: the video's, here
                         out.add(e.event, name, e.end, name, _under(name, e.snapshot),
-                                _under(name, e.clip))
+                                _under(name, e.clip), e.clip_offset)
                         n += 1
         finally:
             out.close(finished=True)   # one self-contained file to rename into place

@@ -19,8 +19,9 @@ Columns of ``events``: ``id`` (order of arrival), ``camera`` (the camera, or the
 class of the event's track, its ``label``), ``track``, ``frame``, ``t`` (seconds into the
 source), ``start``/``end`` (epoch seconds: ``end`` is when the event happened, ``start`` is
 ``end`` minus its ``dwell_s`` or ``duration_s``, else equal), ``x``, ``y``, ``snapshot``,
-``clip`` (paths relative to the store's folder, or NULL) and ``data`` (the event's JSON object as
-in ``events.jsonl``).
+``clip`` (paths relative to the store's folder, or NULL), ``data`` (the event's JSON object as
+in ``events.jsonl``) and ``clip_offset`` (seconds into the clip where the event's own seconds
+start: events whose clips overlap share one).
 """
 
 from __future__ import annotations
@@ -70,6 +71,8 @@ MIGRATIONS: tuple[tuple[str, ...], ...] = (
      "CREATE INDEX events_type_end ON events (type, \"end\")",
      "CREATE INDEX events_rule_end ON events (rule, \"end\")",
      "CREATE INDEX events_end ON events (\"end\")"),
+    # events whose clips overlap share one: where each event's own seconds start in it
+    ("ALTER TABLE events ADD COLUMN clip_offset REAL",),
 )
 SCHEMA_VERSION = len(MIGRATIONS)
 
@@ -80,7 +83,7 @@ _CLASS_KEYS = ("class", "label")
 #: the event keys that say how long the event lasted before it was reported
 _DURATION_KEYS = ("dwell_s", "duration_s")
 _COLUMNS = ("id", "camera", "segment", "type", "rule", "class", "track", "frame", "t", "start",
-            "end", "x", "y", "snapshot", "clip", "data")
+            "end", "x", "y", "snapshot", "clip", "data", "clip_offset")
 
 
 def store_path(path: str | Path) -> Path:
@@ -143,13 +146,15 @@ class StoredEvent:
     snapshot: str | None
     clip: str | None
     event: dict[str, Any]
+    clip_offset: float | None = None
 
     def as_dict(self) -> dict[str, Any]:
         """The row as a JSON object (``class`` under its own name)."""
         return {"id": self.id, "camera": self.camera, "segment": self.segment, "type": self.type,
                 "rule": self.rule, "class": self.klass, "track": self.track, "frame": self.frame,
                 "t": self.t, "start": self.start, "end": self.end, "x": self.x, "y": self.y,
-                "snapshot": self.snapshot, "clip": self.clip, "event": self.event}
+                "snapshot": self.snapshot, "clip": self.clip, "clip_offset": self.clip_offset,
+                "event": self.event}
 
 
 class EventStore:
@@ -234,7 +239,8 @@ class EventStore:
 
     # ------------------------------------------------------------------ writing
     def add(self, event: dict[str, Any], camera: str, when: float, segment: str | None = None,
-            snapshot: str | None = None, clip: str | None = None) -> int:
+            snapshot: str | None = None, clip: str | None = None,
+            clip_offset: float | None = None) -> int:
         """Store ``event`` (an ``events.jsonl`` object) of ``camera``, which happened at epoch
         second ``when``; returns its id. Committed within :attr:`commit_every_s`."""
         duration = next((float(event[k]) for k in _DURATION_KEYS
@@ -244,20 +250,24 @@ class EventStore:
         with self._full():
             cur = self._db.execute(
                 'INSERT INTO events (camera, segment, type, rule, class, track, frame, t, start, '
-                '"end", x, y, snapshot, clip, data) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)',
+                '"end", x, y, snapshot, clip, data, clip_offset) '
+                'VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)',
                 (camera, segment, str(event.get("type")), rule, klass,
                  event.get("track"), event.get("frame"), event.get("t"), when - duration, when,
-                 event.get("x"), event.get("y"), snapshot, clip, json.dumps(event)))
+                 event.get("x"), event.get("y"), snapshot, clip, json.dumps(event),
+                 clip_offset))
         self._pending += 1
         self.tick()
         return int(cur.lastrowid)
 
-    def set_media(self, event_id: int, snapshot: str | None = None,
-                  clip: str | None = None) -> None:
-        """Record the snapshot and clip of an event once they are written."""
+    def set_media(self, event_id: int, snapshot: str | None = None, clip: str | None = None,
+                  clip_offset: float | None = None) -> None:
+        """Record the snapshot and clip of an event once they are written (``clip_offset``:
+        seconds into the clip where the event's own seconds start)."""
         with self._full():
             self._db.execute("UPDATE events SET snapshot = COALESCE(?, snapshot), "
-                             "clip = COALESCE(?, clip) WHERE id = ?", (snapshot, clip, event_id))
+                             "clip = COALESCE(?, clip), clip_offset = COALESCE(?, clip_offset) "
+                             "WHERE id = ?", (snapshot, clip, clip_offset, event_id))
         self._pending += 1
         self.tick()
 
@@ -426,7 +436,10 @@ def _quoted(column: str) -> str:
     return f'"{column}"'
 
 
+_DATA = _COLUMNS.index("data")
+
+
 def _row(r: Iterable[Any]) -> StoredEvent:
     v = list(r)
-    v[-1] = json.loads(v[-1])
+    v[_DATA] = json.loads(v[_DATA])
     return StoredEvent(*v)

@@ -73,14 +73,14 @@ class EventStoreWriter(Writer):
         if self._store is None:
             return
         scene, keeper, n = result.scene, self._keeper, frame_number(result.index)
-        picture = None
-        pictured = result.frame is not None and result.frame.size > 0   # not a tracks file's
-        if keeper is not None and pictured and (keeper.needs_picture(n)
-                                                or (scene is not None and scene.events)):
-            picture = self._ctx.annotated(result)
-        clips = keeper.frame(n, picture) if keeper is not None else []
         records = [(e.to_json(), result.timestamp if self._live else self._started + e.t)
                    for e in (scene.events if scene is not None else ())]
+        picture = None
+        pictured = result.frame is not None and result.frame.size > 0   # not a tracks file's
+        if keeper is not None and pictured and (
+                keeper.needs_picture(n) or any(keeper.snapshots(r) for r, _ in records)):
+            picture = self._ctx.annotated(result)   # drawn only for a clip or a snapshot
+        clips = keeper.frame(n, picture) if keeper is not None else []
         self.count += len(records)
         self._uncommitted += records
         if self._full:   # the device is full: kept for the end of the run
@@ -100,9 +100,9 @@ class EventStoreWriter(Writer):
             self._full = True
             raise
 
-    def _media(self, clips: list[tuple[int, str]]) -> None:
-        for event_id, path in clips:
-            self._store.set_media(event_id, clip=path)
+    def _media(self, clips: list[tuple[int, str, float]]) -> None:
+        for event_id, path, offset in clips:
+            self._store.set_media(event_id, clip=path, clip_offset=offset)
 
     def close(self, keep: bool) -> None:
         if self._store is not None and keep:

@@ -2,12 +2,17 @@
 
 For event ``ID`` (its id in the event store): ``ID.jpg``, the annotated frame of the event;
 ``ID-object.jpg``, the object's box (with a margin of a quarter of its size, at least 16 px) cut
-from the same frame; ``ID.avi``, a Motion-JPEG clip from ``clip_s[0]`` seconds before the event
-to ``clip_s[1]`` after it (the scene's ``[evidence]``, :mod:`motiontrack.analytics.evidence`).
+from the same frame; and a Motion-JPEG clip from ``clip_s[0]`` seconds before the event to
+``clip_s[1]`` after it (the scene's ``[evidence]``, :mod:`motiontrack.analytics.evidence`).
+
+Events whose clips overlap share one: a clip still being gathered takes in the next event's
+seconds (up to :data:`MAX_CLIP_S` in all), so a busy scene writes its video once rather than once
+per event. The clip is named after its first event (``ID.avi``); the store records for each
+event the clip and where the event's own seconds start in it (``clip_offset``).
 
 The pre-roll comes from a ring buffer of the annotated frames, JPEG-encoded once as they pass
 (at most ``clip_fps`` a second, at most ``clip_width`` pixels across), so an event costs no
-encoding of the past; the clip is written once its last frame has passed, or when the run ends
+encoding of the past; a clip is written once its last frame has passed, or when the run ends
 (then it ends there). Clips are written under a temporary name and renamed: a killed run leaves
 each clip complete and recorded in the store, or not recorded.
 """
@@ -43,12 +48,21 @@ MIN_MARGIN = 16
 _OURS = re.compile(r"\d+(\.jpg|-object\.jpg|\.avi)|\.\d+(-object)?\..*\.part\.(avi|jpg)")
 
 
+#: the longest clip shared by events whose seconds overlap (then a new clip starts)
+MAX_CLIP_S = 60.0
+
+
 @dataclass
 class _Clip:
+    """A clip being gathered: its frames (JPEG) from frame number ``first``, up to ``last``,
+    and its events with the frame their own seconds start at."""
+
     event_id: int
     frames: list[bytes]
-    last: int                                    # the clip's last frame number
-    done: bool = field(default=False)
+    first: int
+    last: int
+    members: list[tuple[int, int]] = field(default_factory=list)
+    done: bool = False
 
 
 class EvidenceKeeper:
@@ -87,9 +101,10 @@ class EvidenceKeeper:
         return path.relative_to(self.root).as_posix() if path.is_relative_to(self.root) \
             else str(path)
 
-    def frame(self, frame: int, picture: np.ndarray | None) -> list[tuple[int, str]]:
-        """Pass frame ``frame`` (its annotated picture; None when no clip wants it); the clips
-        that are complete now, ``(event id, path)``."""
+    def frame(self, frame: int, picture: np.ndarray | None) -> list[tuple[int, str, float]]:
+        """Pass frame ``frame`` (its annotated picture; None when no clip wants it); the events
+        whose clips are complete now, ``(event id, path, seconds into the clip where the
+        event's own seconds start)``."""
         if not self.any_clip or picture is None or frame % self.step:
             return self._finished(frame)
         jpeg = self._clip_jpeg(picture)
@@ -98,6 +113,10 @@ class EvidenceKeeper:
             if frame <= clip.last:
                 clip.frames.append(jpeg)
         return self._finished(frame)
+
+    def snapshots(self, event: Mapping[str, Any]) -> bool:
+        """Whether ``event``'s rule keeps a snapshot."""
+        return self.plan.of(event).snapshot
 
     def needs_picture(self, frame: int) -> bool:
         """Whether :meth:`frame` will use the picture of ``frame`` (draw it only then)."""
@@ -110,8 +129,8 @@ class EvidenceKeeper:
         spec = self.plan.of(event)
         frame = int(event.get("frame", 0))
         if spec.clip:
-            before = [j for f, j in self._ring if f >= frame - spec.clip_s[0] * self.fps]
-            self._open.append(_Clip(event_id, before, frame + int(spec.clip_s[1] * self.fps)))
+            self._clip(event_id, frame - spec.clip_s[0] * self.fps,
+                       frame + int(spec.clip_s[1] * self.fps))
         if not spec.snapshot or picture is None:
             return None
         path = self.dir / f"{event_id}.jpg"
@@ -126,7 +145,22 @@ class EvidenceKeeper:
             return None
         return self._rel(path)
 
-    def _finished(self, frame: int | None) -> list[tuple[int, str]]:
+    def _clip(self, event_id: int, start: float, end: int) -> None:
+        """Gather frames ``start``..``end`` for ``event_id``: in the newest clip when it is
+        still open there and stays within :data:`MAX_CLIP_S`, else in a new one from the ring."""
+        newest = self._open[-1] if self._open else None
+        longest = int(MAX_CLIP_S * self.fps)
+        if newest is not None and start <= newest.last + 1 and end - newest.first <= longest:
+            newest.last = max(newest.last, end)
+            newest.members.append((event_id, max(newest.first, int(np.ceil(start)))))
+            return
+        kept = [(f, j) for f, j in self._ring if f >= start]
+        first = kept[0][0] if kept else int(np.ceil(start))
+        clip = _Clip(event_id, [j for _, j in kept], first, end)
+        clip.members.append((event_id, first))
+        self._open.append(clip)
+
+    def _finished(self, frame: int | None) -> list[tuple[int, str, float]]:
         out = []
         for clip in self._open:
             if frame is None or frame >= clip.last:
@@ -139,11 +173,13 @@ class EvidenceKeeper:
                     except (OSError, DiskFullError) as exc:   # a full device: no clip
                         log.warning("clip of event %d not written: %s", clip.event_id, exc)
                         continue
-                    out.append((clip.event_id, self._rel(path)))
+                    rel = self._rel(path)
+                    out += [(event_id, rel, round((start - clip.first) / self.fps, 3))
+                            for event_id, start in clip.members]
         self._open = [c for c in self._open if not c.done]
         return out
 
-    def close(self) -> list[tuple[int, str]]:
+    def close(self) -> list[tuple[int, str, float]]:
         """The run ended: write the clips still open, ending where the run ended."""
         return self._finished(None)
 

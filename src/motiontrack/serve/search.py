@@ -1,8 +1,8 @@
 """The event store's search over HTTP: ``GET /api/events/search`` and ``/api/events/totals``.
 
 ``/api/events/{id}/snapshot.jpg``, ``object.jpg``, ``clip.avi`` give an event's evidence
-(:mod:`motiontrack.run.evidence`); ``clip.mjpg`` replays its clip as MJPEG at the clip's rate,
-which an ``<img>`` plays.
+(:mod:`motiontrack.run.evidence`); ``clip.mjpg`` replays its clip as MJPEG at the clip's rate
+from where the event's own seconds start in it, which an ``<img>`` plays.
 
 The same filters as ``motiontrack events`` (:func:`~motiontrack.io.event_store.query_from`):
 ``camera``, ``type``, ``rule``, ``class``, ``since``, ``until`` (ISO times or a time ago),
@@ -66,23 +66,24 @@ def search_routes(store: Path | None) -> list[Route]:
             return JSONResponse({"error": "bin must be hour or day"}, status_code=400)
         return await answer(request, kind)
 
-    def media_path(event_id: int, kind: str) -> Path | None:
+    def media_path(event_id: int, kind: str) -> tuple[Path | None, float]:
         """The file of ``kind`` (snapshot, object, clip) of event ``event_id``, inside the
-        store's folder, or None."""
+        store's folder, or None; and the event's ``clip_offset`` (0 without one)."""
         if store is None or not store.is_file():
-            return None
+            return None, 0.0
         with EventStore(store, readonly=True) as s:
             row = s.get(event_id)
         if row is None:
-            return None
+            return None, 0.0
         rel = row.clip if kind == "clip" else row.snapshot
         if rel is None:
-            return None
+            return None, 0.0
         if kind == "object":
             rel = rel[:-len(".jpg")] + "-object.jpg"
         root = store.parent.resolve()
         path = (root / rel).resolve()
-        return path if path.is_relative_to(root) and path.is_file() else None
+        found = path if path.is_relative_to(root) and path.is_file() else None
+        return found, float(row.clip_offset or 0.0)
 
     async def media(request: Request) -> Response:
         kind = request.path_params["kind"]
@@ -92,11 +93,11 @@ def search_routes(store: Path | None) -> list[Route]:
             event_id = int(request.path_params["id"])
         except ValueError:
             return JSONResponse({"error": "the event id must be a number"}, status_code=400)
-        path = await anyio.to_thread.run_sync(media_path, event_id, _MEDIA[kind][0])
+        path, offset = await anyio.to_thread.run_sync(media_path, event_id, _MEDIA[kind][0])
         if path is None:
             return JSONResponse({"error": f"no {kind} for this event"}, status_code=404)
-        if kind == "clip.mjpg":
-            return StreamingResponse(_replay(path), media_type=MJPEG_TYPE)
+        if kind == "clip.mjpg":   # from where the event's own seconds start in a shared clip
+            return StreamingResponse(_replay(path, offset), media_type=MJPEG_TYPE)
         return FileResponse(path, media_type=_MEDIA[kind][1])
 
     return [Route("/api/events/search", search), Route("/api/events/totals", totals),
@@ -109,10 +110,11 @@ _MEDIA = {"snapshot.jpg": ("snapshot", "image/jpeg"), "object.jpg": ("object", "
 MJPEG_TYPE = "multipart/x-mixed-replace; boundary=frame"
 
 
-async def _replay(path: Path) -> AsyncIterator[bytes]:
-    """A clip's JPEG frames as an MJPEG stream at the clip's own rate: an ``<img>`` plays it."""
+async def _replay(path: Path, start_s: float = 0.0) -> AsyncIterator[bytes]:
+    """A clip's JPEG frames from ``start_s`` seconds into it, as an MJPEG stream at the clip's
+    own rate: an ``<img>`` plays it."""
     frames, fps = await anyio.to_thread.run_sync(_clip_jpegs, path)
-    for jpeg in frames:
+    for jpeg in frames[int(round(start_s * fps)) if fps > 0 else 0:]:
         yield (b"--frame\r\nContent-Type: image/jpeg\r\nContent-Length: "
                + str(len(jpeg)).encode() + b"\r\n\r\n" + jpeg + b"\r\n")
         await anyio.sleep(1.0 / fps if fps > 0 else 0.1)
