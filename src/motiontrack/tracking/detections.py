@@ -47,7 +47,7 @@ from . import kalman
 from .appearance import bhattacharyya, histograms
 from ..assignment import linear_sum_assignment
 from .association import INF_COST, iou_matrix
-from .tracker import APPEARANCE_RATE, TRACKERS, TrackView
+from .tracker import APPEARANCE_RATE, TRACKERS, TrackView, tentative_tracks
 
 __all__ = ["DetectionTracker", "direction_cost", "unit_directions"]
 
@@ -364,10 +364,7 @@ class DetectionTracker:
                                         tuple(m.history), m.score))
                 continue
             if m.tentative:
-                self.confirmed_earlier.extend(
-                    (f, Track(id=m.tid, box=b, state=TrackState.TENTATIVE, velocity=v, hits=n,
-                              age=a, history=hist, score=sc))
-                    for f, b, v, n, a, hist, sc in m.tentative)
+                self.confirmed_earlier.extend(tentative_tracks(m.tid, m.tentative))
                 m.tentative = []
             m.reported = frame
             out.append(Track(id=m.tid, box=Box(x, y, w, h), state=m.state, velocity=(vx, vy),

@@ -63,6 +63,13 @@ def _recent_velocity(history: deque, k: int) -> np.ndarray | None:
     return np.median(np.diff(pts, axis=0), axis=0)
 
 
+def tentative_tracks(tid: int, kept: Sequence[tuple]) -> list[tuple[int, Track]]:
+    """The frames a track was tentative in (``(frame, box, velocity, hits, age, history,
+    score)`` as kept), as ``(frame, Track)`` under the id ``tid`` it has once confirmed."""
+    return [(f, Track(id=tid, box=b, state=TrackState.TENTATIVE, velocity=v, hits=n, age=a,
+                      history=hist, score=sc)) for f, b, v, n, a, hist, sc in kept]
+
+
 @dataclass(frozen=True)
 class TrackView:
     """A named track as :meth:`MultiObjectTracker.views` shows it to other stages."""
@@ -467,10 +474,7 @@ class MultiObjectTracker:
                 continue
             if m.tentative:
                 # confirmed in this frame: its tentative frames, under the id it now has
-                self.confirmed_earlier.extend(
-                    (f, Track(id=m.tid, box=b, state=TrackState.TENTATIVE, velocity=v, hits=n,
-                              age=a, history=hist, score=sc))
-                    for f, b, v, n, a, hist, sc in m.tentative)
+                self.confirmed_earlier.extend(tentative_tracks(m.tid, m.tentative))
                 m.tentative = []
             m.reported = frame
             out.append(Track(
