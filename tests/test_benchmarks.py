@@ -256,3 +256,16 @@ def test_static_foreground_benchmark_keeps_the_stopped_person_with_vibe():
         blocks["vibe (selective update)"], out
     # a 2 s stop is far below accept_s: the parked car is still foreground
     assert "car parks 2 s: still foreground at the end" in blocks["vibe (selective update)"], out
+
+
+@pytest.mark.slow
+def test_review_page_benchmark_times_the_timeline_in_a_browser():
+    from helpers.browser import browser_paths
+
+    browser_paths()
+    out = subprocess.run([sys.executable, str(REPO / "benchmarks" / "review_page.py"),
+                          "--events", "40", "--rounds", "1"],
+                         capture_output=True, text=True, timeout=120).stdout
+    (row,) = re.findall(r"^timeline shown\s+(\d+\.\d+)\s+(\d+\.\d+)\s+(\d+\.\d+)\s+1\.0$", out, re.M)
+    assert 0 < float(row[0]) < 60, out
+    assert "40 events of one day" in out
