@@ -555,3 +555,38 @@ def test_cameras_stop_and_commit_when_the_server_is_killed(tmp_path):
         (seg,) = (srv.out / name).iterdir()
         read_events(seg / "events.jsonl")
         assert json.loads((seg / "summary.json").read_text())["interrupted"] is True
+
+
+@pytest.mark.slow
+def test_a_server_and_its_cameras_killed_while_keeping_clips_leave_a_consistent_store(tmp_path):
+    """SIGKILL of the server and every camera process at once (the OOM killer, a power cut of
+    the process group): each event in the store has its snapshot, and its clip whole or none."""
+    from motiontrack.io.clips import read_clip
+    from motiontrack.io.event_store import EventStore
+
+    cameras = synth_cameras(tmp_path, {n: f"synth:{n}" for n in CAMERAS})
+    for name in CAMERAS:   # short clips, so that one is written within seconds
+        scene = tmp_path / name / "scene.toml"
+        scene.write_text(scene.read_text() + "\n[evidence]\nclip_s = [1, 1]\n")
+    with ServeProcess(tmp_path, cameras) as srv:
+        pids = [c["pid"] for c in srv.wait_running(frames=5, timeout=60).values()]
+
+        def a_clip():
+            if not (srv.out / "events.db").is_file():
+                return None
+            with EventStore(srv.out, readonly=True) as store:
+                return any(e.clip for e in store)
+
+        srv.wait("a clip recorded in the store", a_clip, 60)
+        for pid in (srv.proc.pid, *pids):
+            os.kill(pid, signal.SIGKILL)
+        srv.proc.wait(10)
+    time.sleep(0.5)
+    with EventStore(srv.out, readonly=True) as store:
+        rows = list(store)
+    assert rows and any(e.clip for e in rows)
+    for e in rows:
+        assert e.snapshot is None or (srv.out / e.snapshot).is_file(), e
+        if e.clip is not None:
+            frames, fps = read_clip(srv.out / e.clip)
+            assert frames and fps > 0, e
