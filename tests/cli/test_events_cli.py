@@ -93,3 +93,17 @@ def test_a_bad_filter_is_one_line(scene_runs, capsys, args, words):
 def test_a_folder_without_a_store_is_one_line(tmp_path, capsys):
     user_error(main(["events", str(tmp_path)]), capsys.readouterr().err,
                "no event store at", "events.db")
+
+
+def test_totals_of_several_cameras_are_also_given_over_every_camera(tmp_path, capsys, utc):
+    with EventStore(tmp_path) as store:
+        for camera, when in (("gate", 3600.0), ("gate", 3700.0), ("yard", 3800.0),
+                             ("yard", 7300.0)):
+            store.add({"type": "loiter", "frame": 1, "zone": "z"}, camera, when)
+    assert main(["events", str(tmp_path), "--totals", "hour"]) == 0
+    rows = [ln.split() for ln in capsys.readouterr().out.splitlines()[1:]]
+    assert rows == [["gate", "1970-01-01T01:00:00+00:00", "loiter", "2"],
+                    ["yard", "1970-01-01T01:00:00+00:00", "loiter", "1"],
+                    ["yard", "1970-01-01T02:00:00+00:00", "loiter", "1"],
+                    ["(all)", "1970-01-01T01:00:00+00:00", "loiter", "3"],
+                    ["(all)", "1970-01-01T02:00:00+00:00", "loiter", "1"]]

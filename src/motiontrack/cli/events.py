@@ -33,10 +33,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     fmt.add_argument("--json", action="store_true", help="one JSON object per line")
     fmt.add_argument("--csv", action="store_true", help="CSV with a header row")
     fmt.add_argument("--totals", choices=("hour", "day"),
-                     help="counts per camera, type and hour or day (local time) instead")
+                     help="counts per camera, type and hour or day (local time), and over every "
+                          "camera, instead")
     p.set_defaults(func=cmd_events)
 
 
+#: the camera column of the totals over every camera
+ALL_CAMERAS = "(all)"
 #: the columns of the table and the CSV
 COLUMNS = ("id", "time", "camera", "type", "rule", "class", "track", "frame", "snapshot", "clip")
 
@@ -79,8 +82,13 @@ def cmd_events(args: argparse.Namespace) -> int:
 def _print_totals(store, query, bin_s: float) -> int:
     offset = datetime.now().astimezone().utcoffset()
     rows = store.totals(bin_s, query, utc_offset_s=offset.total_seconds() if offset else 0.0)
-    _print_table(("camera", "from", "type", "count"),
-                 [(c, local_time(start), t, n) for c, start, t, n in rows])
+    table = [(c, local_time(start), t, n) for c, start, t, n in rows]
+    if len({c for c, *_ in rows}) > 1:   # and over every camera
+        every: dict[tuple[float, str], int] = {}
+        for _, start, t, n in rows:
+            every[start, t] = every.get((start, t), 0) + n
+        table += [(ALL_CAMERAS, local_time(start), t, n) for (start, t), n in sorted(every.items())]
+    _print_table(("camera", "from", "type", "count"), table)
     return 0
 
 

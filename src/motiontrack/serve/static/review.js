@@ -129,6 +129,18 @@ async function drawTotals() {
   const { totals } = await api("api/events/totals?bin=hour&" + query());
   const body = $("totals").tBodies[0];
   body.replaceChildren();
+  if (new Set(totals.map((t) => t.camera)).size > 1) {
+    // and over every camera
+    const every = new Map();
+    for (const t of totals) {
+      const key = `${t.start}\u0000${t.type}`;
+      every.set(key, (every.get(key) || 0) + t.count);
+    }
+    for (const [key, count] of [...every.entries()].sort()) {
+      const [start, type] = key.split("\u0000");
+      totals.push({ camera: "(all)", start: Number(start), type, count });
+    }
+  }
   for (const t of totals) {
     const tr = body.insertRow();
     for (const v of [t.camera, new Date(t.start * 1000).toLocaleString(), t.type, t.count]) tr.insertCell().textContent = v;
