@@ -33,7 +33,8 @@ _BINS = {"hour": 3600.0, "day": 86400.0}
 
 
 def search_routes(store: Path | None) -> list[Route]:
-    """The routes over the event store ``store`` (None: the app has none, 404)."""
+    """The routes over the event store ``store`` (None, or not written yet: no events; an
+    event's media then 404)."""
 
     def run(params: dict[str, str], totals: str | None) -> dict[str, Any]:
         query = query_from(params, time.time(), MAX_PAGE)
