@@ -17,7 +17,7 @@ import numpy as np
 
 from .atomic import temp_path_for
 
-__all__ = ["write_mjpeg_clip", "read_clip"]
+__all__ = ["write_mjpeg_clip", "read_clip", "clip_jpegs"]
 
 
 def write_mjpeg_clip(path: str | Path, jpegs: Sequence[bytes], fps: float) -> Path:
@@ -80,3 +80,21 @@ def read_clip(path: str | Path) -> tuple[list[np.ndarray], float]:
         return frames, float(cap.get(cv2.CAP_PROP_FPS))
     finally:
         cap.release()
+
+
+def clip_jpegs(path: str | Path) -> tuple[list[bytes], float]:
+    """A clip's frames as the JPEGs it holds and its frame rate: demuxed as they are with PyAV
+    (a Motion-JPEG clip's packets are its pictures), encoded again from OpenCV's decoding
+    without it."""
+    try:
+        import av
+    except ImportError:
+        frames, fps = read_clip(path)
+        return [cv2.imencode(".jpg", f)[1].tobytes() for f in frames], fps
+    with av.open(str(path)) as box:
+        stream = box.streams.video[0]
+        if stream.codec_context.name != "mjpeg":   # not one of ours: decode it
+            frames, fps = read_clip(path)
+            return [cv2.imencode(".jpg", f)[1].tobytes() for f in frames], fps
+        fps = float(stream.average_rate or stream.base_rate or 0.0)
+        return [bytes(p) for p in box.demux(stream) if p.size], fps

@@ -30,6 +30,7 @@ from .hosts import LOOPBACK_NAMES
 from .hub import CameraState, Cursor, Hub
 from .scenes import SceneFiles
 from .metrics import metrics_routes
+from .mjpeg import MJPEG_TYPE, WALL_HEADER, part
 from .search import search_routes
 
 __all__ = ["create_app", "json_body", "MAX_BODY", "MAX_DEPTH"]
@@ -46,9 +47,6 @@ _ASSETS = {"index.html": "text/html; charset=utf-8", "app.js": "text/javascript;
            "review.js": "text/javascript; charset=utf-8"}
 #: seconds between keep-alive comments on an idle event stream
 _KEEPALIVE_S = 15.0
-_BOUNDARY = "frame"
-#: header of a picture (snapshot, MJPEG part) with its frame's read time, epoch seconds
-_WALL_HEADER = "X-Frame-Wall"
 
 
 def _error(status: int, message: str) -> JSONResponse:
@@ -185,7 +183,7 @@ def _api_routes(hub: Hub) -> list[Route]:
             return _error(404, "no picture yet")
         headers = {"Cache-Control": "no-store"}
         if wall is not None:
-            headers[_WALL_HEADER] = f"{wall:.4f}"
+            headers[WALL_HEADER] = f"{wall:.4f}"
         return Response(jpeg, media_type="image/jpeg", headers=headers)
 
     return [
@@ -205,7 +203,7 @@ def _stream_routes(hub: Hub, stopping: Callable[[], bool]) -> list[Route]:
             return cam
         return StreamingResponse(_mjpeg_parts(hub, cam, stopping),
                                  headers={"Cache-Control": "no-store"},
-                                 media_type=f"multipart/x-mixed-replace; boundary={_BOUNDARY}")
+                                 media_type=MJPEG_TYPE)
 
     async def event_stream(request: Request) -> Response:
         # a reconnecting EventSource sends the id of the last message it received: the events
@@ -226,13 +224,13 @@ async def _mjpeg_parts(hub: Hub, cam: CameraState,
         with cam.lock:
             latest = (cam.jpeg, cam.wall)
         if latest[0] is not None:
-            yield _part(*latest)
+            yield part(*latest)
         while not stopping():
             try:
                 jpeg, wall = await asyncio.wait_for(sub.queue.get(), 1.0)
             except asyncio.TimeoutError:
                 continue
-            yield _part(jpeg, wall)
+            yield part(jpeg, wall)
     finally:
         hub.unsubscribe_frames(cam, sub)
 
@@ -357,14 +355,6 @@ class _Cached:
         if self.etag in tags or "*" in tags:
             return Response(status_code=304, headers=headers)
         return Response(self.body, media_type="application/json", headers=headers)
-
-
-def _part(jpeg: bytes, wall: float | None = None) -> bytes:
-    """One MJPEG part; ``wall`` (when its frame was read) goes in :data:`_WALL_HEADER`, for
-    latency measurements."""
-    stamp = f"{_WALL_HEADER}: {wall:.4f}\r\n" if wall is not None else ""
-    return (f"--{_BOUNDARY}\r\nContent-Type: image/jpeg\r\nContent-Length: {len(jpeg)}\r\n"
-            f"{stamp}\r\n".encode() + jpeg + b"\r\n")
 
 
 def _asset(name: str) -> Response:

@@ -23,7 +23,9 @@ from starlette.responses import FileResponse, JSONResponse, Response, StreamingR
 from starlette.routing import Route
 
 from ..errors import MotionTrackError
+from ..io.clips import clip_jpegs
 from ..io.event_store import EventStore, query_from
+from .mjpeg import MJPEG_TYPE, part
 
 __all__ = ["search_routes", "MAX_PAGE"]
 
@@ -108,23 +110,12 @@ def search_routes(store: Path | None) -> list[Route]:
 #: the media of an event: what the URL names → (the file it comes from, its content type)
 _MEDIA = {"snapshot.jpg": ("snapshot", "image/jpeg"), "object.jpg": ("object", "image/jpeg"),
           "clip.avi": ("clip", "video/x-msvideo"), "clip.mjpg": ("clip", "")}
-MJPEG_TYPE = "multipart/x-mixed-replace; boundary=frame"
 
 
 async def _replay(path: Path, start_s: float = 0.0) -> AsyncIterator[bytes]:
     """A clip's JPEG frames from ``start_s`` seconds into it, as an MJPEG stream at the clip's
     own rate: an ``<img>`` plays it."""
-    frames, fps = await anyio.to_thread.run_sync(_clip_jpegs, path)
+    frames, fps = await anyio.to_thread.run_sync(clip_jpegs, path)
     for jpeg in frames[int(round(start_s * fps)) if fps > 0 else 0:]:
-        yield (b"--frame\r\nContent-Type: image/jpeg\r\nContent-Length: "
-               + str(len(jpeg)).encode() + b"\r\n\r\n" + jpeg + b"\r\n")
+        yield part(jpeg)
         await anyio.sleep(1.0 / fps if fps > 0 else 0.1)
-
-
-def _clip_jpegs(path: Path) -> tuple[list[bytes], float]:
-    import cv2
-
-    from ..io.clips import read_clip
-
-    frames, fps = read_clip(path)
-    return [cv2.imencode(".jpg", f)[1].tobytes() for f in frames], fps
