@@ -10,12 +10,11 @@ name and renamed into place, and removed when no finished video has events.
 
 from __future__ import annotations
 
-import contextlib
 import os
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
-from ..io.event_store import STORE_NAME, EventStore
+from ..io.event_store import STORE_NAME, EventStore, remove_store
 from ..run.folder import RunFolder
 from .combined import FINISHED
 
@@ -31,10 +30,10 @@ def write_event_store(results: Path, rows: Sequence[Mapping[str, Any]]) -> int |
     stores = [(name, db) for name, db in stores if db.is_file()]
     final = results / STORE_NAME
     if not stores:
-        _remove(final)
+        remove_store(final)
         return None
     tmp = results / f".{STORE_NAME}.{os.getpid()}.tmp"
-    _remove(tmp)
+    remove_store(tmp)
     n = 0
     try:
         out = EventStore(tmp)
@@ -50,15 +49,9 @@ def write_event_store(results: Path, rows: Sequence[Mapping[str, Any]]) -> int |
             out.close(finished=True)   # one self-contained file to rename into place
         os.replace(tmp, final)
     finally:
-        _remove(tmp)
+        remove_store(tmp)
     return n
 
 
 def _under(folder: str, path: str | None) -> str | None:
     return None if path is None else f"{folder}/{path}"
-
-
-def _remove(db: Path) -> None:
-    for suffix in ("", "-wal", "-shm"):
-        with contextlib.suppress(FileNotFoundError):
-            Path(f"{db}{suffix}").unlink()

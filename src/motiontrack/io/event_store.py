@@ -43,7 +43,7 @@ from ..errors import InputError
 from .atomic import DiskFullError
 
 __all__ = ["EventStore", "EventQuery", "StoredEvent", "STORE_NAME", "SCHEMA_VERSION",
-           "MIGRATIONS", "store_path", "parse_time", "query_from"]
+           "MIGRATIONS", "store_path", "parse_time", "query_from", "remove_store"]
 
 #: the store's file name in a run or serve output folder
 STORE_NAME = "events.db"
@@ -90,6 +90,14 @@ def store_path(path: str | Path) -> Path:
     """The database of ``path``: the file itself, or ``events.db`` of a folder."""
     p = Path(path)
     return p / STORE_NAME if p.is_dir() else p
+
+
+def remove_store(path: str | Path, journal_only: bool = False) -> None:
+    """Remove the store file ``path`` and its WAL journal beside it (``-wal``, ``-shm``), or
+    the journal alone (a killed writer's, when its file is gone)."""
+    for suffix in ("-wal", "-shm") if journal_only else ("", "-wal", "-shm"):
+        with contextlib.suppress(FileNotFoundError):
+            Path(f"{path}{suffix}").unlink()
 
 
 @dataclass(frozen=True)

@@ -9,13 +9,12 @@ not known). With an evidence folder each event also gets its snapshot and clip
 
 from __future__ import annotations
 
-import contextlib
 import time
 from pathlib import Path
 from typing import Callable
 
 from ..io.atomic import DiskFullError
-from ..io.event_store import EventStore
+from ..io.event_store import EventStore, remove_store
 from ..types import FrameResult, frame_number
 from .evidence import EvidenceKeeper
 from .job import JobContext, JobSummary, Writer
@@ -54,10 +53,8 @@ class EventStoreWriter(Writer):
 
     def start(self, ctx: JobContext) -> None:
         fresh = not self.path.exists()
-        if self.paths and fresh:
-            for stale in ("-wal", "-shm"):   # a killed run's journal of a file now removed
-                with contextlib.suppress(FileNotFoundError):
-                    Path(f"{self.path}{stale}").unlink()
+        if self.paths and fresh:   # a killed run's journal of a file now removed
+            remove_store(self.path, journal_only=True)
         self._store = EventStore(self.path)
         self._live = bool(ctx.info.live)
         self._started = self._clock()
@@ -116,9 +113,7 @@ class EventStoreWriter(Writer):
             self._store.close(finished=bool(self.paths))   # a run's own store is complete now
             self._store = None
         if not keep and self.paths:
-            for suffix in ("", "-wal", "-shm"):
-                with contextlib.suppress(FileNotFoundError):
-                    Path(f"{self.path}{suffix}").unlink()
+            remove_store(self.path)
 
     def finish(self, summary: JobSummary) -> None:
         summary.extra["event_store"] = {"path": self.path.name if self.paths else str(self.path),
