@@ -7,11 +7,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from helpers.stops import frames_by_track, stopping_person
 from motiontrack.config import load_config
-from motiontrack.pipeline import Pipeline
-from motiontrack.synth.render import Person
 from motiontrack.synth.sequence import SyntheticScene
-from motiontrack.types import Frame
 
 FPS = 25.0
 WALK_TO = 80        # frame the person stops at
@@ -21,21 +19,13 @@ N_FRAMES = WALK_TO + STAND + 80
 
 def _scene() -> SyntheticScene:
     # walks right at 3 px/frame from the left edge, stands 4 s mid-image, walks on out of view
-    p = Person(id=1, x0=-30.0, y0=400.0, vx=3.0, vy=0.0, height=110.0, t0=5.0,
-               turns=((float(WALK_TO), 0.0, 0.0), (float(WALK_TO + STAND), 3.0, 0.0)))
-    return SyntheticScene("stop", 0, 640, 480, FPS, N_FRAMES, people=(p,))
+    return stopping_person((640, 480), FPS, WALK_TO, STAND, N_FRAMES - WALK_TO - STAND,
+                           x0=-30.0, y0=400.0, speed=3.0, height=110.0, t0=5.0)
 
 
 def _frames_by_id(keep_stopped: bool) -> dict[int, list[int]]:
-    scene = _scene()
     cfg = load_config(None, [f"motion.keep_stopped={str(keep_stopped).lower()}"])
-    pipe = Pipeline(cfg, (scene.width, scene.height), fps=FPS)
-    seen: dict[int, list[int]] = {}
-    for i in range(scene.n_frames):
-        r = pipe.process(Frame(index=i, image=scene.frame(i), timestamp=i / FPS))
-        for t in r.tracks:
-            seen.setdefault(t.id, []).append(i)
-    return seen
+    return frames_by_track(cfg, _scene())
 
 
 def test_person_who_stops_keeps_one_track_with_keep_stopped():

@@ -6,9 +6,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from helpers.stops import frames_by_track, stopping_person
 from motiontrack.config import load_config
 from motiontrack.pipeline import Pipeline
-from motiontrack.synth.render import Person
 from motiontrack.synth.sequence import SyntheticScene
 from motiontrack.types import Frame
 
@@ -19,23 +19,15 @@ N_FRAMES = WALK_TO + STAND + 25
 
 
 def _scene() -> SyntheticScene:
-    p = Person(id=1, x0=-15.0, y0=200.0, vx=4.0, vy=0.0, height=70.0, t0=2.0,
-               turns=((float(WALK_TO), 0.0, 0.0), (float(WALK_TO + STAND), 4.0, 0.0)))
-    return SyntheticScene("stop", 0, 320, 240, FPS, N_FRAMES, people=(p,))
+    return stopping_person((320, 240), FPS, WALK_TO, STAND, N_FRAMES - WALK_TO - STAND,
+                           x0=-15.0, y0=200.0, speed=4.0, height=70.0, t0=2.0)
 
 
 def _frames_by_id(protect: bool) -> dict[int, list[int]]:
-    scene = _scene()
     cfg = load_config(None, ["motion.method=vibe", "motion.vibe.absorb_s=2",
                              f"motion.vibe.protect={str(protect).lower()}",
                              "preprocess.scale=1.0"])
-    pipe = Pipeline(cfg, (scene.width, scene.height), fps=FPS)
-    seen: dict[int, list[int]] = {}
-    for i in range(scene.n_frames):
-        r = pipe.process(Frame(index=i, image=scene.frame(i), timestamp=i / FPS))
-        for t in r.tracks:
-            seen.setdefault(t.id, []).append(i)
-    return seen
+    return frames_by_track(cfg, _scene())
 
 
 def test_person_who_stops_keeps_one_track_under_the_protect_mask():
