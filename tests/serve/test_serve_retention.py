@@ -97,3 +97,22 @@ def test_the_servers_thread_applies_retention_until_stopped(out):
     idle = RetentionThread(out, Retention(), in_use)   # nothing to keep: no thread at all
     idle.start()
     assert not idle._thread.is_alive()
+
+
+def test_files_and_segments_that_go_while_they_are_read_are_left_out(out, monkeypatch):
+    """A camera renames its temporary files into place, and a segment may be removed, while
+    the check reads the folders: what is gone is left out, the check goes on."""
+    from pathlib import Path
+
+    real = Path.rglob
+
+    def racing(self, pattern):
+        if self.name == "b":                        # gate/b: a file renamed meanwhile
+            yield self / ".tracks.txt.x1.part"
+        if self.name == "a" and self.parent.name == "yard":
+            raise FileNotFoundError(self)             # yard/a: removed meanwhile
+        yield from real(self, pattern)
+
+    monkeypatch.setattr(Path, "rglob", racing)
+    found = {s.name: s.bytes for s in segments(out)}
+    assert found == {"gate/a": 400, "gate/b": 300, "gate/c": 200, "gate/d": 100, "yard/b": 50}

@@ -15,6 +15,7 @@ from __future__ import annotations
 import logging
 import math
 import shutil
+import stat
 import threading
 import time
 from dataclasses import dataclass
@@ -65,12 +66,28 @@ def segments(out: Path) -> list[Segment]:
     found = []
     for cam in sorted(p for p in Path(out).iterdir() if p.is_dir()):
         for seg in sorted(p for p in cam.iterdir() if p.is_dir() and not p.name.startswith(".")):
-            files = [f for f in seg.rglob("*") if f.is_file()]
-            stats = [f.stat() for f in files]
-            ended = max([s.st_mtime for s in stats] + [seg.stat().st_mtime])
-            found.append(Segment(seg, f"{cam.name}/{seg.name}", ended,
-                                 sum(s.st_size for s in stats)))
+            segment = _segment(seg, f"{cam.name}/{seg.name}")
+            if segment is not None:
+                found.append(segment)
     return sorted(found, key=lambda s: (s.ended, s.name))
+
+
+def _segment(seg: Path, name: str) -> Segment | None:
+    """The segment ``seg`` as it is now, or None when it is gone. A file may go while it is
+    read (a writer renames its temporary files into place; a segment is removed): it is left
+    out rather than failing the whole check."""
+    try:
+        ended, size = seg.stat().st_mtime, 0
+        for f in seg.rglob("*"):
+            try:
+                st = f.stat()
+            except FileNotFoundError:
+                continue
+            if stat.S_ISREG(st.st_mode):
+                ended, size = max(ended, st.st_mtime), size + st.st_size
+    except FileNotFoundError:
+        return None
+    return Segment(seg, name, ended, size)
 
 
 def apply_retention(out: Path, retention: Retention, in_use: Iterable[str],
