@@ -89,11 +89,13 @@ def test_the_servers_thread_applies_retention_until_stopped(out):
 
     t = RetentionThread(out, Retention(keep_days=6), in_use, every_s=0.02, clock=lambda: NOW)
     t.start()
+    kept = ["gate/b", "gate/c", "yard/b", "gate/d"]
     end = time.monotonic() + 10
-    while "gate/a" in _left(out) and time.monotonic() < end:
+    while _left(out) != kept and time.monotonic() < end:   # a check removes one at a time
         time.sleep(0.02)
     t.stop()
-    assert _left(out) == ["gate/b", "gate/c", "yard/b", "gate/d"] and seen
+    assert _left(out) == kept and seen
+    assert not t._thread.is_alive()                       # stopped: no check runs after it
     idle = RetentionThread(out, Retention(), in_use)   # nothing to keep: no thread at all
     idle.start()
     assert not idle._thread.is_alive()

@@ -156,4 +156,7 @@ class RetentionThread:
                 log.warning("retention: %s", exc)
 
     def stop(self) -> None:
+        """End the checks; a check under way finishes first (it removes whole folders)."""
         self._stop.set()
+        if self._thread.is_alive():
+            self._thread.join()
