@@ -114,7 +114,9 @@ def test_headless_show_serves_the_page_of_the_running_source(track):
                          (f"evil.example:{t.port}", 403)):
         assert t.client.get("/api/cameras", headers={"Host": host}).status_code == status, host
     frames_then = t.camera()["frames"]
-    t.poll(lambda: t.camera()["frames"] > frames_then, 10, "frames still counting")
+    # still counting, and past the frames where the walker is first tracked (28 to 32) on a
+    # machine too busy to play the source at its rate
+    t.poll(lambda: t.camera()["frames"] > max(frames_then, 60), 30, "frames still counting")
 
     code, out = t.interrupt()
     assert code in (0, 130), t.stderr()
