@@ -87,9 +87,12 @@ def test_the_review_page_shows_each_event_with_its_snapshot_and_clip(review):
             .select_by_value(kind)
         _until("only the marks of one type",
                lambda: len(_marks(driver)) == sum(e.type == kind for e in events))
-        rows = driver.find_elements("css selector", '[data-testid="review-totals"] tbody tr')
-        assert sum(int(r.find_elements("css selector", "td")[3].text) for r in rows) == \
-            sum(e.type == kind for e in events)
+        # The totals table is filled by its own request and replaced whole, so it is read in
+        # one script call and waited for rather than read row by row after the marks.
+        _until("the totals of that type", lambda: driver.execute_script(
+            "return [...document.querySelectorAll('[data-testid=\"review-totals\"] tbody tr')]"
+            ".reduce((n, r) => n + Number(r.cells[3].textContent), 0);")
+            == sum(e.type == kind for e in events))
         errors = [e for e in driver.get_log("browser") if e["level"] == "SEVERE"
                   and "clip.mjpg" not in e["message"]]
         assert not errors, errors
