@@ -46,6 +46,8 @@ LOOPBACK = "http://127.0.0.1:8080"
      "camera[2].name 'a' is used by an earlier camera"),
     ({"camera": [{"name": "a", "source": "x", "loop": "yes"}]}, "camera[1].loop must be true or false, got 'yes'"),
     ({"camera": [{"name": "a", "source": "x", "fps": 0}]}, "camera[1].fps must be in (0, 1000], got 0.0"),
+    ({"camera": [{"name": "a", "source": "x", "speed": 0}]},
+     "camera[1].speed must be in (0, 1000], got 0.0"),
     ({"camera": [{"name": "a", "source": "x", "sorce": "y"}]},
      "unknown key(s) camera[1].sorce; valid keys in camera[1]: camera, config, fps, loop, name"),
     ({"camera": [{"name": "a", "source": " "}]}, "camera[1].source must be a non-empty string"),

@@ -7,7 +7,7 @@ from __future__ import annotations
 from motiontrack.io.events import read_events
 from motiontrack.io.pacing import Pacer
 from motiontrack.serve.cameras import CameraSpec
-from motiontrack.serve.worker import _Flag, run_camera
+from motiontrack.serve.worker import _Flag, _Frames, run_camera
 from motiontrack.types import Discontinuity
 
 #: a person leaves a bag and walks on: stays of the person and of the bag each play
@@ -80,3 +80,26 @@ def test_a_looped_file_gives_the_events_of_its_first_play_again(tmp_path):
     ef = read_events(segment / "events.jsonl")
     assert ef.discontinuities == ((N + 1, Discontinuity("loop")),)
     assert [e.to_json()["type"] for e in ef.events] == [e["type"] for e in events]
+
+
+def test_a_faster_speed_plays_a_file_faster_and_keeps_its_times():
+    from motiontrack.config import load_config
+
+    rates: list[float] = []
+
+    class Recorder(Pacer):
+        def __init__(self) -> None:
+            super().__init__(clock=lambda: 0.0, sleep=lambda s: False)
+
+        def wait(self, n: int, fps: float) -> bool:
+            rates.append(fps)
+            return False
+
+    spec = CameraSpec(name="fast", source="synth:walker?n_frames=5", speed=20.0)
+    frames = _Frames(spec, load_config(None, []), _Flag(), Recorder())
+    try:
+        got = [frames.next() for _ in range(3)]
+    finally:
+        frames.close()
+    assert rates == [500.0] * 3                      # 25 fps played 20 times faster
+    assert [f.timestamp for f in got] == [0.0, 0.04, 0.08]   # times of the 25 fps

@@ -11,6 +11,7 @@ A TOML file with one ``[[camera]]`` table per camera::
     camera = "View_001.xml"       # optional: calibration (world positions, rules in metres)
     loop = true                   # optional: a video file starts again at its end
     fps = 10                      # optional: the frame rate to play and analyse at
+    speed = 20                    # optional: a file plays 20 times faster than its frame rate
 
 Relative paths are relative to the cameras file. The file's schema is :class:`CameraTable`
 (:mod:`motiontrack.schema`); every problem is one :class:`ConfigError` naming the key as written
@@ -51,6 +52,10 @@ class CameraTable(Section):
     loop: bool = param(False, doc="a video file starts again at its end")
     fps: float | None = param(None, lo=0, lo_open=True, hi=1000,
                               doc="the frame rate to play and analyse at")
+    speed: float = param(1.0, lo=0, lo_open=True, hi=1000,
+                         doc="a video file, image folder or synth: scene plays this many times "
+                             "faster than its frame rate (its times stay those of the frame "
+                             "rate); a live source comes as it comes")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -72,6 +77,7 @@ class CameraSpec:
     camera: Path | None = None
     loop: bool = False
     fps: float | None = None
+    speed: float = 1.0
 
 
 def _path(base: Path, v: str | None) -> Path | None:
@@ -103,7 +109,8 @@ def parse_cameras(data: Any, base: str | Path = ".") -> tuple[CameraSpec, ...]:
     cams = tuple(CameraSpec(name=t.name, source=_source(base, t.source),
                             config=_path(base, t.config), preset=t.preset,
                             scene=_path(base, t.scene), camera=_path(base, t.camera),
-                            loop=t.loop, fps=t.fps) for t in tables)
+                            loop=t.loop, fps=t.fps, speed=t.speed)
+            for t in tables)
     seen: set[str] = set()
     for i, c in enumerate(cams, 1):
         if c.name in seen:

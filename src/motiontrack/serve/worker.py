@@ -164,8 +164,8 @@ class _Frames:
                 if self.loops and not got:   # the jump from the last frame to the first
                     frame = replace(frame, discontinuity=Discontinuity("loop"))
                 got = True
-                # a file plays at its own rate
-                if not self.live and self.pacer.wait(n, self.fps):
+                # a file plays at its own rate (times the cameras file's speed)
+                if not self.live and self.pacer.wait(n, self.fps * self.spec.speed):
                     return
                 n += 1
                 yield frame
