@@ -115,6 +115,19 @@ def test_media_paths_are_recorded_once_written(store):
     assert (e.snapshot, e.clip) == ("door/1.jpg", "door/1.mp4")
 
 
+def test_an_event_added_without_commit_is_first_seen_with_its_snapshot(store, tmp_path):
+    store.commit_every_s = 0.0                          # every tick commits
+    reader = EventStore(tmp_path, readonly=True)
+    i = store.add(_cross(1), "door", T0, commit=False)
+    assert reader.count() == 0                          # its snapshot is not written yet
+    store.set_media(i, snapshot=f"evidence/{i}.jpg")
+    (e,) = reader.search()
+    assert e.snapshot == f"evidence/{i}.jpg"
+    store.add(_cross(2), "door", T0 + 1)                # the default commits at once here
+    assert reader.count() == 2
+    reader.close()
+
+
 def test_an_older_file_is_migrated_and_a_newer_or_foreign_one_refused(tmp_path):
     db = tmp_path / "old.db"
     sqlite3.connect(db).close()                          # version 0: an empty database

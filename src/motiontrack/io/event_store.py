@@ -248,9 +248,12 @@ class EventStore:
     # ------------------------------------------------------------------ writing
     def add(self, event: dict[str, Any], camera: str, when: float, segment: str | None = None,
             snapshot: str | None = None, clip: str | None = None,
-            clip_offset: float | None = None) -> int:
+            clip_offset: float | None = None, commit: bool = True) -> int:
         """Store ``event`` (an ``events.jsonl`` object) of ``camera``, which happened at epoch
-        second ``when``; returns its id. Committed within :attr:`commit_every_s`."""
+        second ``when``; returns its id. Committed within :attr:`commit_every_s`; with
+        ``commit=False`` not before the caller's next :meth:`set_media` or :meth:`tick`, so
+        that a snapshot named by the id is recorded with the event (no reader sees the
+        event without it)."""
         duration = next((float(event[k]) for k in _DURATION_KEYS
                          if isinstance(event.get(k), (int, float))), 0.0)
         rule = next((str(event[k]) for k in _RULE_KEYS if event.get(k) is not None), None)
@@ -265,7 +268,8 @@ class EventStore:
                  event.get("x"), event.get("y"), snapshot, clip, json.dumps(event),
                  clip_offset))
         self._pending += 1
-        self.tick()
+        if commit:
+            self.tick()
         return int(cur.lastrowid)
 
     def set_media(self, event_id: int, snapshot: str | None = None, clip: str | None = None,

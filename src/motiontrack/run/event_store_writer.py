@@ -84,7 +84,9 @@ class EventStoreWriter(Writer):
             return
         try:
             for record, when in records:
-                event_id = self._store.add(record, self.camera, when, self.segment)
+                # committed with its snapshot, not before it is written
+                event_id = self._store.add(record, self.camera, when, self.segment,
+                                           commit=keeper is None)
                 if keeper is not None:
                     snapshot = keeper.event(event_id, record, result, picture)
                     if snapshot is not None:
