@@ -51,6 +51,8 @@ from pathlib import Path
 import httpx
 import numpy as np
 
+from memory import vm_rss_mb  # benchmarks/ is on sys.path when a script here runs
+
 CAMERAS = ("crossing", "runner")
 CHECK_EVERY_S = 60.0     # motiontrack.serve.retention.CHECK_EVERY_S
 
@@ -59,17 +61,6 @@ def _free_port() -> int:
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         return s.getsockname()[1]
-
-
-def vm_rss_mb(pid: int) -> float | None:
-    """The resident memory of ``pid`` (MB), None once it has exited."""
-    try:
-        for line in Path(f"/proc/{pid}/status").read_text().splitlines():
-            if line.startswith("VmRSS:"):
-                return int(line.split()[1]) / 1024.0
-    except (OSError, ValueError, IndexError):
-        pass
-    return None
 
 
 def tree_bytes(root: Path) -> int:

@@ -269,3 +269,26 @@ def test_review_page_benchmark_times_the_timeline_in_a_browser():
     (row,) = re.findall(r"^timeline shown\s+(\d+\.\d+)\s+(\d+\.\d+)\s+(\d+\.\d+)\s+1\.0$", out, re.M)
     assert 0 < float(row[0]) < 60, out
     assert "40 events of one day" in out
+
+
+@pytest.mark.slow
+def test_serve_soak_benchmark_samples_both_cameras_and_checks_every_target(tmp_path):
+    report = tmp_path / "soak.json"
+    # 0.01 h at 5 fps: 180 frames a camera, a few samples; too short for a retention check,
+    # so only what every sample holds is asserted
+    proc = subprocess.run([sys.executable, str(REPO / "benchmarks" / "serve_soak.py"),
+                           "--hours", "0.01", "--sample", "0.5", "--max-minutes", "2",
+                           "--json", str(report)], capture_output=True, text=True, timeout=300)
+    out = proc.stdout + proc.stderr
+    doc = json.loads(report.read_text())
+    samples = doc["samples"]
+    assert len(samples) >= 4, out
+    assert samples[-1]["hours"] >= 0.01 or samples[-1]["wall"] >= 120, out
+    assert set(samples[-1]["frames"]) == {"crossing", "runner"}, out
+    assert set(samples[-1]["rss"]) == {"server", "crossing", "runner"}, out
+    assert samples[-1]["store_events"] > 0 and samples[-1]["disk_mb"] > 0, out
+    checks = {c["what"].split(",")[0]: c for c in doc["checks"]}
+    assert set(checks) == {"disk", "store", "events without their snapshot", "RSS server",
+                           "RSS crossing", "RSS runner"}, out
+    assert checks["events without their snapshot"]["met"], out
+    assert "serve exited 0" in out
