@@ -99,3 +99,44 @@ def test_cli_tune(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "validate  det_object_f1" in out
     assert (tmp_path / "best_config.toml").is_file()
+
+
+def test_an_interrupted_tuning_writes_the_best_of_its_finished_trials(tmp_path, monkeypatch,
+                                                                       capsys):
+    import json
+
+    import motiontrack.studies.tune as tune_module
+    from motiontrack.cli import main
+
+    calls = []
+
+    def execute(specs, jobs=1):   # trial k scores k / 10; Ctrl-C during the third trial
+        calls.append(len(specs))
+        if len(calls) == 3:
+            raise KeyboardInterrupt
+        return [{"row": {"det_object_f1": len(calls) / 10}} for _ in specs]
+
+    monkeypatch.setattr(tune_module, "execute", execute)
+    code = main(["-q", "tune", "--train", "synth:walker", "--val", "synth:crossing",
+                 "--param", "motion.knn.history=100:900", "--trials", "10", "-o", str(tmp_path)])
+    assert code == 130
+    assert len(calls) == 3                      # no validation run after the interrupt
+    doc = json.loads((tmp_path / "tune.json").read_text())
+    assert doc["interrupted"] is True and doc["n_trials"] == 2
+    assert doc["train_score"] == 0.2 and doc["validation_score"] is None
+    assert (tmp_path / "trials.csv").read_text().count("\n") == 1 + 2
+    assert (tmp_path / "best_config.toml").is_file()
+    assert "train     det_object_f1 0.2000" in capsys.readouterr().out
+
+
+def test_a_tuning_interrupted_before_any_trial_finished_writes_nothing(tmp_path, monkeypatch):
+    import motiontrack.studies.tune as tune_module
+    from motiontrack.cli import main
+
+    def execute(specs, jobs=1):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(tune_module, "execute", execute)
+    code = main(["-q", "tune", "--train", "synth:walker", "--param", "motion.knn.history=100:900",
+                 "--trials", "10", "-o", str(tmp_path / "t")])
+    assert code == 130 and not (tmp_path / "t" / "tune.json").exists()

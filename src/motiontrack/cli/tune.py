@@ -107,6 +107,7 @@ def cmd_tune(args) -> int:
     from ..config_activity import warn_inactive_overrides
     from ..errors import ConfigError, printable
     from ..studies.sweep import TRACKING_KEYS
+    from ._common import sigterm_as_interrupt
     from ..studies.tune import parse_space, require_optuna, tune, write_tune_outputs
 
     from pathlib import Path
@@ -129,12 +130,17 @@ def cmd_tune(args) -> int:
     if args.force:  # the old tuning goes before the new one appears: never a mixture of both
         remove_outputs(outputs)
     remove_leftover_temps(outputs)
-    with tqdm(total=args.trials, unit="trial", disable=None, file=sys.stderr, dynamic_ncols=True) as bar:
+    # SIGTERM stops the search as Ctrl-C does: the finished trials are written
+    with sigterm_as_interrupt(), tqdm(total=args.trials, unit="trial", disable=None,
+                                      file=sys.stderr, dynamic_ncols=True) as bar:
         res = tune(train, val, space, cfg, metric=args.metric,
                    direction="minimize" if args.minimize else "maximize", n_trials=args.trials,
                    seed=args.seed, xi=args.xi, jobs=args.jobs, progress=bar.update,
                    scoring=args.scoring)
     paths = write_tune_outputs(res, args.out)
+    if res.interrupted:
+        log.warning("interrupted after %d of %d trials: the best of those is written, not "
+                    "validated", len(res.trials), args.trials)
     print("best      " + "  ".join(f"{k}={v:.6g}" if isinstance(v, float) else printable(f"{k}={v}")
                                    for k, v in res.best_params.items()))
     print(f"train     {args.metric} {res.train_score:.4f} (mean over {len(train)} sequence(s))")
@@ -143,4 +149,4 @@ def cmd_tune(args) -> int:
     if args.metric in TRACKING_KEYS:
         print(f"scoring   {res.scoring}")
     print(f"outputs   {printable(', '.join(paths.values()))}")
-    return 0
+    return 130 if res.interrupted else 0

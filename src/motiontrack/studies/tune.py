@@ -147,11 +147,15 @@ class TuneResult:
     validation_rows: list[dict[str, Any]] = field(repr=False)
     best_config: Any = field(repr=False, default=None)
     scoring: str = DEFAULT_SCORING
+    #: the search was stopped (Ctrl-C, SIGTERM): the best of the trials finished before it,
+    #: not validated
+    interrupted: bool = False
 
     def as_dict(self) -> dict[str, Any]:
         return {"metric": self.metric, "direction": self.direction, "best_params": self.best_params,
                 "train_score": self.train_score, "validation_score": self.validation_score,
-                "n_trials": len(self.trials), "scoring": self.scoring}
+                "n_trials": len(self.trials), "scoring": self.scoring,
+                "interrupted": self.interrupted}
 
 
 def _check_key(base: dict[str, Any], key: str) -> None:
@@ -261,20 +265,27 @@ def tune(train: Sequence[SequenceSpec], validation: Sequence[SequenceSpec], spac
 
     sampler = optuna.samplers.TPESampler(seed=seed)
     study = optuna.create_study(direction=direction, sampler=sampler)
-    study.optimize(objective, n_trials=n_trials)
+    interrupted = False
+    try:
+        study.optimize(objective, n_trials=n_trials)
+    except KeyboardInterrupt:   # the trial in progress is dropped; the finished ones stand
+        interrupted = True
     if not any(t["state"] == "complete" for t in trials):
+        if interrupted:
+            raise KeyboardInterrupt
         raise ConfigError(f"no trial gave a defined {metric}; widen the search space")
     dims = {p.key: p for p in space}
     best = {k: dims[k].value_of(v) for k, v in study.best_params.items()}
     # values of the best trial in the original types (Optuna returns the suggested python values)
     best_cfg = apply_overrides(from_dict(PipelineConfig, base),
                                [f"{k}={format_value(v)}" for k, v in best.items()])
-    val_rows = [r["row"] for r in execute(specs(best, validation, 0), jobs=jobs)] if validation else []
-    val_score = _score(val_rows, metric) if validation else None
+    validate = bool(validation) and not interrupted
+    val_rows = [r["row"] for r in execute(specs(best, validation, 0), jobs=jobs)] if validate else []
+    val_score = _score(val_rows, metric) if validate else None
     return TuneResult(metric=metric, direction=direction, best_params=best,
                       train_score=float(study.best_value), validation_score=val_score,
                       trials=trials, validation_rows=val_rows, best_config=best_cfg,
-                      scoring=scoring)
+                      scoring=scoring, interrupted=interrupted)
 
 
 def write_tune_outputs(res: TuneResult, out_dir: str | Path) -> dict[str, str]:
