@@ -274,6 +274,29 @@ def test_ablate_prints_one_row_per_configuration(capsys, tmp_path):
     assert all(0.0 <= r["localized_object_recall"] <= 1.0 for r in rows)
 
 
+def test_an_interrupted_ablation_prints_and_writes_the_rows_that_finished(capsys, tmp_path,
+                                                                          monkeypatch):
+    import json
+
+    import motiontrack.studies.ablate as ablate
+    from motiontrack.cli import main
+
+    def execute(specs, jobs=1, on_result=None):   # the second row is stopped by Ctrl-C
+        on_result(0, {"row": {"TP": 9, "FP": 1, "FN": 1, "MOTA": 0.8, "IDF1": 0.9, "HOTA": 0.7,
+                              "trk_localized_object_precision": 0.9,
+                              "trk_localized_object_recall": 0.9}})
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(ablate, "execute", execute)
+    code = main(["ablate", "synth:crossing", "--rows", "1,3", "--json", str(tmp_path / "a.json")])
+    assert code == 130
+    out = capsys.readouterr()
+    assert "interrupted after 1 of 2 rows" in out.err
+    assert out.out.splitlines()[1].startswith("motion + regions only")
+    rows = json.loads((tmp_path / "a.json").read_text())
+    assert [(r["configuration"], r["precision"]) for r in rows] == [("motion + regions only", 0.9)]
+
+
 @pytest.mark.parametrize("stamps, gaps", [
     ([0.0, 0.1, 0.2, 0.5], [1, 1, 1, 3]),      # a 10 fps file: 0.3 s is three periods
     ([5.0, 5.04, 5.08, 5.2], [1, 1, 1, 3]),    # live wall-clock stamps at 25 fps, then a drop

@@ -9,7 +9,10 @@ from __future__ import annotations
 
 import argparse
 import json
+import logging
 import sys
+
+log = logging.getLogger("motiontrack")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -38,7 +41,9 @@ def cmd_ablate(args) -> int:
     from ..config import load_config
     from ..config_activity import warn_inactive_overrides
     from ..io.atomic import atomic_write_text, check_writable, is_stdout
-    from ..studies.ablate import format_table, row_settings, run_ablation, select_rows
+    from ..studies.ablate import (AblationInterrupted, format_table, row_settings,
+                                  run_ablation, select_rows)
+    from ._common import sigterm_as_interrupt
 
     if args.json:
         check_writable([Path(args.json)], args.force)
@@ -46,9 +51,18 @@ def cmd_ablate(args) -> int:
     cfg = load_config(args.config, args.overrides)
     # a --set key is in effect when one of the rows switches it on
     warn_inactive_overrides(cfg, args.overrides, points=row_settings(rows))
-    table = run_ablation(args.source, args.gt, cfg, rows,
-                         xi=args.xi, jobs=args.jobs, scoring=args.scoring)
+    code = 0
+    try:
+        # SIGTERM stops the rows as Ctrl-C does: the finished ones are printed and written
+        with sigterm_as_interrupt():
+            table = run_ablation(args.source, args.gt, cfg, rows,
+                                 xi=args.xi, jobs=args.jobs, scoring=args.scoring)
+    except AblationInterrupted as stop:
+        if not stop.table:
+            raise
+        log.warning("%s: the finished rows follow", stop)
+        table, code = stop.table, 130
     (sys.stderr if is_stdout(args.json) else sys.stdout).write(format_table(table))
     if args.json:
         atomic_write_text(args.json, json.dumps(table, indent=2) + "\n")
-    return 0
+    return code

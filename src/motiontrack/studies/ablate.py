@@ -16,7 +16,8 @@ from ..io.manifest import SequenceSpec
 from .params import parse_param
 from .sweep import RunSpec, execute
 
-__all__ = ["ROWS", "COLUMNS", "select_rows", "row_settings", "run_ablation", "format_table"]
+__all__ = ["ROWS", "COLUMNS", "select_rows", "row_settings", "run_ablation", "format_table",
+           "AblationInterrupted"]
 
 #: rows of the table: label → overrides (cumulative, as in the thesis)
 ROWS: tuple[tuple[str, tuple[str, ...]], ...] = (
@@ -78,8 +79,25 @@ def run_ablation(source: str, gt: str | None, base: PipelineConfig,
         params = tuple((key, values[0]) for key, values in map(parse_param, overrides))
         specs.append(RunSpec(run=k, params=params, sequence=seq, base_config=to_dict(base), xi=xi,
                              scoring=scoring))
-    return [_row(label, res["row"], scoring)
-            for (label, _), res in zip(rows, execute(specs, jobs=jobs))]
+    done: dict[int, dict[str, Any]] = {}
+
+    def finished(i: int, res: dict[str, Any]) -> None:
+        done[i] = _row(rows[i][0], res["row"], scoring)
+
+    try:
+        execute(specs, jobs=jobs, on_result=finished)
+    except KeyboardInterrupt:
+        raise AblationInterrupted([done[i] for i in sorted(done)], len(rows)) from None
+    return [done[i] for i in range(len(rows))]
+
+
+class AblationInterrupted(KeyboardInterrupt):
+    """An ablation stopped by Ctrl-C or SIGTERM: ``table`` holds the rows that finished (in row
+    order) out of ``total``."""
+
+    def __init__(self, table: list[dict[str, Any]], total: int) -> None:
+        super().__init__(f"interrupted after {len(table)} of {total} rows")
+        self.table, self.total = table, total
 
 
 def _row(label: str, r: Mapping[str, Any], scoring: str) -> dict[str, Any]:
