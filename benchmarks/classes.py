@@ -17,9 +17,10 @@ one class, ``other`` counts as wrong. Rows:
                                 classifier's ms a frame
 
 Each row ends with the number of boxes HOG looked at (``classes.hog``) and of the people it
-found in them. Then the classifier's
-cost on PETS 1-300 (ms a frame, best of 3, OpenCV in one thread, on the tracks of a run without
-it and its processing-scale frames, which HOG looks at), without and with the calibration.
+found in them. Then each HOG model on single boxes (PETS track boxes, highway cars' boxes:
+:func:`hog_models`), and the classifier's cost on PETS 1-300 (ms a frame, best of 3, OpenCV in
+one thread, on the tracks of a run without it and its processing-scale frames, which HOG looks
+at), without and with the calibration.
 
 Run: .venv/bin/python benchmarks/classes.py [--data ../shared/data]
 """
@@ -41,6 +42,7 @@ from motiontrack.config import load_config
 from motiontrack.pipeline import Pipeline, fitted_camera, run
 from motiontrack.preprocess import preprocess
 from motiontrack.io.mot import read_mot
+from motiontrack.people.hog import HOGParams, HOGPeopleDetector
 from motiontrack.tracking.association import iou_matrix
 from motiontrack.types import Box, Track, TrackState
 
@@ -141,13 +143,18 @@ def pairs_accuracy(pets: Path, gt_file: Path, overrides: list[str]) -> tuple[flo
             f"{clf.hog_looks} (found {clf.hog_found}), {spent * 1000 / 300:.2f} ms a frame")
 
 
-def cost(pets: Path, camera: Path) -> tuple[float, float, int]:
-    """Milliseconds a frame of the classifier on PETS 1-300's tracks and processing-scale
-    frames (HOG looks at those), without and with the camera; the boxes HOG looked at without
-    it."""
+def pets_frames(pets: Path) -> tuple[list, float]:
+    """The tracks and processing-scale frame of each frame of a PETS 1-300 run without the
+    classifier, and the processing scale."""
     cfg = load_config(None, ["source.max_frames=300", "classes.enabled=false"])
     pre = Pipeline(cfg, (768, 576), None, 10.0).pre_cfg
-    frames = [(r.tracks, preprocess(r.frame, pre)) for r in run(str(pets), cfg)]
+    return [(r.tracks, preprocess(r.frame, pre)) for r in run(str(pets), cfg)], pre.scale
+
+
+def cost(frames: list, scale: float, camera: Path) -> tuple[float, float, int]:
+    """Milliseconds a frame of the classifier on PETS 1-300's tracks and processing-scale
+    frames (:func:`pets_frames`; HOG looks at those), without and with the camera; the boxes
+    HOG looked at without it."""
     cam = fitted_camera(load_config(None, [f"measure.camera='{camera}'"]), 768, 576)
     classes = load_config(None, []).classes
     cv2.setNumThreads(1)   # HOG's pyramid would spread over every core
@@ -158,11 +165,39 @@ def cost(pets: Path, camera: Path) -> tuple[float, float, int]:
             clf = TrackClassifier(classes, 10.0, c)   # PETS is stored at 10 fps
             t = time.perf_counter()
             for tracks, small in frames:
-                clf.update(tracks, image=small, scale=pre.scale)
+                clf.update(tracks, image=small, scale=scale)
             best = min(best, (time.perf_counter() - t) * 1000 / len(frames))
             looks = looks or clf.hog_looks
         out.append(best)
     return out[0], out[1], looks
+
+
+def hog_models(frames: list, scale: float, highway: Path) -> None:
+    """Each HOG model (``classes.hog``) on single boxes: the share of PETS track boxes (the
+    measured tracks of every third frame of :func:`pets_frames`) with a person centred in
+    them, the people found centred in the boxes of highway cars (the ground truth's motion
+    blobs of at least 150 px, frames 500, 510, ..., 1000), and the milliseconds a look."""
+    cars = []
+    pre = Pipeline(load_config(), (320, 240), None, 25.0).pre_cfg
+    for i in range(500, 1001, 10):
+        mask = cv2.imread(str(highway / "groundtruth" / f"gt{i:06d}.png"), cv2.IMREAD_GRAYSCALE)
+        small = preprocess(cv2.imread(str(highway / "input" / f"in{i:06d}.jpg")), pre)
+        _, _, stats, _ = cv2.connectedComponentsWithStats((mask == 255).astype(np.uint8))
+        cars += [(small, b) for b in stats[1:][stats[1:, 4] >= 150, :4].astype(float)]
+    people = [(small, t.box.as_array()) for tracks, small in frames[::3]
+              for t in tracks if t.time_since_update == 0]
+    cv2.setNumThreads(1)
+    for model in ("daimler", "default"):
+        hog = HOGPeopleDetector(HOGParams(model=model, hit_threshold=0.3))
+        found, t = [], time.perf_counter()
+        for boxes, s in ((people, scale), (cars, 1.0)):
+            found.append([sum(1 for r in hog.people_in_box(img, b, s)
+                              if b[0] <= r.box.center[0] <= b[0] + b[2]
+                              and b[1] <= r.box.center[1] <= b[1] + b[3]) for img, b in boxes])
+        ms = (time.perf_counter() - t) * 1000 / (len(people) + len(cars))
+        print(f"HOG {model}: a person in {sum(n > 0 for n in found[0])} of {len(people)} PETS "
+              f"track boxes, {sum(found[1])} people in {len(cars)} highway cars' boxes, "
+              f"{ms:.2f} ms a look")
 
 
 def main() -> None:
@@ -197,7 +232,9 @@ def main() -> None:
     for name, overrides in (("PETS pairs, HOG", []), ("PETS pairs, no HOG", ["classes.hog=off"])):
         acc, by_class, looks = pairs_accuracy(pets, gt_file, overrides)
         print(f"{name:24s} {acc:8.3f}  {dict(by_class)}  HOG looks {looks}")
-    plain, metric, looks = cost(pets, camera)
+    frames, scale = pets_frames(pets)
+    hog_models(frames, scale, data / "cdnet-highway")
+    plain, metric, looks = cost(frames, scale, camera)
     print(f"classifier cost on PETS: {plain:.2f} ms a frame, {metric:.2f} with the camera "
           f"(OpenCV in one thread; HOG looks {looks})")
 
