@@ -15,7 +15,8 @@ per frame of each (best of ``--repeat`` runs over the clip):
                      the head splitting)
   head splitting     merged regions split between heads (Pipeline._split_upright)
   tracker            Pipeline.track (association, Kalman update, appearance)
-  classes            the track classifier (classes.enabled: votes of each measured track)
+  classes            the track classifier (classes.enabled: votes of each measured track,
+                     HOG on a few of their boxes)
 
 The last three are the tracking thread's work. Stage times measured one at a time include cache
 effects of the stages around them (the KNN model is 9 MB at 384x288), so they add up to more than
@@ -76,7 +77,7 @@ def one_run(frames: list, cfg: PipelineConfig, fps: float) -> dict[str, float]:
         t5 = clock()
         result = pipe.track(frame, Detection(Motion(mask, raw, small), mask, regions, heads))
         t6 = clock()
-        classes.update(result.tracks)
+        classes.update(result.tracks, image=small, scale=pipe.scale)
         t7 = clock()
         for name, a, b in zip(STAGES, (t0, t1, t2, t3, t4, t5, t6), (t1, t2, t3, t4, t5, t6, t7)):
             spent[name] += b - a

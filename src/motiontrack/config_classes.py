@@ -13,6 +13,8 @@ __all__ = ["ClassesConfig", "DetectorConfig"]
 
 #: the classifier's keys take effect while it runs
 _ON = {"enabled": True}
+#: the HOG keys, while it runs with HOG
+_HOG = {"enabled": True, "hog": Not("off", "daimler")}
 
 
 @dataclass(frozen=True)
@@ -45,6 +47,19 @@ class ClassesConfig(_Section):
     person_max_speed_mps: float = param(4.0, lo=0.0, hi=100.0, when=_ON,
                                         doc="with a camera: fastest person (m/s); faster is a "
                                             "vehicle")
+    hog: str = param("daimler", choices=("daimler", "default", "off"), when=_ON,
+                     doc="OpenCV's HOG people detector on the boxes of a few tracks a frame: "
+                         "daimler (48x96 window, small people), default (64x128, INRIA) or off")
+    hog_vote: int = param(10, lo=1, hi=1000, when=_HOG,
+                          doc="votes for person of each HOG person centred in a track's box (a "
+                              "miss casts none)")
+    hog_threshold: float = param(0.3, lo=-5.0, hi=5.0, when=_HOG,
+                                 doc="SVM margin a HOG window needs to be a person")
+    hog_every: int = param(5, lo=1, hi=10000, when=_HOG,
+                           doc="measured frames of a track between two HOG looks at it")
+    hog_per_frame: int = param(2, lo=1, hi=1000, when=_HOG,
+                               doc="most tracks HOG looks at in a frame (vehicle-like tracks "
+                                   "first)")
 
 
 @dataclass(frozen=True)

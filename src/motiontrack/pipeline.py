@@ -519,8 +519,12 @@ class Pipeline:
             self.bridge.remember(frame.image, tracks)
         earlier = tuple(self.tracker.confirmed_earlier)
         if self.classes is not None:
+            # HOG looks at the processing-scale frame, or the frame itself without the motion
+            # stage (none in a source of detections alone)
+            if small is None:
+                image, scale = (frame.image if frame.image.size else None), 1.0
             tracks = self.classes.update(tracks, dets, self.cfg.detector.match_iou,
-                                         self.cfg.detector.vote)
+                                         self.cfg.detector.vote, image=image, scale=scale)
             earlier = tuple((f, replace(t, label=n, label_score=s))
                             for f, t in earlier for n, s in [self.classes.label(t.id)])
         self._prev_tracks = tuple(tracks)

@@ -154,3 +154,68 @@ def test_hog_every_n_frames_never_puts_a_moving_region_where_its_person_was(mode
     # frame 3: a new scan; its box's centre is outside the region at x 55..85
     expected_3 = (55.0, 100.0, 30.0, 80.0) if mode == "regions" else (44.0, 104.0, 20.0, 70.0)
     assert boxes[3] == [expected_3]
+
+
+def test_params_name_a_known_model_and_a_sane_fill():
+    with pytest.raises(ValueError, match="model must be one of"):
+        HOGParams(model="inria")
+    with pytest.raises(ValueError, match="fill"):
+        HOGParams(fill=0.0)
+    assert HOGPeopleDetector(HOGParams(model="daimler")).WINDOW == (48, 96)
+    assert HOGPeopleDetector().WINDOW == (64, 128)
+
+
+def test_a_box_with_no_size_or_off_the_image_finds_nobody():
+    det = HOGPeopleDetector(HOGParams(model="daimler"))
+    image = np.zeros((100, 100), np.uint8)
+    assert det.people_in_box(image, (10, 10, 0, 40)) == []
+    assert det.people_in_box(image, (500, 500, 20, 40)) == []
+
+
+def _centred(found: list[Region], box) -> int:
+    x, y, w, h = box
+    return sum(1 for r in found if x <= r.box.center[0] <= x + w and y <= r.box.center[1] <= y + h)
+
+
+@pytest.mark.data
+def test_daimler_finds_pets_people_in_their_boxes_at_processing_scale(data):
+    from motiontrack.config import PreprocessConfig
+    from motiontrack.preprocess import preprocess
+
+    # the pipeline's frame: 768x576 at its automatic processing scale 0.5 (people ~15x37 px),
+    # blurred; the boxes in original pixels. Measured on frames 0, 60, ..., 240: 24 of the 27
+    # people found
+    det = HOGPeopleDetector(HOGParams(model="daimler", hit_threshold=0.3))
+    found = n = 0
+    for index in (0, 60, 120, 180, 240):
+        img, gt = _pets(data, index)
+        small = preprocess(img, PreprocessConfig(scale=0.5))
+        for box in gt:
+            found += _centred(det.people_in_box(small, box, 0.5), box) > 0
+            n += 1
+    assert n == 27
+    assert found >= 22
+
+
+@pytest.mark.data
+def test_daimler_finds_no_person_in_the_boxes_of_highway_cars(data):
+    import cv2
+
+    from motiontrack.config import PreprocessConfig
+    from motiontrack.preprocess import preprocess
+
+    # every car of CDnet highway frames 500, 525, ..., 1000: the boxes of the ground truth's
+    # motion (255) blobs of at least 150 px, in the pipeline's 320x240 frame (processing
+    # scale 1, blurred)
+    det = HOGPeopleDetector(HOGParams(model="daimler", hit_threshold=0.3))
+    found = n = 0
+    for i in range(500, 1001, 25):
+        mask = cv2.imread(str(data("cdnet-highway", "groundtruth", f"gt{i:06d}.png")), 0)
+        img = cv2.imread(str(data("cdnet-highway", "input", f"in{i:06d}.jpg")))
+        _, _, stats, _ = cv2.connectedComponentsWithStats((mask == 255).astype(np.uint8))
+        for box in stats[1:][stats[1:, 4] >= 150, :4].astype(float):
+            found += _centred(det.people_in_box(preprocess(img, PreprocessConfig(scale=1.0)), box),
+                              box)
+            n += 1
+    assert n == 69
+    assert found == 0

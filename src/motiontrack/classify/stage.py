@@ -16,7 +16,14 @@ Each frame a track is measured in (``time_since_update == 0``) casts one vote:
   ``person_max_speed``; a ``vehicle`` is at most ``vehicle_aspect`` tall for its width or
   faster than a person.
 
-A frame that fits neither votes ``other``. With the user's detector (``detector.model``), a
+A frame that fits neither votes ``other``. OpenCV's HOG people detector (``hog``: ``daimler``
+or ``default``; :meth:`~motiontrack.people.hog.HOGPeopleDetector.people_in_box`) looks at the
+boxes of a few measured tracks a frame in the pipeline's processing-scale frame: each person it
+finds whose centre lies in the box casts ``hog_vote`` votes for ``person``; a miss casts none
+(HOG misses many people). It looks at tracks no faster than a person whose class is not yet
+``person`` or whose box does not look like one this frame (people merged side by side into a
+wide blob), each at most every ``hog_every`` measured frames and at most ``hog_per_frame``
+tracks a frame, vehicle-like tracks first. With the user's detector (``detector.model``), a
 detection matched to a measured track (IoU at least ``detector.match_iou``) casts
 ``detector.vote`` more votes for its class (:func:`class_of`: ``person``; ``bicycle``, ``car``,
 ``motorcycle``, ``bus``, ``truck``... a ``vehicle``; any other name ``other``).
@@ -79,15 +86,26 @@ def class_name(number: int) -> str:
     return _NAMES_BY_ID.get(int(number), "")
 
 
-class _Evidence:
-    """One track's votes and its speed window."""
+#: the shortest box (processing pixels) HOG looks at: shorter people would be magnified more
+#: than 4 times to fill the window, which leaves no gradients to see
+_HOG_MIN_HEIGHT = 16.0
 
-    __slots__ = ("votes", "speed", "last_seen")
+
+class _Evidence:
+    """One track's votes, its speed window, whether its last speed was a person's (known and
+    no faster than one), when HOG last looked at it (measured frames ago) and this frame's
+    vote."""
+
+    __slots__ = ("votes", "speed", "last_seen", "slow", "speed_known", "since_hog", "vote")
 
     def __init__(self, fps: float) -> None:
         self.votes = np.zeros(3, dtype=np.int64)
         self.speed = WindowSpeed(fps=fps)
         self.last_seen = 0
+        self.slow = False
+        self.speed_known = False
+        self.since_hog = 1 << 30
+        self.vote = _OTHER
 
 
 class TrackClassifier:
@@ -104,6 +122,13 @@ class TrackClassifier:
         self.cfg = cfg
         self.fps = float(fps) if fps and math.isfinite(fps) and fps > 0 else 25.0
         self.camera = camera if camera is not None and hasattr(camera, "rays") else None
+        self.hog = None
+        if cfg.hog != "off":
+            from ..people.hog import HOGParams, HOGPeopleDetector
+
+            self.hog = HOGPeopleDetector(HOGParams(model=cfg.hog, hit_threshold=cfg.hog_threshold))
+        #: boxes HOG looked at and people it found in them so far (benchmarks/classes.py)
+        self.hog_looks = self.hog_found = 0
         self._tracks: dict[int, _Evidence] = {}
         self._frames = 0
         #: frames after which the evidence of a track not seen since is dropped
@@ -119,16 +144,21 @@ class TrackClassifier:
         return ("other", 0.0) if ev is None else self._decide(ev.votes)
 
     def update(self, tracks: Sequence[Track], detections: Any = None,
-               match_iou: float = 0.3, weight: int = 5) -> list[Track]:
+               match_iou: float = 0.3, weight: int = 5, image: np.ndarray | None = None,
+               scale: float = 1.0) -> list[Track]:
         """The tracks of one frame with :attr:`Track.label` and :attr:`Track.label_score` set,
-        after the votes of the measured ones were counted: their own, and ``weight`` for the
-        class of the detection (``boxes``, :meth:`name`; the user's detector) each matches."""
+        after the votes of the measured ones were counted: their own, ``weight`` for the
+        class of the detection (``boxes``, :meth:`name`; the user's detector) each matches, and
+        HOG's (``hog``) in ``image``, the frame at ``scale`` of the original (boxes are in
+        original pixels; None = no HOG this frame)."""
         self._frames += 1
         measured = [t for t in tracks if t.time_since_update == 0]
         if measured:
             self._vote(measured)
             if detections is not None and len(detections):
                 self._detector_votes(measured, detections, match_iou, weight)
+            if self.hog is not None and image is not None:
+                self._hog_votes(measured, image, scale)
         if len(self._tracks) > 64 and self._frames % 256 == 0:
             self._forget()
         out = []
@@ -153,6 +183,8 @@ class TrackClassifier:
             votes = np.where(metric >= 0, metric, votes)
         for ev, v in zip(evs, votes.tolist()):
             ev.votes[v] += 1
+            ev.vote = v
+            ev.since_hog += 1
 
     def _detector_votes(self, tracks: Sequence[Track], detections: Any, match_iou: float,
                         weight: int) -> None:
@@ -163,6 +195,40 @@ class TrackClassifier:
             k = CLASS_NAMES.index(class_of(detections.name(j)))
             self._tracks[tracks[i].id].votes[k] += weight
 
+    def _hog_votes(self, tracks: Sequence[Track], image: np.ndarray, scale: float) -> None:
+        """``hog_vote`` votes for ``person`` per HOG person centred in the box of each track
+        :meth:`_hog_candidates` picks."""
+        c = self.cfg
+        for t in self._hog_candidates(tracks, scale):
+            ev = self._tracks[t.id]
+            ev.since_hog = 0
+            self.hog_looks += 1
+            x, y, w, h = t.box.as_array().tolist()
+            found = sum(1 for r in self.hog.people_in_box(image, (x, y, w, h), scale)
+                        if x <= r.box.center[0] <= x + w and y <= r.box.center[1] <= y + h)
+            ev.votes[_PERSON] += c.hog_vote * found
+            self.hog_found += found
+
+    def _hog_candidates(self, tracks: Sequence[Track], scale: float) -> list[Track]:
+        """The measured tracks HOG looks at this frame, at most ``hog_per_frame``: no faster
+        than a person, not looked at in their last ``hog_every`` measured frames, tall enough,
+        and either not yet a ``person`` or not looking like one this frame; vehicles first,
+        then undecided tracks (``other``), then people in a wide box, each the longest unseen
+        first."""
+        c = self.cfg
+        ranked = []
+        for t in tracks:
+            ev = self._tracks[t.id]
+            if not ev.slow or ev.since_hog < c.hog_every or t.box.h * scale < _HOG_MIN_HEIGHT:
+                continue
+            k = CLASS_NAMES.index(self._decide(ev.votes)[0])
+            if k == _PERSON and ev.vote == _PERSON:
+                continue
+            rank = {_VEHICLE: 0, _OTHER: 1, _PERSON: 2}[k]
+            ranked.append((rank, -ev.since_hog, t.id, t))
+        ranked.sort(key=lambda r: r[:3])
+        return [r[3] for r in ranked[:c.hog_per_frame]]
+
     def _image_votes(self, boxes: np.ndarray, evs: list[_Evidence]) -> np.ndarray:
         """(N,) votes from the boxes' aspect and their speed in heights per second."""
         c = self.cfg
@@ -170,6 +236,9 @@ class TrackClassifier:
         cx, cy = boxes[:, 0] + w / 2.0, boxes[:, 1] + h / 2.0
         if self.camera is None:
             pace = np.array([_speed(ev, x, y) for ev, x, y in zip(evs, cx, cy)]) / h
+            known = np.array([ev.speed_known for ev in evs], dtype=bool)
+            for ev, slow in zip(evs, (known & (pace <= c.person_max_speed)).tolist()):
+                ev.slow = slow
         else:   # the windows hold ground positions: the image test goes without speed
             pace = np.zeros(len(boxes))
         aspect = h / w
@@ -189,6 +258,9 @@ class TrackClassifier:
         speed = np.array([_speed(ev, X, Y) if math.isfinite(X) and math.isfinite(Y) else 0.0
                           for ev, (X, Y) in zip(evs, foot.tolist())])
         ok = np.isfinite(height) & (height > 0)
+        for ev, (X, Y), v in zip(evs, foot.tolist(), speed.tolist()):
+            ev.slow = (math.isfinite(X) and math.isfinite(Y) and ev.speed_known
+                       and v <= c.person_max_speed_mps)
         person = ((height >= c.person_min_height_m) & (height <= c.person_max_height_m)
                   & (width <= c.person_max_width_m) & (speed <= c.person_max_speed_mps))
         vehicle = (width >= c.vehicle_min_width_m) | (speed > c.person_max_speed_mps)
@@ -212,4 +284,5 @@ def _speed(ev: _Evidence, x: float, y: float) -> float:
     """The track's speed per second over the last second after adding ``(x, y)`` (0 while
     the window is too short)."""
     v = ev.speed.add(ev.last_seen, float(x), float(y))
+    ev.speed_known = v is not None
     return 0.0 if v is None else float(v)

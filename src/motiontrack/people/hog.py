@@ -1,4 +1,4 @@
-"""HOG people detector: OpenCV's default people SVM, whole frame or restricted to motion regions.
+"""HOG people detector: OpenCV's people SVMs, whole frame, motion regions or one box.
 
 Dalal & Triggs, "Histograms of Oriented Gradients for Human Detection", CVPR 2005: a linear SVM
 over HOG features of a 64×128 window, shipped with OpenCV as
@@ -8,14 +8,22 @@ over HOG features of a 64×128 window, shipped with OpenCV as
 (:func:`nms`, Felzenszwalb et al. 2010 style: keep the best, drop those overlapping it by more than
 ``iou_threshold``).
 
+OpenCV also ships the Daimler pedestrian SVM (``cv2.HOGDescriptor_getDaimlerPeopleDetector()``,
+``model="daimler"``; Enzweiler & Gavrila, "Monocular Pedestrian Detection: Survey and
+Experiments", PAMI 2009): a 48×96 window with the same 16 px blocks, 8 px cells and 9 bins,
+trained on small pedestrians in urban video, which suits people a few tens of pixels tall.
+
 People smaller than ~96 px (PETS 2009: ~30×75 px) must be upscaled (``upscale``); restricting the
-search to padded crops around motion regions (:meth:`HOGPeopleDetector.detect_in_regions`) makes
-that affordable. Returned boxes are tightened from the window to the person inside it
-(``tighten``: the INRIA window has about 16 px of margin above/below and 16 px at each side).
+search to padded crops around motion regions (:meth:`HOGPeopleDetector.detect_in_regions`) or to
+one box scaled so that a person of its height fits the window (:meth:`HOGPeopleDetector.people_in_box`)
+makes that affordable. Returned boxes are tightened from the window to the person inside it
+(``tighten``: the INRIA window has about 16 px of margin above/below and 16 px at each side; the
+Daimler window is tightened by the same fractions).
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import cv2
@@ -24,7 +32,25 @@ import numpy as np
 from ..imaging import to_gray
 from ..types import Box, Region
 
-__all__ = ["nms", "HOGParams", "HOGPeopleDetector"]
+__all__ = ["nms", "HOGParams", "HOGPeopleDetector", "MODELS"]
+
+
+def _default() -> cv2.HOGDescriptor:
+    hog = cv2.HOGDescriptor()   # 64x128, 16 px blocks moved by 8 px, 8 px cells, 9 bins
+    hog.setSVMDetector(cv2.HOGDescriptor_getDefaultPeopleDetector())
+    return hog
+
+
+def _daimler() -> cv2.HOGDescriptor:
+    # the same block and cell layout over 48x96 (OpenCV's peopledetect sample builds it so)
+    hog = cv2.HOGDescriptor((48, 96), (16, 16), (8, 8), (8, 8), 9)
+    hog.setSVMDetector(cv2.HOGDescriptor_getDaimlerPeopleDetector())
+    return hog
+
+
+#: the people SVMs OpenCV ships, by name: their window (width, height) and a descriptor
+#: holding the SVM
+MODELS = {"default": ((64, 128), _default), "daimler": ((48, 96), _daimler)}
 
 
 def nms(boxes: np.ndarray, scores: np.ndarray, iou_threshold: float = 0.4) -> np.ndarray:
@@ -90,6 +116,14 @@ class HOGParams:
     min_crop_height : float
         Regions mode: a crop is at least this tall in original pixels, so that a person split into
         pieces by the motion detector still fits the window.
+    model : str
+        The SVM (:data:`MODELS`): ``default`` (INRIA, 64×128) or ``daimler`` (48×96).
+    fill : float
+        Box mode: the share of the window's height that a person as tall as the box fills after
+        the crop is magnified (0.85: of 0.75-0.9, the most PETS people found in their boxes with
+        both SVMs; the pyramid then also finds people up to the crop's height).
+    box_margin : float
+        Box mode: crop margin around the box, a fraction of its height on every side.
     """
 
     upscale: float = 1.0
@@ -100,41 +134,49 @@ class HOGParams:
     tighten: bool = True
     pad: float = 0.3
     min_crop_height: float = 0.0
+    model: str = "default"
+    fill: float = 0.85
+    box_margin: float = 0.15
 
     def __post_init__(self) -> None:
+        if self.model not in MODELS:
+            raise ValueError(f"model must be one of {sorted(MODELS)}, got {self.model!r}")
         if not 0.1 <= self.upscale <= 8:
             raise ValueError(f"upscale must be in [0.1, 8], got {self.upscale}")
         if self.win_stride < 1 or self.pyramid_scale <= 1.0:
             raise ValueError("win_stride must be >= 1 and pyramid_scale > 1, got "
                              f"{self.win_stride}, {self.pyramid_scale}")
-        if not 0 <= self.iou_threshold <= 1 or self.pad < 0:
-            raise ValueError("iou_threshold must be in [0, 1] and pad >= 0")
+        if not 0 <= self.iou_threshold <= 1 or self.pad < 0 or self.box_margin < 0:
+            raise ValueError("iou_threshold must be in [0, 1], pad and box_margin >= 0")
+        if not 0.1 <= self.fill <= 2:
+            raise ValueError(f"fill must be in [0.1, 2], got {self.fill}")
 
 
 class HOGPeopleDetector:
-    """Dalal–Triggs people detector with OpenCV's default SVM.
+    """Dalal–Triggs people detector with one of OpenCV's people SVMs (``params.model``).
 
     ``detect(image)`` scans the whole frame; ``detect_in_regions(image, regions)`` scans padded
-    crops around motion regions only. Both return :class:`Region` objects (original-frame pixels)
-    whose ``score`` is the SVM margin, after non-maximum suppression.
+    crops around motion regions only; ``people_in_box(image, box)`` one crop around a box. All
+    return :class:`Region` objects (original-frame pixels) whose ``score`` is the SVM margin,
+    after non-maximum suppression.
     """
-
-    WINDOW = (64, 128)
 
     def __init__(self, params: HOGParams | None = None) -> None:
         self.params = params or HOGParams()
-        self._hog = cv2.HOGDescriptor()
-        self._hog.setSVMDetector(cv2.HOGDescriptor_getDefaultPeopleDetector())
+        window, make = MODELS[self.params.model]
+        #: the detection window (width, height) in pixels
+        self.WINDOW = window
+        self._hog = make()
 
     # ----------------------------------------------------------------- internals
-    def _raw(self, img: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def _raw(self, img: np.ndarray, padding: int = 8) -> tuple[np.ndarray, np.ndarray]:
         """Windows ``(K, 4)`` in ``img`` pixels and their scores, before NMS."""
         p = self.params
         if img.shape[0] < self.WINDOW[1] or img.shape[1] < self.WINDOW[0]:
             return np.zeros((0, 4)), np.zeros(0)
         rects, weights = self._hog.detectMultiScale(
             img, hitThreshold=p.hit_threshold, winStride=(p.win_stride, p.win_stride),
-            padding=(8, 8), scale=p.pyramid_scale)
+            padding=(padding, padding), scale=p.pyramid_scale)
         rects = np.asarray(rects, dtype=np.float64).reshape(-1, 4)
         weights = np.asarray(weights, dtype=np.float64).reshape(-1)
         return rects, weights
@@ -208,3 +250,53 @@ class HOGPeopleDetector:
         if not all_b:
             return []
         return self._finish(np.concatenate(all_b), np.concatenate(all_w))
+
+    def people_in_box(self, image: np.ndarray, box, scale: float = 1.0) -> list[Region]:
+        """People about as tall as ``box`` around it: one crop, one short pyramid.
+
+        Parameters
+        ----------
+        image : (H, W[, 3]) uint8
+            The frame at ``scale`` of the original frame (the pipeline's processing scale).
+        box : (4,) float
+            ``x, y, w, h`` in original-frame pixels.
+        scale : float
+            Size of ``image`` relative to the original frame.
+
+        Returns
+        -------
+        list of Region
+            Original-frame pixels. The crop is the box grown by ``box_margin × h`` on every side
+            (and to at least one window step around a window), magnified so that a person of the box's height fills
+            ``fill`` of the window's height; the pyramid shrinks it from there, so people from
+            about the box's height up to the crop's are found, none much shorter.
+        """
+        p = self.params
+        x, y, w, h = (float(v) * scale for v in box)
+        ww, wh = self.WINDOW
+        if w <= 0 or h <= 0:
+            return []
+        f = wh * p.fill / h
+        # at least one window step around a window centred on the box, each way: a crop of
+        # just one window finds only a person centred in it to the pixel
+        half_h = max(h * (0.5 + p.box_margin), (wh / 2 + p.win_stride) / f)
+        half_w = max(w / 2 + p.box_margin * h, (ww / 2 + p.win_stride) / f)
+        cx, cy = x + w / 2, y + h / 2
+        H, W = image.shape[:2]
+        x1, x2 = int(max(0, cx - half_w)), int(min(W, math.ceil(cx + half_w)))
+        y1, y2 = int(max(0, cy - half_h)), int(min(H, math.ceil(cy + half_h)))
+        if x2 <= x1 or y2 <= y1:
+            return []
+        crop = cv2.resize(to_gray(image[y1:y2, x1:x2]), None, fx=f, fy=f,
+                          interpolation=cv2.INTER_LINEAR)
+        # a box cut by the frame's border: the edge rows repeated up to one window
+        short_y, short_x = max(0, wh - crop.shape[0]), max(0, ww - crop.shape[1])
+        if short_y or short_x:
+            crop = cv2.copyMakeBorder(crop, 0, short_y, 0, short_x, cv2.BORDER_REPLICATE)
+        b, score = self._raw(crop, padding=0)
+        if len(b):
+            b = b / f
+            b[:, 0] += x1
+            b[:, 1] += y1
+            b /= scale
+        return self._finish(b, score)
