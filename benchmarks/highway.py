@@ -108,6 +108,7 @@ def main() -> None:
         ("pipeline, automatic scale (1.0 here)", [], None),
         ("pipeline, --preset fast", [], "fast"),
         ("pipeline, motion.method=knn", ["motion.method=knn"], None),
+        ("knn, hold=true", ["motion.method=knn", "motion.knn.hold=true"], None),
         ("pipeline, motion.method=vibe", ["motion.method=vibe"], None),
         ("vibe, protect=false", ["motion.method=vibe", "motion.vibe.protect=false"], None),
     ]

@@ -7,7 +7,11 @@ hits all alike); the CPU time of this process (user + sys) per frame is taken, a
 the rounds printed with the range. The "protect" rows pass the ground truth's boxes of each frame
 (grown by 10 % on each side) as the do-not-learn mask, as the pipeline passes its tracks' boxes.
 
-  knn              OpenCV KNN, the pipeline's settings (the default detector before ``vibe``)
+  knn              OpenCV KNN with the hold (the default), no boxes: the hold's own work when
+                   no track is held
+  knn + hold boxes the same with the boxes as protect mask, every person held (the pipeline
+                   passes only the tracks that have slowed down: an upper bound)
+  knn, hold=false  OpenCV KNN alone
   mog2             OpenCV MOG2 with shadow detection
   vibe             the sample-based model (motion.vibe defaults), no protect mask
   vibe + protect   the same with the boxes as protect mask
@@ -36,6 +40,8 @@ from _pets import pets_args  # benchmarks/ is on sys.path when a script here run
 
 MODELS = {
     "knn": (["motion.method=knn"], False),
+    "knn + hold boxes": (["motion.method=knn"], True),
+    "knn, hold=false": (["motion.method=knn", "motion.knn.hold=false"], False),
     "mog2": (["motion.method=mog2"], False),
     "vibe": (["motion.method=vibe", "motion.vibe.protect=false"], False),
     "vibe + protect": (["motion.method=vibe"], True),

@@ -49,6 +49,7 @@ FPS = 10.0
 W, H = 320, 240
 ROWS = {
     "knn (default)": ["motion.method=knn"],
+    "knn + hold": ["motion.method=knn", "motion.knn.hold=true"],
     "vibe (selective update)": ["motion.method=vibe"],
     "vibe protect=false": ["motion.method=vibe", "motion.vibe.protect=false"],
 }
