@@ -101,23 +101,37 @@ class Hold:
             self._frames = 1
             return fg
         self._frames += 1
-        boxes = None
-        if protect is not None and protect.any():
-            boxes = np.ascontiguousarray(protect).view(np.uint8) * np.uint8(255)
-        if isinstance(relearn, np.ndarray) and relearn.any():
-            if boxes is not None:
-                relearn = relearn & (boxes == 0)
-            self._bg[relearn] = image[relearn]
-            self._count[relearn] = 0
-            self._seen[relearn] = 0
+        boxes = None   # 0/1 uint8: OpenCV takes any non-zero value as set
+        if protect is not None:
+            boxes = np.ascontiguousarray(protect).view(np.uint8)
+            if not cv2.countNonZero(boxes):
+                boxes = None
         out = fg
         if boxes is not None or cv2.countNonZero(self._seen):
             out = self._hold(image, raw, fg, boxes)
         elif self._count.any():
             self._count.fill(0)
         if self._frames % self.EVERY == 0:
-            self._learn(image, raw, boxes)
+            off = cv2.compare(boxes, 0, cv2.CMP_EQ) if boxes is not None else None
+            if isinstance(relearn, np.ndarray):
+                self._relearn(image, relearn, off)
+            self._learn(image, raw, off)
         return out
+
+    def _relearn(self, image: np.ndarray, relearn: np.ndarray, off: np.ndarray | None) -> None:
+        """The ghost filter's ghost pixels (bool (h, w)) off the boxes (``off``: 255 there, or
+        None for everywhere) are uncovered ground: the background takes them from ``image``.
+        Under a box they are left alone (a bag of the ground's brightness is taken for ground by
+        the gray tests of the ghost filter)."""
+        where = np.ascontiguousarray(relearn).view(np.uint8)
+        if off is not None:
+            where = cv2.bitwise_and(where, off)
+        if not cv2.countNonZero(where):
+            return
+        cv2.copyTo(image, where, self._bg)
+        keep = cv2.compare(where, 0, cv2.CMP_EQ)
+        self._count = cv2.bitwise_and(self._count, self._count, mask=keep)
+        self._seen = cv2.bitwise_and(self._seen, keep)
 
     def _hold(self, image: np.ndarray, raw: np.ndarray, fg: np.ndarray,
               boxes: np.ndarray | None) -> np.ndarray:
@@ -163,12 +177,12 @@ class Hold:
         cv2.copyTo(self._bg, self._seen, out)
         return out
 
-    def _learn(self, image: np.ndarray, raw: np.ndarray, boxes: np.ndarray | None) -> None:
+    def _learn(self, image: np.ndarray, raw: np.ndarray, off: np.ndarray | None) -> None:
         """The background learns the frame where the subtractor calls it background, off the
-        boxes and the remembered pixels."""
+        boxes (``off``: 255 there, or None for everywhere) and the remembered pixels."""
         learn = cv2.compare(raw, 0, cv2.CMP_EQ)
-        if boxes is not None:
-            learn = cv2.bitwise_and(learn, cv2.bitwise_not(boxes))
+        if off is not None:
+            learn = cv2.bitwise_and(learn, off)
         learn = cv2.bitwise_and(learn, cv2.bitwise_not(self._seen))
         blended = cv2.addWeighted(self._bg, 1.0 - self.RATE, image, self.RATE, 0.0)
         cv2.copyTo(blended, learn, self._bg)
