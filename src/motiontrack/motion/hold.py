@@ -106,15 +106,15 @@ class Hold:
             boxes = np.ascontiguousarray(protect).view(np.uint8)
             if not cv2.countNonZero(boxes):
                 boxes = None
+        off = cv2.compare(boxes, 0, cv2.CMP_EQ) if boxes is not None else None
+        if isinstance(relearn, np.ndarray):
+            self._relearn(image, relearn, off)
         out = fg
         if boxes is not None or cv2.countNonZero(self._seen):
             out = self._hold(image, raw, fg, boxes)
         elif self._count.any():
             self._count.fill(0)
         if self._frames % self.EVERY == 0:
-            off = cv2.compare(boxes, 0, cv2.CMP_EQ) if boxes is not None else None
-            if isinstance(relearn, np.ndarray):
-                self._relearn(image, relearn, off)
             self._learn(image, raw, off)
         return out
 
