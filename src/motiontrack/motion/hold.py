@@ -146,14 +146,14 @@ class Hold:
         # frames in a row each pixel has differed under a box (0 elsewhere, also off the window)
         count = self._count[win] + cover
         count[~cover] = 0
-        self._count.fill(0)
-        self._count[win] = count
         limit = self.accept_frames
         if limit and count.max() >= limit:
             due = count >= limit
             self._bg[win][due] = image[win][due]
             count[due] = 0
             cover &= ~due
+        self._count.fill(0)
+        self._count[win] = count
         held = cover & (raw[win] == 0)
         moving = fg[win] > 0
         ghost = (self._seen[win] > 0) & moving & ~differs
