@@ -257,8 +257,10 @@ def test_static_foreground_benchmark_keeps_the_stopped_person_with_the_hold_and_
         assert "person stops 4 s: ids 1, switches 0, recall while still 1.000" in blocks[row], out
         # a 2 s stop is far below accept_s: the parked car is still foreground
         assert "car parks 2 s: still foreground at the end" in blocks[row], out
-    # KNN alone learns the person within the stop: a second id when they walk on
-    assert "person stops 4 s: ids 2, switches 1" in blocks["knn hold=false"], out
+    # KNN alone learns the person within the stop: missing from the tracks for part of it
+    (recall,) = re.findall(r"person stops 4 s: .*recall while still (\d\.\d+)",
+                           blocks["knn hold=false"])
+    assert float(recall) < 0.8, out
 
 
 @pytest.mark.slow
