@@ -14,9 +14,10 @@ one body height, and static objects when it keeps a dual background):
 2. **Bounded time.** A pixel that has differed under a box for ``accept_s`` seconds in a row is
    learnt into the hold's background at once (a parked car becomes background after that long).
 3. **Ghost pixels.** A pixel held in a frame is remembered; while the subtractor calls it
-   foreground, it is taken out of the mask where the frame matches the hold's background again:
-   the held object left, and the subtractor, which had learnt it, shows a ghost of it there. A
-   pixel is forgotten when the subtractor calls it background.
+   foreground, it is taken out of the mask where the frame matches the hold's background again
+   and no box covers it: the held object left, and the subtractor, which had learnt it, shows a
+   ghost of it there. Under a box such a pixel may be a neighbour's that looks like the ground,
+   and is left to the subtractor. A pixel is forgotten when the subtractor calls it background.
 
 Outside the boxes the hold's background learns, every :attr:`Hold.EVERY` frames, where the
 subtractor calls a pixel background, so it follows the light and whatever the subtractor accepts;
@@ -156,7 +157,7 @@ class Hold:
         self._count[win] = count
         held = cover & (raw[win] == 0)
         moving = fg[win] > 0
-        ghost = (self._seen[win] > 0) & moving & ~differs
+        ghost = (self._seen[win] > 0) & moving & ~differs & ~inside   # step 3: off the boxes
         out = fg.copy()
         out[win][held] = 255
         out[win][ghost] = 0
