@@ -239,8 +239,8 @@ def test_motion_models_benchmark_times_every_model(data):
                           str(data_root()), "--frames", "12", "--repeat", "1"],
                          capture_output=True, text=True, timeout=120, check=True).stdout
     times = dict(re.findall(r"^(\S.*?)\s{2,}(\d+\.\d+)\s+\[", out, re.M))
-    assert set(times) == {"knn", "knn + hold boxes", "knn, hold=false", "mog2", "vibe",
-                          "vibe + protect", "vibe, n_samples 6 + protect",
+    assert set(times) == {"knn", "knn + hold slow", "knn + hold boxes", "knn, hold=false",
+                          "mog2", "vibe", "vibe + protect", "vibe, n_samples 6 + protect",
                           "vibe, n_samples 12 + protect"}, out
     assert all(float(v) > 0 for v in times.values()), out
 
