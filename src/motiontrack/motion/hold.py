@@ -6,7 +6,8 @@ is (its mask of everything that moves is unchanged) and keeps a background image
 does not learn under the boxes of tracked objects (the selective update of the Reading People
 Tracker's background maintenance, kept beside the subtractor rather than inside it). Each frame,
 inside the boxes the pipeline passes as ``protect`` (confirmed tracks that have travelled at least
-one body height, and static objects when it keeps a dual background):
+one body height and have slowed down, ``motion.knn.hold_speed``, and static objects when it keeps
+a dual background):
 
 1. **Held pixels.** A pixel the subtractor calls background (not a shadow either) where the frame
    differs from the hold's background by more than ``threshold`` levels (largest colour channel)
@@ -21,8 +22,8 @@ one body height, and static objects when it keeps a dual background):
 
 Outside the boxes the hold's background learns, every :attr:`Hold.EVERY` frames, where the
 subtractor calls a pixel background, so it follows the light and whatever the subtractor accepts;
-the ghost filter's ghost pixels (``relearn``) are learnt at once (uncovered ground). Something that
-stops without a track is not held and fades as the subtractor learns it.
+the ghost filter's ghost pixels (``relearn``) off the boxes are learnt at once (uncovered ground).
+Something that stops without a track is not held and fades as the subtractor learns it.
 """
 
 from __future__ import annotations
