@@ -616,7 +616,13 @@ class Pipeline:
             for k in itertools.count():
                 frame = item[0]
                 motion = job.result()
-                item = next(prepared, None)
+                try:
+                    item = next(prepared, None)
+                except Exception:
+                    # the source failed (a camera that does not come back): the frame already
+                    # detected is still tracked and handed on before the error
+                    yield self.track(frame, self.regions_of(k, motion))
+                    raise
                 if item is not None:
                     job = pool.submit(self.motion, item[0], item[1], self.feedback(*item))
                 yield self.track(frame, self.regions_of(k, motion))
