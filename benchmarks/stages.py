@@ -8,8 +8,9 @@ per frame of each (best of ``--repeat`` runs over the clip):
 
   decode             cv2.VideoCapture.read()
   preprocess         resize to the processing scale (and blur)
-  motion detector    the motion stage (Pipeline.stage.apply): camera-motion compensation, the
-                     KNN model, the sudden-change check
+  motion detector    the motion stage (Pipeline.feedback and Pipeline.stage.apply): the boxes
+                     of the tracks that have slowed down, camera-motion compensation, the KNN
+                     model with its hold, the sudden-change check
   mask clean-up      motion.cleanup
   ghosts + regions   the ghost filter and the mask's regions (Pipeline.regions_of, without
                      the head splitting)
@@ -26,7 +27,8 @@ It then times the motion stage again without compensation and sudden-change chec
 (``stabilize.enabled=false``, ``motion.relearn_fraction=0``, ``motion.relearn_brightness=0``),
 the two runs interleaved, and prints the medians over the repeats of both and of their
 difference: what compensation costs a frame on a fixed camera (it measures the camera's motion
-every frame and warps nothing).
+every frame and warps nothing); and, interleaved the same way, without the hold
+(``motion.knn.hold=false``): what the hold costs a frame.
 
 Run: .venv/bin/python benchmarks/stages.py [--data ../shared/data] [--frames 300] [--repeat 5]
 """
@@ -62,12 +64,16 @@ def one_run(frames: list, cfg: PipelineConfig, fps: float) -> dict[str, float]:
         t0 = clock()
         small = preprocess(image, pipe.pre_cfg)
         t1 = clock()
-        raw = pipe.stage.apply(small, None).raw
+        out = pipe.stage.apply(small, *pipe.feedback(frame, small))
+        raw = out.raw
         t2 = clock()
         mask = clean_mask(raw, cfg.cleanup)
         t3 = clock()
         if pipe.ghosts is not None:
-            mask, regions = pipe.ghosts.regions(small, mask, pipe._find, pipe.scale)
+            mask, regions = pipe.ghosts.regions(small, mask, pipe._find, pipe.scale,
+                                                keep=out.held)
+            if pipe.detector.relearns:
+                pipe._relearn = pipe.ghosts.ghost_pixels(mask.shape[:2])
         else:
             regions = pipe._find(mask)
         t4 = clock()
@@ -109,10 +115,12 @@ def main() -> None:
         bare = load_config(None, ["stabilize.enabled=false", "motion.relearn_fraction=0",
                                   "motion.relearn_brightness=0"])
         one_run(frames[:20], cfg, fps)   # imports and first calls outside the timing
-        runs, bares = [], []
+        no_hold = load_config(None, ["motion.knn.hold=false"])
+        runs, bares, plains = [], [], []
         for _ in range(args.repeat):
             runs.append(one_run(frames, cfg, fps))
             bares.append(one_run(frames, bare, fps))
+            plains.append(one_run(frames, no_hold, fps))
     finally:
         cv2.setNumThreads(threads)
     best = {k: min(r[k] for r in runs) for k in STAGES}
@@ -130,6 +138,9 @@ def main() -> None:
     print(f"motion stage, medians of {args.repeat}: {statistics.median(with_):.2f} ms, without "
           f"compensation and sudden-change check {statistics.median(without):.2f} ms, "
           f"difference {statistics.median(a - b for a, b in zip(with_, without)):.2f} ms")
+    plain = [r[key] for r in plains]
+    print(f"motion stage without the hold (motion.knn.hold=false), median {statistics.median(plain):.2f}"
+          f" ms, difference {statistics.median(a - b for a, b in zip(with_, plain)):.2f} ms")
 
 
 if __name__ == "__main__":

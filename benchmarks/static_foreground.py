@@ -18,8 +18,9 @@ Scenes (320x240 at 10 fps, noise 3.5 grey levels, built here from :mod:`motiontr
   car leaves     the same car stands there from the first frame and drives off after 10 s.
                  Printed: frames after it left until its old place is out of the mask (ghost).
 
-Rows: the default motion model (KNN), ``vibe`` with its selective update (``accept_s`` 180: the
-parked car's bound), and ``vibe`` without it.
+Rows: the default motion model (KNN with its hold, ``accept_s`` 180: the parked car's bound), KNN
+alone (``motion.knn.hold=false``), ``vibe`` with its selective update (``accept_s`` 180), and
+``vibe`` without it.
 
 Run: .venv/bin/python benchmarks/static_foreground.py [--data ../shared/data] [--repeat 3]
          [--stand 30] [--park 200] [--no-cost] [--scenes person,bag,parks,leaves] [--rows ...]
@@ -48,7 +49,8 @@ from motiontrack.types import Frame
 FPS = 10.0
 W, H = 320, 240
 ROWS = {
-    "knn (default)": ["motion.method=knn"],
+    "knn + hold (default)": ["motion.method=knn"],
+    "knn hold=false": ["motion.method=knn", "motion.knn.hold=false"],
     "vibe (selective update)": ["motion.method=vibe"],
     "vibe protect=false": ["motion.method=vibe", "motion.vibe.protect=false"],
 }

@@ -259,9 +259,9 @@ def test_a_section_built_directly_names_its_keys_as_users_write_them():
     (lambda: load_config(None, ["motion.knn.knn_samples=9"]),
      "motion.knn.knn_samples must be at most motion.knn.n_samples (7) and at least 1, got 9"),
     (lambda: from_dict(KNNParams, {"nope": 1}),
-     "unknown config key(s) motion.knn.nope; valid keys in motion.knn: detect_shadows, "
-     "dist2_threshold, history, knn_samples, learning_rate, n_samples, protect, "
-     "protect_threshold, seed"),
+     "unknown config key(s) motion.knn.nope; valid keys in motion.knn: accept_s, "
+     "detect_shadows, dist2_threshold, history, hold, hold_speed, hold_threshold, "
+     "knn_samples, learning_rate, n_samples, protect, protect_threshold, seed"),
     (lambda: from_dict(PipelineConfig, 3), "the config must be a table, got 3"),
 ])
 def test_config_errors_name_the_key_never_the_class(make, message):

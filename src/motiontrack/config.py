@@ -208,6 +208,23 @@ class KNNParams(_Section):
                                  "background, at most n_samples")
     protect: bool = _protect(False)
     protect_threshold: int = _protect_threshold()
+    hold: bool = param(True, doc="keep people and objects that stop in the mask: inside the boxes "
+                                 "of confirmed tracks that have moved and slowed down, pixels the "
+                                 "model has learnt stay foreground while they differ from a "
+                                 "background that does not learn there; their ghost is dropped "
+                                 "when they leave (docs/pipeline.md, The hold); not used with "
+                                 "protect")
+    hold_threshold: int = param(30, lo=1, hi=255,
+                                doc="difference from the hold's background (levels, largest "
+                                    "colour channel) that keeps a pixel under a box foreground",
+                                when={"hold": True})
+    hold_speed: float = param(0.2, lo=0.0, hi=100.0,
+                              doc="a track is held while its speed is below this many box heights "
+                                  "a second (a walking person is about 0.8; a moving object is "
+                                  "whole in the model's own mask)", when={"hold": True})
+    accept_s: float = param(180.0, lo=0.0, hi=86400.0,
+                            doc="seconds a held pixel stays foreground before it is learnt (a "
+                                "parked car); 0 = never", when={"hold": True})
     seed: int = param(0, lo=0, hi=1_000_000,
                       doc="seed of the model's random sample updates: a run repeats exactly for a "
                           "given seed; other seeds show the spread of the scores")

@@ -127,6 +127,9 @@ class Motion:
     #: the camera's motion since the previous frame while it moves ((2, 3), previous frame's
     #: pixels → this frame's, processing scale): the tracker carries its tracks with it
     step: np.ndarray | None = None
+    #: pixels of ``raw_mask`` the detector holds for a stopped tracked object (uint8 0/255, or
+    #: None): the ghost filter does not take them
+    held: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -338,11 +341,14 @@ class Pipeline:
 
     def _protect_mask(self, shape: tuple[int, int]) -> np.ndarray | None:
         """Pixels (processing scale) not learnt as background: where the previous frame's
-        confirmed tracks that have moved are expected, and the previous frame's static objects
-        (with a dual background and a detector that re-learns)."""
+        confirmed tracks that have moved are expected (those slower than the detector's
+        ``protect_speed`` only, when it has one), and the previous frame's static objects (with
+        a dual background and a detector that re-learns)."""
         if not self.detector.protect:
             return None
-        boxes = list(self.tracker.moving_boxes())
+        speed = self.detector.protect_speed
+        slower = speed / (self.fps or 25.0) if speed is not None else None
+        boxes = list(self.tracker.moving_boxes(slower=slower))
         static = self._static_prev
         if static is not None and self.detector.relearns:
             boxes += [o.box.as_array() for o in static.objects]
@@ -394,7 +400,7 @@ class Pipeline:
         background = self.detector.background() if self._wants_background else None
         return Motion(clean_mask(raw, self.cfg.cleanup), raw_mask=raw, small=small, static=static,
                       background=background, discontinuity=cut, relearned=out.relearned,
-                      step=out.step)
+                      step=out.step, held=out.held)
 
     def regions_of(self, index: int, motion: Motion) -> Detection:
         """Second half of :meth:`detect`: the mask's regions, split between heads while the
@@ -407,7 +413,8 @@ class Pipeline:
         if self.keep_stopped:
             mask = self._keep_stopped(mask, motion.static)
         if self.ghosts is not None:   # it learns its background in the warm-up frames too
-            mask, regions = self.ghosts.regions(motion.small, mask, self._find, self.scale)
+            mask, regions = self.ghosts.regions(motion.small, mask, self._find, self.scale,
+                                                keep=motion.held)
             if self.detector.relearns:
                 # the detector re-learns the ghost pixels with the next frame
                 self._relearn = self.ghosts.ghost_pixels(mask.shape[:2])
@@ -613,7 +620,13 @@ class Pipeline:
             for k in itertools.count():
                 frame = item[0]
                 motion = job.result()
-                item = next(prepared, None)
+                try:
+                    item = next(prepared, None)
+                except Exception:
+                    # the source failed (a camera that does not come back): the frame already
+                    # detected is still tracked and handed on before the error
+                    yield self.track(frame, self.regions_of(k, motion))
+                    raise
                 if item is not None:
                     job = pool.submit(self.motion, item[0], item[1], self.feedback(*item))
                 yield self.track(frame, self.regions_of(k, motion))

@@ -77,13 +77,16 @@ def test_fps_sets_the_frames_of_every_duration():
 def test_fps_scales_speeds_and_sets_the_video_rate_and_the_summary(data, tmp_path):
     video, xml = data("pets09-s2l1", "video.avi"), data("pets09-s2l1", "View_001.xml")
     common = ["track", str(video), "--max-frames", "40", "--camera", str(xml)]
-    # the same time-out in frames at every rate (10 frames), so the tracks are the same
+    # the same time-out (10 frames) and hold speed (0.02 box heights a frame) in frames at every
+    # rate, so the tracks are the same
     assert main(common + ["--no-video", "-o", str(tmp_path / "a"),
                           "--set", "tracker.max_lost_s=1.0"]) == 0
     assert main(common + ["--fps", "5", "--codec", "mjpg", "-o", str(tmp_path / "b"),
-                          "--set", "tracker.max_lost_s=2.0"]) == 0
+                          "--set", "tracker.max_lost_s=2.0",
+                          "--set", "motion.knn.hold_speed=0.1"]) == 0
     assert main(common + ["--fps", "20", "--no-video", "-o", str(tmp_path / "c"),
-                          "--set", "tracker.max_lost_s=0.5"]) == 0
+                          "--set", "tracker.max_lost_s=0.5",
+                          "--set", "motion.knn.hold_speed=0.4"]) == 0
     a, b, c = (json.loads((tmp_path / n / "summary.json").read_text()) for n in "abc")
     assert (a["source_fps"], "source_stored_fps" in a) == (10.0, False)
     assert (b["source_fps"], b["source_stored_fps"]) == (5.0, 10.0)

@@ -24,7 +24,9 @@ def _scene() -> SyntheticScene:
 
 
 def _frames_by_id(keep_stopped: bool) -> dict[int, list[int]]:
-    cfg = load_config(None, [f"motion.keep_stopped={str(keep_stopped).lower()}"])
+    # the KNN model alone (without its hold), so that what keeps the person is the dual background
+    cfg = load_config(None, [f"motion.keep_stopped={str(keep_stopped).lower()}",
+                             "motion.knn.hold=false"])
     return frames_by_track(cfg, _scene())
 
 

@@ -53,6 +53,7 @@ class _Recorder:
     wants_color = False
     protect = True
     relearns = True
+    protect_speed = None
 
     def __init__(self) -> None:
         self.calls: list[tuple] = []
@@ -62,6 +63,9 @@ class _Recorder:
         return np.zeros(image.shape[:2], np.uint8)
 
     def background(self):
+        return None
+
+    def held(self):
         return None
 
 

@@ -20,6 +20,9 @@ class MotionDetector:
     protect = False
     #: whether ``apply`` takes a ``relearn`` request (re-learn the whole frame or some pixels)
     relearns = False
+    #: the ``protect`` mask holds only the tracks slower than this (box heights a second; None:
+    #: every track that has moved)
+    protect_speed: float | None = None
 
     def apply(self, image: np.ndarray, protect: np.ndarray | None = None) -> np.ndarray:  # pragma: no cover
         """Foreground mask of ``image``.
@@ -49,6 +52,12 @@ class MotionDetector:
 
     def background(self) -> np.ndarray | None:
         """Current background estimate (for `--save background`), or None."""
+        return None
+
+    def held(self) -> np.ndarray | None:
+        """The pixels of the last mask that are foreground only because a stopped tracked object
+        is kept there (uint8 0/255, the frame's shape), or None when there are none: the ghost
+        filter leaves them alone (default: none)."""
         return None
 
 

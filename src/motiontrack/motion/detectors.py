@@ -11,6 +11,7 @@ import numpy as np
 from ..config import check_knn_samples
 from ..imaging import to_gray
 from .base import DETECTORS, MotionDetector
+from .hold import Hold
 
 #: the random generator is seeded with ``seed * _SEED_STRIDE + frame``: seeds do not share
 #: sequences for videos shorter than this many frames
@@ -109,21 +110,40 @@ class _SelectiveSubtractor(_OpenCVSubtractor):
     prime = 0
 
     def __init__(self, make: Callable[[], Any], learning_rate: float = -1.0,
-                 protect: bool = False, protect_threshold: int = 30) -> None:
+                 protect: bool = False, protect_threshold: int = 30,
+                 hold: Hold | None = None, hold_speed: float | None = None) -> None:
         super().__init__(make, learning_rate)
-        self.protect = bool(protect)
+        #: the model itself does not learn the protected pixels
+        self.feeds = bool(protect)
         self.protect_threshold = int(protect_threshold)
+        #: the hold (:mod:`.hold`) keeps stopped tracked objects beside the model instead; with
+        #: ``protect`` the model keeps them itself and the hold is not used
+        self.hold = hold if not self.feeds else None
+        # the pipeline passes the boxes (``protect``) and the ghost pixels (``relearn``) to a
+        # detector that takes them, a frame ahead in the detector's thread (``relearns``)
+        self.protect = self.feeds or self.hold is not None
+        self.relearns = self.hold is not None
+        if self.hold is not None:
+            # a moving object is whole in the model's own mask: only what slows down is held
+            self.protect_speed = hold_speed
         self._bg: np.ndarray | None = None
         self._frames = 0
         #: frames of earlier models: the random generator's seeds go on from there
         self._before = 0
 
+    def set_rate(self, fps: float) -> None:
+        if self.hold is not None:
+            self.hold.fps = float(fps)
+
     def _restart(self) -> None:
         self._before += self._frames
         self._frames = 0
         self._bg = None
+        if self.hold is not None:
+            self.hold.reset()
 
-    def apply(self, image: np.ndarray, protect: np.ndarray | None = None) -> np.ndarray:
+    def apply(self, image: np.ndarray, protect: np.ndarray | None = None,
+              relearn: np.ndarray | bool | None = None) -> np.ndarray:
         self._frames += 1
         if self.uses_rng:
             # OpenCV's random generator is per thread and shared with everything else that runs
@@ -133,7 +153,13 @@ class _SelectiveSubtractor(_OpenCVSubtractor):
         if self._frames == 1:
             for _ in range(self.prime):
                 self.sub.apply(image, learningRate=self.learning_rate)
-        if protect is None or self._frames < 3 or not protect.any():
+        if self.hold is not None:
+            raw = self.sub.apply(image, learningRate=self.learning_rate)
+            if relearn is True:
+                self.hold.reset()
+                relearn = None
+            return self.hold.apply(image, raw, protect, relearn)
+        if not self.feeds or protect is None or self._frames < 3 or not protect.any():
             if self._frames % self.BG_REFRESH == 0:
                 self._bg = None
             return _binary(self.sub.apply(image, learningRate=self.learning_rate))
@@ -148,11 +174,15 @@ class _SelectiveSubtractor(_OpenCVSubtractor):
         fg[protect] = np.where(diff[protect] > self.protect_threshold, 255, 0)
         return fg
 
+    def held(self) -> np.ndarray | None:
+        return self.hold.held if self.hold is not None else None
+
     def background(self) -> np.ndarray | None:
         try:
-            return self.sub.getBackgroundImage()
+            bg = self.sub.getBackgroundImage()
         except cv2.error:  # pragma: no cover - some subtractors have none
             return None
+        return self.hold.background(bg) if self.hold is not None else bg
 
 
 @DETECTORS.register("mog2")
@@ -176,7 +206,9 @@ class KNN(_SelectiveSubtractor):
 
     def __init__(self, history: int = 500, dist2_threshold: float = 300.0, detect_shadows: bool = True,
                  learning_rate: float = -1.0, protect: bool = False, protect_threshold: int = 30,
-                 seed: int = 0, n_samples: int = 7, knn_samples: int = 2) -> None:
+                 seed: int = 0, n_samples: int = 7, knn_samples: int = 2, hold: bool = True,
+                 hold_threshold: int = 30, hold_speed: float = 0.2,
+                 accept_s: float = 180.0) -> None:
         check_knn_samples(int(n_samples), int(knn_samples))
         self.seed = int(seed)
 
@@ -187,7 +219,8 @@ class KNN(_SelectiveSubtractor):
             sub.setkNNSamples(int(knn_samples))
             return sub
 
-        super().__init__(make, learning_rate, protect, protect_threshold)
+        super().__init__(make, learning_rate, protect, protect_threshold,
+                         Hold(hold_threshold, accept_s) if hold else None, hold_speed)
 
 
 @DETECTORS.register("cnt")

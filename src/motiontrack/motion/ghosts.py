@@ -114,12 +114,15 @@ class GhostFilter:
         self._prev: list[np.ndarray] = []   # gray frames of the last runs of _absorb
 
     def regions(self, image: np.ndarray, mask: np.ndarray,
-                find: Callable[[np.ndarray], list[Region]], scale: float
-                ) -> tuple[np.ndarray, list[Region]]:
+                find: Callable[[np.ndarray], list[Region]], scale: float,
+                keep: np.ndarray | None = None) -> tuple[np.ndarray, list[Region]]:
         """``(mask, regions)`` of one frame without its ghosts, then learn the frame's background.
 
         ``image`` and ``mask`` are at processing resolution (``image`` gray or BGR); ``find``
-        turns a mask into regions (boxes in original-frame pixels; ``scale`` converts them)."""
+        turns a mask into regions (boxes in original-frame pixels; ``scale`` converts them).
+        ``keep`` (uint8 0/255 or None): pixels the detector holds for a stopped tracked object,
+        which differ from the ground it keeps there; they are neither taken nor hidden as ghost
+        pixels (a bag of the ground's brightness looks like ground to the gray tests)."""
         self._frames += 1
         gray = None
         if self._bg is None or self._bg.shape != mask.shape:
@@ -138,6 +141,8 @@ class GhostFilter:
             y1, y2, x1, x2 = self._win
             ghost = self._ghost[y1:y2, x1:x2]
             ghost[mask[y1:y2, x1:x2] == 0] = -1
+            if keep is not None:
+                ghost[keep[y1:y2, x1:x2] > 0] = -1
             remembered = ghost >= 0
             x, y, w, h = cv2.boundingRect(remembered.view(np.uint8))
             self._win = (y1 + y, y1 + y + h, x1 + x, x1 + x + w) if w else None
@@ -148,7 +153,7 @@ class GhostFilter:
         if self.pixels and self._frames % self.ABSORB_EVERY == 0:
             if gray is None:
                 gray = to_gray(image)
-            mask = self._absorb(gray, mask)
+            mask = self._absorb(gray, mask, keep)
         regions = find(mask)
         keep = []
         for r in regions:
@@ -173,7 +178,8 @@ class GhostFilter:
             self._bg8 = cv2.convertScaleAbs(self._bg)
         return mask, keep
 
-    def _absorb(self, gray: np.ndarray, mask: np.ndarray) -> np.ndarray:
+    def _absorb(self, gray: np.ndarray, mask: np.ndarray,
+                keep: np.ndarray | None = None) -> np.ndarray:
         """Pixel-level ghost removal: the mask's border pixels that now look like the ground
         next to them, and not like the background held at their place, are ghost pixels (the
         ground uncovered by an object that stood where the model learnt it). This is the idea
@@ -200,7 +206,11 @@ class GhostFilter:
         if not prev:
             return mask
         # only a still pixel next to the ground can be taken: the still part of the mask's border
-        pts = cv2.findNonZero(cv2.bitwise_and(mask, cv2.bitwise_not(cv2.erode(mask, _K3))))
+        # (not a pixel the detector holds, nor a ring beyond one: see :meth:`regions`)
+        border = cv2.bitwise_and(mask, cv2.bitwise_not(cv2.erode(mask, _K3)))
+        if keep is not None:
+            border = cv2.bitwise_and(border, cv2.bitwise_not(keep))
+        pts = cv2.findNonZero(border)
         if pts is None:
             return mask
         w = mask.shape[1]
@@ -233,6 +243,8 @@ class GhostFilter:
             flat = np.unique(ny * w + nx)
             ys, xs = flat // w, flat % w
             fg = out[ys, xs] > 0
+            if keep is not None:
+                fg &= keep[ys, xs] == 0
             ys, xs = _still(ys[fg], xs[fg], gray, prev, self.STILL_T)
         if not taken:
             return mask

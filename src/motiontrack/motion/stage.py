@@ -50,13 +50,15 @@ class StageOutput:
     frame after a sudden change (``relearned``), whether the reference moved on
     (``reanchored``), and the camera's motion since the previous frame while it moves (``step``:
     (2, 3), previous frame's pixels → this frame's, processing scale; see
-    :attr:`StabilizedFrame.step`)."""
+    :attr:`StabilizedFrame.step`), and the pixels of ``raw`` that the detector holds for a
+    stopped tracked object (``held``: :meth:`MotionDetector.held`, frame coordinates, or None)."""
 
     raw: np.ndarray
     view: np.ndarray
     relearned: bool = False
     reanchored: bool = False
     step: np.ndarray | None = None
+    held: np.ndarray | None = None
 
 
 def sudden_change(fraction: float, jump: float, cfg: MotionConfig) -> bool:
@@ -140,12 +142,15 @@ class MotionStage:
         relearned = self._sudden(view, raw)
         if relearned:
             raw = self.detector.apply(view, None)
+        held = self.detector.held()
         self._moving = raw
         if seen is not None:
             raw = self.stabilizer.unwarp(raw, seen)
+            if held is not None:
+                held = self.stabilizer.unwarp(held, seen)
         if seen is None:
-            return StageOutput(raw, view, relearned)
-        return StageOutput(raw, view, relearned, seen.reanchored, seen.step)
+            return StageOutput(raw, view, relearned, held=held)
+        return StageOutput(raw, view, relearned, seen.reanchored, seen.step, held)
 
     def _follow(self, seen: StabilizedFrame) -> None:
         """The reference moved on at ``seen``: the model re-learns from its background carried

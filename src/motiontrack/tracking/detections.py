@@ -377,7 +377,8 @@ class DetectionTracker:
         """Every named track (ids > 0), as :meth:`MultiObjectTracker.views` shows them."""
         return [TrackView(m.tid, m.state, m.tsu, True, False) for m in self.meta if m.tid > 0]
 
-    def moving_boxes(self, margin: float = 0.1, unseen: int = 2) -> np.ndarray:
+    def moving_boxes(self, margin: float = 0.1, unseen: int = 2,
+                     slower: float | None = None) -> np.ndarray:
         """No motion mask to protect with detections: an empty (0, 4) array."""
         return np.zeros((0, 4))
 

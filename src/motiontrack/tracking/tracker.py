@@ -490,13 +490,19 @@ class MultiObjectTracker:
         return [TrackView(m.tid, m.state, m.tsu, m.moved, m.bridged)
                 for m in self.meta if m.tid > 0]
 
-    def moving_boxes(self, margin: float = 0.1, unseen: int = 2) -> np.ndarray:
+    def moving_boxes(self, margin: float = 0.1, unseen: int = 2,
+                     slower: float | None = None) -> np.ndarray:
         """Boxes (N, 4) where established tracks that have travelled at least one body height and
         were seen in the last ``unseen`` frames are expected next frame (current box moved by one
-        step of velocity, grown by ``margin`` of its size on each side). Used to protect them from
+        step of velocity, grown by ``margin`` of its size on each side); with ``slower``, only
+        those whose speed is below that many box heights a frame. Used to protect them from
         being learnt into the background, and to keep people who stop in the mask."""
         keep = [i for i, m in enumerate(self.meta) if m.moved and m.state != TrackState.TENTATIVE
                 and m.tsu <= unseen]
+        if keep and slower is not None:
+            x = self.x[keep]
+            speed = np.hypot(x[:, 4], x[:, 5])
+            keep = [i for i, s, h in zip(keep, speed, x[:, 3]) if s < slower * h]
         if not keep:
             return np.zeros((0, 4))
         x = self.x[keep]
