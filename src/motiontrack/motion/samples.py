@@ -31,7 +31,7 @@ import numpy as np
 
 from ..imaging import to_gray
 from .base import DETECTORS, MotionDetector
-from .ghosts import outline_ratio
+from .ghosts import components, outline_ratio
 
 __all__ = ["SampleBackground"]
 
@@ -266,18 +266,8 @@ class SampleBackground(MotionDetector):
         are ghosts: their outline has its edges in the model's background and not in the frame
         (the place an object left; :func:`~motiontrack.motion.ghosts.outline_ratio`). Protected
         pixels are tested too: a ghost is never an object to keep."""
-        mask = fg.view(np.uint8)
-        contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
         h, w = fg.shape
-        for c in contours:
-            x, y, bw, bh = cv2.boundingRect(c)
-            if bw * bh < self.GHOST_MIN:
-                continue
-            x1, y1 = max(0, x - 2), max(0, y - 2)
-            x2, y2 = min(w, x + bw + 2), min(h, y + bh + 2)
-            crop = np.zeros((y2 - y1, x2 - x1), np.uint8)
-            cv2.drawContours(crop, [c], -1, 255, -1, offset=(-x1, -y1))
-            crop &= mask[y1:y2, x1:x2] * np.uint8(255)
+        for y1, y2, x1, x2, crop in components(fg.view(np.uint8), self.GHOST_MIN):
             bg = self._background(y1, y2, x1, x2)
             if outline_ratio(to_gray(image[y1:y2, x1:x2]), to_gray(bg), crop) < self.ghost_ratio:
                 where = np.zeros((h, w), bool)

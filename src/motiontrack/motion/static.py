@@ -36,7 +36,7 @@ import numpy as np
 
 from ..imaging import to_gray
 from ..types import Box, StaticFrame, StaticObject
-from .ghosts import outline_ratio
+from .ghosts import components, outline_ratio
 
 __all__ = ["DualBackground"]
 
@@ -120,24 +120,13 @@ class DualBackground:
 
     def _objects(self, image: np.ndarray, mask: np.ndarray, diff_short: np.ndarray,
                  long8: np.ndarray) -> tuple[StaticObject, ...]:
-        # outer contours, each filled in its own window: far cheaper than labelling the image
-        contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
-        if not contours:
+        if not cv2.countNonZero(mask):
             return ()
         gray = to_gray(image)
         inv = 1.0 / self.scale
         out = []
-        h, w = mask.shape
         long_gray = None
-        for c in contours:
-            x, y, bw, bh = cv2.boundingRect(c)
-            if bw * bh < self.min_pixels:
-                continue
-            x1, y1 = max(0, x - 2), max(0, y - 2)
-            x2, y2 = min(w, x + bw + 2), min(h, y + bh + 2)
-            crop = np.zeros((y2 - y1, x2 - x1), np.uint8)
-            cv2.drawContours(crop, [c], -1, 255, -1, offset=(-x1, -y1))
-            crop = cv2.bitwise_and(crop, mask[y1:y2, x1:x2])
+        for y1, y2, x1, x2, crop in components(mask, self.min_pixels):
             on = crop > 0
             area = int(np.count_nonzero(on))
             if area < self.min_pixels:
@@ -147,6 +136,9 @@ class DualBackground:
                     long_gray = to_gray(long8)
                 if outline_ratio(gray[y1:y2, x1:x2], long_gray[y1:y2, x1:x2], crop) < self.ghost_ratio:
                     continue
+            # the component's box: its outline's pixels are the mask's, so the crop's box
+            bx, by, bw, bh = cv2.boundingRect(crop)
+            x, y = x1 + bx, y1 + by
             frames = int(self._evidence[y1:y2, x1:x2][on].max())
             change = float(diff_short[y1:y2, x1:x2][on].mean())
             out.append(StaticObject(Box(x * inv, y * inv, bw * inv, bh * inv),
