@@ -52,6 +52,24 @@ def test_segments_older_than_the_days_kept_go_and_their_events_with_them(out, ca
     assert "retention: removed gate/a (0.0 MB" in caplog.text
 
 
+def test_a_segments_events_leave_the_store_before_its_files_go(out, monkeypatch):
+    import shutil
+
+    import motiontrack.serve.retention as retention
+
+    seen, remove = [], shutil.rmtree
+
+    def rmtree(path, *a, **kw):   # what a reader of the store sees as the files go
+        with EventStore(out, readonly=True) as store:
+            seen.append((path.relative_to(out).as_posix(),
+                         sorted(e.segment for e in store if (out / e.segment) == path)))
+        remove(path, *a, **kw)
+
+    monkeypatch.setattr(retention.shutil, "rmtree", rmtree)
+    apply_retention(out, Retention(keep_days=6), in_use=["gate/d"], now=NOW)
+    assert seen == [("gate/a", []), ("yard/a", [])]
+
+
 def test_the_oldest_go_until_all_fit_in_the_size_kept(out):
     # 2,050 bytes in all; keep 1,000: gate/a (400), yard/a (1000) go → 650 left
     removed = apply_retention(out, Retention(keep_gb=1000 / 1e9), in_use=[], now=NOW)

@@ -111,6 +111,9 @@ def apply_retention(out: Path, retention: Retention, in_use: Iterable[str],
             if s not in doomed:
                 doomed.append(s)
                 total -= s.bytes
+    # the store forgets the events first: a reader never finds an event whose snapshot or
+    # clip is already gone (a segment that then cannot be removed is tried again next time)
+    _forget(Path(out) / STORE_NAME, [s.name for s in doomed])
     removed = []
     for s in doomed:
         try:
@@ -121,7 +124,6 @@ def apply_retention(out: Path, retention: Retention, in_use: Iterable[str],
         log.info("retention: removed %s (%.1f MB, ended %s)", s.name, s.bytes / 1e6,
                  time.strftime("%Y-%m-%d %H:%M", time.localtime(s.ended)))
         removed.append(s)
-    _forget(Path(out) / STORE_NAME, [s.name for s in removed])
     return removed
 
 
