@@ -4,6 +4,8 @@ first, after one ``discontinuity`` record, and the segment's ``events.jsonl`` sa
 
 from __future__ import annotations
 
+import json
+
 from motiontrack.io.events import read_events
 from motiontrack.io.pacing import Pacer
 from motiontrack.serve.cameras import CameraSpec
@@ -78,6 +80,8 @@ def test_a_looped_file_gives_the_events_of_its_first_play_again(tmp_path):
     # the segment's events file: the same events, the record before the second play's
     (segment,) = (tmp_path / "out").iterdir()
     ef = read_events(segment / "events.jsonl")
+    assert ef.header["source"] == json.loads((segment / "summary.json").read_text())["source"]
+    assert ef.header["source"].startswith("synth:leftbag")     # the camera's source, by name
     assert ef.discontinuities == ((N + 1, Discontinuity("loop")),)
     assert [e.to_json()["type"] for e in ef.events] == [e["type"] for e in events]
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import functools
 import logging
+import os
 from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Callable, Iterable, Sequence
@@ -115,7 +116,9 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
         tracks = TracksWriter(out, fitted, fill)
         writers: list[Writer] = [tracks]
         if analytics is not None:
-            writers += _scene_writers(out, str(source), analytics.scene, fitted, bin_s,
+            # a Source object (serve's segments) is named as the summary names it
+            named = source if isinstance(source, (str, int, os.PathLike)) else src.info.name
+            writers += _scene_writers(out, str(named), analytics.scene, fitted, bin_s,
                                       by_class)
             if store_events:
                 from .event_store_writer import EventStoreWriter
