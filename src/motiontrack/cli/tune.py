@@ -107,8 +107,8 @@ def cmd_tune(args) -> int:
     from ..config_activity import warn_inactive_overrides
     from ..errors import ConfigError, printable
     from ..studies.sweep import TRACKING_KEYS
-    from ._common import sigterm_as_interrupt
     from ..studies.tune import parse_space, require_optuna, tune, write_tune_outputs
+    from ._common import sigterm_as_interrupt
 
     from pathlib import Path
 
