@@ -116,10 +116,8 @@ def track_job(source: Any, cfg: PipelineConfig, out_dir: str | Path, *, force: b
         tracks = TracksWriter(out, fitted, fill)
         writers: list[Writer] = [tracks]
         if analytics is not None:
-            # a Source object (serve's segments) is named as the summary names it
-            named = source if isinstance(source, (str, int, os.PathLike)) else src.info.name
-            writers += _scene_writers(out, str(named), analytics.scene, fitted, bin_s,
-                                      by_class)
+            writers += _scene_writers(out, _source_label(source, src), analytics.scene, fitted,
+                                      bin_s, by_class)
             if store_events:
                 from .event_store_writer import EventStoreWriter
 
@@ -188,6 +186,12 @@ def _sink_camera_name(sinks: Sequence[Any], scene: Any, camera_name: str | None,
     from ..io.sinks import check_camera_name
 
     return check_camera_name(camera_name or source_name(source))
+
+
+def _source_label(source: Any, src: Source) -> str:
+    """The source as ``events.jsonl`` names it: as given, or for a Source object (serve's
+    segments) the name its summary gives it."""
+    return str(source if isinstance(source, (str, int, os.PathLike)) else src.info.name)
 
 
 def _scene_writers(out: Path, source: str, sc: Any, camera: Any, bin_s: float,
