@@ -172,17 +172,24 @@ SYNTH_CASES = [
 @pytest.mark.slow
 def test_synthetic_person_followed(scene, name, n, criterion, minimum):
     f0, frames, gt = _scene_frames(scene, 61)
-    out = list(follow(frames[:n + 1], create_single_tracker(name), Box(*gt.at(f0).boxes[0])))
-    good = []
-    for k, (_, _, ok, b, _) in enumerate(out[1:], start=1):
-        g = gt.at(f0 + k).boxes[0]
-        if criterion == "iou":
-            good.append(ok and iou_matrix(b.as_array(), g)[0, 0] >= 0.5)
-        else:
-            cx, cy = b.center if ok else (-1, -1)
-            good.append(g[0] <= cx <= g[0] + g[2] and g[1] <= cy <= g[1] + g[3])
-    assert len(good) == n
-    assert np.mean(good) >= minimum, f"{name} on {scene}: {np.mean(good):.3f} < {minimum}"
+
+    def share_followed() -> float:
+        out = list(follow(frames[:n + 1], create_single_tracker(name), Box(*gt.at(f0).boxes[0])))
+        good = []
+        for k, (_, _, ok, b, _) in enumerate(out[1:], start=1):
+            g = gt.at(f0 + k).boxes[0]
+            if criterion == "iou":
+                good.append(ok and iou_matrix(b.as_array(), g)[0, 0] >= 0.5)
+            else:
+                cx, cy = b.center if ok else (-1, -1)
+                good.append(g[0] <= cx <= g[0] + g[2] and g[1] <= cy <= g[1] + g[3])
+        assert len(good) == n
+        return float(np.mean(good))
+
+    # MIL draws its samples from a generator inside OpenCV that cv2.setRNGSeed does not reach,
+    # so one run depends on the MIL runs before it in the process: the median of three runs
+    share = float(np.median([share_followed() for _ in range(3 if name == "mil" else 1)]))
+    assert share >= minimum, f"{name} on {scene}: {share:.3f} < {minimum}"
 
 
 # --------------------------------------------------------------------------------- accuracy
