@@ -11,7 +11,7 @@ from typing import Sequence
 import cv2
 import numpy as np
 
-__all__ = ["to_gray", "pixel_window", "scaled_size", "resolve_scale", "AUTO_PIXELS",
+__all__ = ["to_gray", "largest_difference", "pixel_window", "scaled_size", "resolve_scale", "AUTO_PIXELS",
            "AUTO_MIN_SCALE"]
 
 #: automatic processing scale: about this many pixels are processed (384 x 288) ...
@@ -54,3 +54,13 @@ def pixel_window(box: Sequence[float] | np.ndarray, scale: float, shape: tuple[i
 def to_gray(image: np.ndarray) -> np.ndarray:
     """A BGR image in gray; a gray (2-D) image as it is (not copied)."""
     return cv2.cvtColor(image, cv2.COLOR_BGR2GRAY) if image.ndim == 3 else image
+
+
+def largest_difference(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """The absolute difference of two uint8 images in their most different colour channel,
+    (h, w) uint8 (a bag can have the brightness of the ground it lies on, not its colour)."""
+    d = cv2.absdiff(a, b)
+    if d.ndim == 3:
+        c0, c1, c2 = cv2.split(d)
+        d = cv2.max(cv2.max(c0, c1), c2)
+    return d

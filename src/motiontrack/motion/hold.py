@@ -31,19 +31,12 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from ..imaging import largest_difference
+
 __all__ = ["Hold"]
 
 #: subtractor output at and above which a pixel is foreground (MOG2/KNN: 255; shadows 127)
 _FOREGROUND = 200
-
-
-def _largest_difference(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """The largest channel's absolute difference of two uint8 images, (h, w) uint8."""
-    d = cv2.absdiff(a, b)
-    if d.ndim == 3:
-        c0, c1, c2 = cv2.split(d)
-        d = cv2.max(cv2.max(c0, c1), c2)
-    return d
 
 
 class Hold:
@@ -141,7 +134,7 @@ class Hold:
         where = self._seen if boxes is None else cv2.bitwise_or(boxes, self._seen)
         x, y, w, h = cv2.boundingRect(where)
         win = (slice(y, y + h), slice(x, x + w))
-        d = _largest_difference(image[win], self._bg[win])
+        d = largest_difference(image[win], self._bg[win])
         differs = d > self.threshold
         inside = boxes[win] > 0 if boxes is not None else np.zeros(d.shape, bool)
         cover = differs & inside

@@ -34,7 +34,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from ..imaging import to_gray
+from ..imaging import largest_difference, to_gray
 from ..types import Box, StaticFrame, StaticObject
 from .ghosts import components, outline_ratio
 
@@ -98,8 +98,8 @@ class DualBackground:
             return StaticFrame()
         self.frames += 1
         long8 = cv2.convertScaleAbs(self._long)
-        fg_long = _difference(image, long8) > self.threshold
-        diff_short = _difference(image, cv2.convertScaleAbs(self._short))
+        fg_long = largest_difference(image, long8) > self.threshold
+        diff_short = largest_difference(image, cv2.convertScaleAbs(self._short))
         fg_short = diff_short > self.threshold
         ev = self._evidence
         np.multiply(ev, fg_long, out=ev)       # the long-term background again: nothing there
@@ -144,12 +144,3 @@ class DualBackground:
             out.append(StaticObject(Box(x * inv, y * inv, bw * inv, bh * inv),
                                     float(area) * inv * inv, frames, round(change, 2)))
         return tuple(out)
-
-
-def _difference(image: np.ndarray, model: np.ndarray) -> np.ndarray:
-    """The largest channel's absolute difference of two uint8 images, (h, w) uint8."""
-    d = cv2.absdiff(image, model)
-    if d.ndim == 3:
-        b, g, r = cv2.split(d)
-        d = cv2.max(cv2.max(b, g), r)
-    return d
