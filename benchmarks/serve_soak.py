@@ -40,7 +40,6 @@ import json
 import os
 import signal
 import socket
-import sqlite3
 import subprocess
 import sys
 import tempfile
@@ -50,6 +49,8 @@ from pathlib import Path
 
 import httpx
 import numpy as np
+
+from motiontrack.io.event_store import STORE_NAME, EventStore
 
 from memory import vm_rss_mb  # benchmarks/ is on sys.path when a script here runs
 
@@ -90,14 +91,10 @@ class Sample:
 def store_state(out: Path) -> tuple[int, int]:
     """(events in the store, those of them without their snapshot although their segment is
     still there)."""
-    db = out / "events.db"
-    if not db.is_file():
+    if not (out / STORE_NAME).is_file():
         return 0, 0
-    con = sqlite3.connect(f"file:{db}?mode=ro", uri=True, timeout=10)
-    try:
-        rows = con.execute("SELECT segment, snapshot FROM events").fetchall()
-    finally:
-        con.close()
+    with EventStore(out, readonly=True) as store:
+        rows = [(e.segment, e.snapshot) for e in store]
     missing = 0
     for segment, snapshot in rows:        # segment: CAMERA/FOLDER, snapshot: relative to out
         if snapshot is not None and (out / snapshot).is_file():
@@ -154,7 +151,7 @@ class Soak:
     def sample(self, t0: float) -> Sample:
         frames = self.frames()
         events, missing = store_state(self.out)
-        store_mb = sum(p.stat().st_size for p in self.out.glob("events.db*")) / 1e6
+        store_mb = sum(p.stat().st_size for p in self.out.glob(f"{STORE_NAME}*")) / 1e6
         rss = {"server": vm_rss_mb(self.proc.pid) or 0.0}
         rss.update({name: vm_rss_mb(pid) or 0.0 for name, pid in self.pids.items()})
         return Sample(wall=time.monotonic() - t0,
