@@ -65,6 +65,24 @@ def test_a_clip_holds_the_seconds_before_and_after_its_event(tmp_path):
     assert (tmp_path / "evidence" / "1-object.jpg").is_file()
 
 
+def test_a_device_failing_mid_clip_drops_that_clip_and_keeps_the_next(tmp_path, monkeypatch):
+    from motiontrack.io.clips import ClipWriter
+
+    real = ClipWriter.add
+    def add(self, jpeg):                     # the device fills while the first clip is written
+        if self.path.name == "1.avi" and self.frames == 12:
+            raise OSError(28, "No space left on device")
+        real(self, jpeg)
+
+    monkeypatch.setattr(ClipWriter, "add", add)
+    scene = {**SCENE, "evidence": {"clip_s": [0.4, 0.8], "clip_fps": 25}}
+    clips, snaps = _run(tmp_path, scene, {30: [{"type": "line_cross", "line": "gate", "track": 3}],
+                                          95: [{"type": "zone_enter", "zone": "bench", "track": 3}]},
+                        frames=100)
+    assert clips == {2: "evidence/2.avi"} and set(snaps) == {1, 2}
+    assert sorted(p.name for p in (tmp_path / "evidence").glob("*.avi")) == ["2.avi"]  # no .part
+
+
 def test_events_whose_seconds_overlap_share_one_clip(tmp_path):
     scene = {**SCENE, "evidence": {"clip_s": [0.4, 0.8], "clip_fps": 25}}
     clips, _ = _run(tmp_path, scene, {30: [{"type": "line_cross", "line": "gate"}],

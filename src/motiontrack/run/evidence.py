@@ -12,9 +12,11 @@ event the clip and where the event's own seconds start in it (``clip_offset``).
 
 The pre-roll comes from a ring buffer of the annotated frames, JPEG-encoded once as they pass
 (at most ``clip_fps`` a second, at most ``clip_width`` pixels across), so an event costs no
-encoding of the past; a clip is written once its last frame has passed, or when the run ends
-(then it ends there). Clips are written under a temporary name and renamed: a killed run leaves
-each clip complete and recorded in the store, or not recorded.
+encoding of the past; a clip's file is written as its frames pass (the ring's pre-roll first),
+so the frames of the clips being gathered are on disk, not in memory, and it is complete once
+its last frame has passed, or when the run ends (then it ends there). Clips are written under a
+temporary name and renamed: a killed run leaves each clip complete and recorded in the store,
+or not recorded (its ``.part`` file is removed by the next run of the folder).
 """
 
 from __future__ import annotations
@@ -31,7 +33,7 @@ import numpy as np
 
 from ..analytics.evidence import EvidencePlan
 from ..io.atomic import DiskFullError, atomic_write_bytes
-from ..io.clips import write_mjpeg_clip
+from ..io.clips import ClipWriter
 from ..types import FrameResult
 
 log = logging.getLogger(__name__)
@@ -54,11 +56,11 @@ MAX_CLIP_S = 60.0
 
 @dataclass
 class _Clip:
-    """A clip being gathered: its frames (JPEG) from frame number ``first``, up to ``last``,
+    """A clip being gathered: its file, written from frame number ``first`` up to ``last``,
     and its events with the frame their own seconds start at."""
 
     event_id: int
-    frames: list[bytes]
+    writer: ClipWriter
     first: int
     last: int
     members: list[tuple[int, int]] = field(default_factory=list)
@@ -111,8 +113,19 @@ class EvidenceKeeper:
         self._ring.append((frame, jpeg))
         for clip in self._open:
             if frame <= clip.last:
-                clip.frames.append(jpeg)
+                self._add(clip, jpeg)
         return self._finished(frame)
+
+    def _add(self, clip: _Clip, jpeg: bytes) -> None:
+        """Write a frame of ``clip``; a device that fails (full) drops the clip."""
+        if clip.done:
+            return
+        try:
+            clip.writer.add(jpeg)
+        except (OSError, DiskFullError) as exc:
+            log.warning("clip of event %d not written: %s", clip.event_id, exc)
+            clip.writer.abort()
+            clip.done = True
 
     def snapshots(self, event: Mapping[str, Any]) -> bool:
         """Whether ``event``'s rule keeps a snapshot."""
@@ -156,26 +169,29 @@ class EvidenceKeeper:
             return
         kept = [(f, j) for f, j in self._ring if f >= start]
         first = kept[0][0] if kept else int(np.ceil(start))
-        clip = _Clip(event_id, [j for _, j in kept], first, end)
+        clip = _Clip(event_id, ClipWriter(self.dir / f"{event_id}.avi", self.clip_fps), first,
+                     end)
         clip.members.append((event_id, first))
         self._open.append(clip)
+        for _, jpeg in kept:
+            self._add(clip, jpeg)
 
     def _finished(self, frame: int | None) -> list[tuple[int, str, float]]:
         out = []
         for clip in self._open:
-            if frame is None or frame >= clip.last:
-                clip.done = True
-                if clip.frames:
-                    try:
-                        self.dir.mkdir(parents=True, exist_ok=True)
-                        path = write_mjpeg_clip(self.dir / f"{clip.event_id}.avi", clip.frames,
-                                                self.clip_fps)
-                    except (OSError, DiskFullError) as exc:   # a full device: no clip
-                        log.warning("clip of event %d not written: %s", clip.event_id, exc)
-                        continue
-                    rel = self._rel(path)
-                    out += [(event_id, rel, round((start - clip.first) / self.fps, 3))
-                            for event_id, start in clip.members]
+            if clip.done or not (frame is None or frame >= clip.last):
+                continue
+            clip.done = True
+            if not clip.writer.frames:
+                continue
+            try:
+                path = clip.writer.close()
+            except (OSError, DiskFullError) as exc:   # a full device: no clip
+                log.warning("clip of event %d not written: %s", clip.event_id, exc)
+                continue
+            rel = self._rel(path)
+            out += [(event_id, rel, round((start - clip.first) / self.fps, 3))
+                    for event_id, start in clip.members]
         self._open = [c for c in self._open if not c.done]
         return out
 

@@ -24,8 +24,10 @@ from typing import Any, Iterable
 
 __all__ = ["Hub", "CameraState", "Subscriber", "Cursor", "EVENTS_KEPT"]
 
-#: events kept per camera for ``?since=``
-EVENTS_KEPT = 10_000
+#: events kept in memory per camera for ``?since=`` and resumed event streams (about 1 KB
+#: each): enough to bridge a dropped connection; every event is in the store, which
+#: ``/api/events/search`` reads, so a wall of cameras does not hold its history in memory
+EVENTS_KEPT = 1_000
 
 
 class Subscriber:
