@@ -14,7 +14,12 @@ Box F is the harmonic mean of recall and precision. Pixel F is CDnet's F-measure
 regions are found in (after clean-up and the ghost filter; ``motiontrack evaluate-masks`` rules,
 ROI.bmp and label 170 excluded, shadow negative), over the same frames.
 
-Run: .venv/bin/python benchmarks/highway.py [--data ../shared/data]
+The last rows hold KNN's shadow test (a pixel at least ``shadow_threshold`` of the background's
+brightness, its colour kept, is a shadow) at one threshold, where the default takes 0.7 once the
+tracks are mostly vehicles. ``--shadows`` prints instead where the shadows and the
+cars fall on that scale.
+
+Run: .venv/bin/python benchmarks/highway.py [--data ../shared/data] [--shadows]
 """
 
 from __future__ import annotations
@@ -94,10 +99,40 @@ def baseline_boxes(folder: Path):
                                if cv2.contourArea(c) >= min_area], float).reshape(-1, 4)
 
 
+def shadow_ratios(folder: Path) -> None:
+    """Percentiles of frame / background brightness (sum of the channels, OpenCV's KNN with the
+    pipeline's 3x3 blur at full size) over every 5th frame of FIRST-LAST: for the ground truth's
+    shadow pixels (label 50), for car pixels (255) KNN marks as shadow (127), and for car
+    pixels it marks as foreground."""
+    sub = cv2.createBackgroundSubtractorKNN(500, 300.0, True)
+    parts: dict[str, list[np.ndarray]] = {"cast shadows (gt 50)": [],
+                                          "car pixels KNN calls shadow": [],
+                                          "car pixels KNN calls foreground": []}
+    for k, name in enumerate(sorted((folder / "input").glob("in*.jpg"))[:LAST]):
+        frame = k + 1
+        image = cv2.GaussianBlur(cv2.imread(str(name)), (3, 3), 0)
+        raw = sub.apply(image)
+        if frame < FIRST or frame % 5:
+            continue
+        g = cv2.imread(str(folder / "groundtruth" / f"gt{frame:06d}.png"), cv2.IMREAD_GRAYSCALE)
+        ratio = ((image.astype(np.float32).sum(2) + 1)
+                 / (sub.getBackgroundImage().astype(np.float32).sum(2) + 1))
+        for key, where in zip(parts, (g == 50, (g == 255) & (raw == 127),
+                                      (g == 255) & (raw == 255))):
+            parts[key].append(ratio[where])
+    print("brightness of frame / background, percentiles 5 25 50 75 95 (KNN's shadows: 0.5-1)")
+    for key, values in parts.items():
+        v = np.concatenate(values)
+        print(f"{key:<34}{len(v):>9} px  " + " ".join(f"{q:5.2f}" for q in
+                                                       np.percentile(v, [5, 25, 50, 75, 95])))
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--data", default=os.environ.get("MOTIONTRACK_DATA",
                                                      Path(__file__).resolve().parents[2] / "shared" / "data"))
+    ap.add_argument("--shadows", action="store_true",
+                    help="only the brightness ratios of shadows and of cars KNN calls shadow")
     args = ap.parse_args()
     folder = Path(args.data) / "cdnet-highway"
     if not (folder / "input").is_dir():
@@ -110,7 +145,16 @@ def main() -> None:
         ("knn, hold=false", ["motion.method=knn", "motion.knn.hold=false"], None),
         ("pipeline, motion.method=vibe", ["motion.method=vibe"], None),
         ("vibe, protect=false", ["motion.method=vibe", "motion.vibe.protect=false"], None),
+        ("knn, shadow threshold 0.5 always", ["motion.knn.vehicle_shadow_threshold=0.5"], None),
+        ("knn, shadow threshold 0.7 always", ["motion.knn.shadow_threshold=0.7",
+                                              "motion.knn.vehicle_shadow_threshold=0.7"], None),
+        ("knn, shadow threshold 0.8 always", ["motion.knn.shadow_threshold=0.8",
+                                              "motion.knn.vehicle_shadow_threshold=0.8"], None),
+        ("knn, detect_shadows=false", ["motion.knn.detect_shadows=false"], None),
     ]
+    if args.shadows:
+        shadow_ratios(folder)
+        return
     print(f"CDnet highway 320x240, frames {FIRST}-{LAST}, cars = gt mask components >= {MIN_GT_AREA} px")
     print(f"{'run':<38}{'recall':>8}{'prec':>8}{'box F':>7}{'pixel F':>8}{'s':>7}")
     for name, overrides, preset in rows:

@@ -64,7 +64,8 @@ def one_run(frames: list, cfg: PipelineConfig, fps: float) -> dict[str, float]:
         t0 = clock()
         small = preprocess(image, pipe.pre_cfg)
         t1 = clock()
-        out = pipe.stage.apply(small, *pipe.feedback(frame, small))
+        fb = pipe.feedback(frame, small)
+        out = pipe.stage.apply(small, fb.protect, fb.relearn)
         raw = out.raw
         t2 = clock()
         mask = clean_mask(raw, cfg.cleanup)

@@ -187,6 +187,11 @@ class MOG2Params(_Section):
                                  doc="squared Mahalanobis distance from the background model above "
                                      "which a pixel is foreground (OpenCV varThreshold)")
     detect_shadows: bool = param(True, doc="detect shadows and leave them out of the mask (slower)")
+    shadow_threshold: float = param(
+        0.5, lo=0.0, hi=1.0, when={"detect_shadows": True},
+        doc="a shadow is the background darkened to no less than this fraction of its brightness, "
+            "its colour kept (OpenCV shadowThreshold); higher where objects are darker copies of "
+            "the ground, such as grey cars on asphalt (docs/pipeline.md, Shadows)")
     learning_rate: float = param(-1.0, lo=-1.0, hi=1.0, doc="-1 = automatic (1/history)")
     protect: bool = _protect(False)
     protect_threshold: int = _protect_threshold()
@@ -199,6 +204,15 @@ class KNNParams(_Section):
                                    doc="squared colour distance within which a pixel matches a "
                                        "background sample (OpenCV dist2Threshold)")
     detect_shadows: bool = param(True, doc="detect shadows and leave them out of the mask (slower)")
+    shadow_threshold: float = param(
+        0.5, lo=0.0, hi=1.0, when={"detect_shadows": True},
+        doc="a shadow is the background darkened to no less than this fraction of its brightness, "
+            "its colour kept (OpenCV shadowThreshold); higher where objects are darker copies of "
+            "the ground, such as grey cars on asphalt (docs/pipeline.md, Shadows)")
+    vehicle_shadow_threshold: float = param(
+        0.7, lo=0.0, hi=1.0, when={"detect_shadows": True},
+        doc="shadow_threshold while most of the scene's classified tracks are vehicles (needs "
+            "classes.enabled); equal to shadow_threshold to keep one")
     learning_rate: float = param(-1.0, lo=-1.0, hi=1.0, doc="-1 = automatic (1/history)")
     n_samples: int = param(7, lo=1, hi=50,
                            doc="samples kept per pixel in each of the model's three time scales "

@@ -28,13 +28,14 @@ import weakref
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any, Iterable, Iterator
+from typing import Any, Iterable, Iterator, NamedTuple
 
 import cv2
 import numpy as np
 
 from . import synth as _synth  # noqa: F401  (registers the synth: sources)
 from .classify import TrackClassifier
+from .classify.scene_kind import VehicleScene
 from .config import PipelineConfig, SourceConfig, load_config, warn_if_oversized
 from .detect import create as create_detector_model
 from .detect import detector_regions
@@ -130,6 +131,15 @@ class Motion:
     #: pixels of ``raw_mask`` the detector holds for a stopped tracked object (uint8 0/255, or
     #: None): the ghost filter does not take them
     held: np.ndarray | None = None
+
+
+class Feedback(NamedTuple):
+    """What the tracks ask of the motion detector for a frame (:meth:`Pipeline.feedback`)."""
+
+    protect: np.ndarray | None
+    relearn: np.ndarray | None
+    #: the scene's recent tracks are mostly vehicles (None: the detector does not ask)
+    vehicles: bool | None = None
 
 
 @dataclass(frozen=True)
@@ -256,6 +266,11 @@ class Pipeline:
         if cfg.motion.ghost_ratio > 0 and self.detector is not None:
             self.ghosts = GhostFilter(cfg.motion.ghost_ratio, pixels=cfg.motion.ghost_pixels)
         self._prev_tracks: tuple = ()
+        #: whether the recent tracks are mostly vehicles, for a detector whose shadow test
+        #: depends on it (None: not asked)
+        self._scene_kind = (VehicleScene() if self.classes is not None and self.detector is not None
+                            and self.detector.switches_shadows else None)
+        self._vehicles: bool | None = False if self._scene_kind is not None else None
         self.bridge = None
         if cfg.tracker.bridge != "none" and not self.tracker_sees_pictures:
             # (the detection tracker takes no owned measurements: tracker.bridge needs kalman)
@@ -310,6 +325,9 @@ class Pipeline:
             self.people.reset()
         self._prev_tracks = ()
         self._last_ts = None
+        if self._scene_kind is not None:
+            self._scene_kind.reset()
+            self._vehicles = False
 
     def _frame_gap(self, frame: Frame) -> int:
         """Frame periods since the previous frame, from the timestamps (wall-clock for live
@@ -324,20 +342,22 @@ class Pipeline:
         self._min_gap = gap if self._min_gap is None else min(self._min_gap, gap)
         return max(1, int(round(gap / self._min_gap)))
 
-    def feedback(self, frame: Frame, small: np.ndarray
-                 ) -> tuple[np.ndarray | None, np.ndarray | None]:
+    def feedback(self, frame: Frame, small: np.ndarray) -> Feedback:
         """What the tracks and the ghost filter ask of the detector for ``frame`` (preprocessed
-        ``small``): ``(protect, relearn)``, the pixels not to learn and those to re-learn at
-        once (:meth:`MotionDetector.apply`), from the state they are in now. None for a frame
-        after a discontinuity (the tracks before a jump say nothing of where it moves), and for
-        the frame after it in :meth:`results`' two-thread order, whose state is still that of
-        the frames before the jump."""
+        ``small``): ``(protect, relearn, vehicles)``, the pixels not to learn and those to
+        re-learn at once (:meth:`MotionDetector.apply`), from the state they are in now, and
+        whether the scene's tracks are mostly vehicles (:meth:`MotionDetector.vehicle_scene`;
+        None when the detector does not ask). The masks are None for a frame after a
+        discontinuity (the tracks before a jump say nothing of where it moves), and for the frame
+        after it in :meth:`results`' two-thread order, whose state is still that of the frames
+        before the jump."""
         relearn, self._relearn = self._relearn, None
+        vehicles = self._vehicles
         if frame.discontinuity is not None or self._fed_cut:
             self._fed_cut = frame.discontinuity is not None and not self.sequential_feedback
-            return None, None
+            return Feedback(None, None, vehicles)
         protect = self._protect_mask(small.shape[:2])
-        return protect, relearn if self.detector.relearns else None
+        return Feedback(protect, relearn if self.detector.relearns else None, vehicles)
 
     def _protect_mask(self, shape: tuple[int, int]) -> np.ndarray | None:
         """Pixels (processing scale) not learnt as background: where the previous frame's
@@ -373,9 +393,9 @@ class Pipeline:
         return preprocess(frame.image, self.pre_cfg) if self.detector is not None else None
 
     def motion(self, frame: Frame, small: np.ndarray | None = None,
-               feedback: tuple[np.ndarray | None, np.ndarray | None] | None = None) -> Motion:
+               feedback: Feedback | None = None) -> Motion:
         """First half of :meth:`detect`, the image work (OpenCV, which releases the GIL).
-        ``feedback``: the detector's ``(protect, relearn)`` made beforehand by :meth:`feedback`
+        ``feedback``: the detector's :class:`Feedback` made beforehand by :meth:`feedback`
         (None: made here from the tracks and ghosts as they are now)."""
         cut = frame.discontinuity
         if self._det_index is not None:
@@ -388,7 +408,9 @@ class Pipeline:
             feedback = self.feedback(frame, small)
         if cut is not None:
             self.reset_motion()
-        protect, relearn = feedback
+        protect, relearn, vehicles = feedback
+        if vehicles is not None:
+            self.detector.vehicle_scene(vehicles)
         out = self.stage.apply(small, protect, relearn)
         raw = out.raw
         if self.roi is not None:
@@ -535,6 +557,8 @@ class Pipeline:
             earlier = tuple((f, replace(t, label=n, label_score=s))
                             for f, t in earlier for n, s in [self.classes.label(t.id)])
         self._prev_tracks = tuple(tracks)
+        if self._scene_kind is not None:
+            self._vehicles = self._scene_kind.update(tracks)
         self.frames_seen += 1
         return FrameResult(index=frame.index, timestamp=frame.timestamp, frame=frame.image,
                            mask=mask, regions=tuple(regions), tracks=tuple(tracks),

@@ -23,6 +23,8 @@ class MotionDetector:
     #: the ``protect`` mask holds only the tracks slower than this (box heights a second; None:
     #: every track that has moved)
     protect_speed: float | None = None
+    #: whether the model takes another shadow test in a scene of vehicles (:meth:`vehicle_scene`)
+    switches_shadows = False
 
     def apply(self, image: np.ndarray, protect: np.ndarray | None = None) -> np.ndarray:  # pragma: no cover
         """Foreground mask of ``image``.
@@ -39,6 +41,10 @@ class MotionDetector:
 
     def set_rate(self, fps: float) -> None:
         """The source's frame rate, for detectors with durations in seconds (default: none)."""
+
+    def vehicle_scene(self, vehicles: bool) -> None:
+        """Whether the scene's tracks are mostly vehicles, for a model whose shadow test
+        depends on it (``switches_shadows``; default: none)."""
 
     def relearn(self, image: np.ndarray | None = None) -> None:  # pragma: no cover
         """Forget the background model and learn the scene afresh: after a sudden change of the

@@ -190,10 +190,15 @@ class MOG2(_SelectiveSubtractor):
     """Gaussian-mixture background (Zivkovic 2004/2006), OpenCV's MOG2; shadows are not foreground."""
 
     def __init__(self, history: int = 500, var_threshold: float = 16.0, detect_shadows: bool = True,
-                 learning_rate: float = -1.0, protect: bool = False, protect_threshold: int = 30) -> None:
-        super().__init__(lambda: cv2.createBackgroundSubtractorMOG2(
-            int(history), float(var_threshold), bool(detect_shadows)), learning_rate, protect,
-            protect_threshold)
+                 shadow_threshold: float = 0.5, learning_rate: float = -1.0,
+                 protect: bool = False, protect_threshold: int = 30) -> None:
+        def make():
+            sub = cv2.createBackgroundSubtractorMOG2(int(history), float(var_threshold),
+                                                     bool(detect_shadows))
+            sub.setShadowThreshold(float(shadow_threshold))
+            return sub
+
+        super().__init__(make, learning_rate, protect, protect_threshold)
 
 
 @DETECTORS.register("knn")
@@ -205,22 +210,32 @@ class KNN(_SelectiveSubtractor):
     prime = 4
 
     def __init__(self, history: int = 500, dist2_threshold: float = 300.0, detect_shadows: bool = True,
+                 shadow_threshold: float = 0.5, vehicle_shadow_threshold: float = 0.7,
                  learning_rate: float = -1.0, protect: bool = False, protect_threshold: int = 30,
                  seed: int = 0, n_samples: int = 7, knn_samples: int = 2, hold: bool = True,
                  hold_threshold: int = 30, hold_speed: float = 0.2,
                  accept_s: float = 180.0) -> None:
         check_knn_samples(int(n_samples), int(knn_samples))
         self.seed = int(seed)
+        self.thresholds = (float(shadow_threshold), float(vehicle_shadow_threshold))
+        self.switches_shadows = bool(detect_shadows) and len(set(self.thresholds)) == 2
+        self._vehicles = False
 
         def make():
             sub = cv2.createBackgroundSubtractorKNN(int(history), float(dist2_threshold),
                                                     bool(detect_shadows))
+            sub.setShadowThreshold(self.thresholds[self._vehicles])
             sub.setNSamples(int(n_samples))
             sub.setkNNSamples(int(knn_samples))
             return sub
 
         super().__init__(make, learning_rate, protect, protect_threshold,
                          Hold(hold_threshold, accept_s) if hold else None, hold_speed)
+
+    def vehicle_scene(self, vehicles: bool) -> None:
+        if self.switches_shadows and vehicles != self._vehicles:
+            self._vehicles = vehicles
+            self.sub.setShadowThreshold(self.thresholds[vehicles])
 
 
 @DETECTORS.register("cnt")

@@ -1,0 +1,42 @@
+"""Whether a scene shows mostly vehicles, from the classes of its recent tracks.
+
+The motion model's shadow test takes a darker copy of the ground for a shadow; a grey or silver
+car on asphalt is such a copy over much of its body, so the default test cuts cars into pieces
+while it keeps people's shadows off them. The pipeline asks :class:`VehicleScene` each frame and
+gives the model its vehicles' shadow threshold while the answer is yes
+(``motion.knn.vehicle_shadow_threshold``, docs/pipeline.md "Shadows").
+"""
+
+from __future__ import annotations
+
+import collections
+from typing import Iterable
+
+__all__ = ["VehicleScene"]
+
+
+class VehicleScene:
+    """The labels of the last :attr:`RECENT` tracks that had a person or vehicle label; the
+    scene is a vehicles' scene when at least :attr:`MIN_VEHICLES` of them are vehicles and they
+    outnumber the people."""
+
+    RECENT = 100
+    MIN_VEHICLES = 2
+
+    def __init__(self) -> None:
+        self._labels: collections.OrderedDict[int, str] = collections.OrderedDict()
+
+    def reset(self) -> None:
+        self._labels.clear()
+
+    def update(self, tracks: Iterable) -> bool:
+        """Take the labels of ``tracks`` (a frame's tracks, with ``id`` and ``label``); whether
+        the scene is a vehicles' scene now."""
+        for t in tracks:
+            if t.label in ("person", "vehicle"):
+                self._labels[t.id] = t.label
+                self._labels.move_to_end(t.id)
+                if len(self._labels) > self.RECENT:
+                    self._labels.popitem(last=False)
+        vehicles = sum(1 for v in self._labels.values() if v == "vehicle")
+        return vehicles >= self.MIN_VEHICLES and vehicles > len(self._labels) - vehicles
