@@ -422,12 +422,22 @@ def _writers_into(out, tmp_path):
         "overlay": ["overlay", WALKER.format(n=2), "-o", str(out / "overlay.avi")],
         "world": ["world", str(tracks), "--camera", str(_camera(tmp_path)), "-o",
                   str(out / "world.txt")],
+        "calibrate ground": ["calibrate", "ground", "--points", str(_point_pairs(tmp_path)),
+                             "-o", str(out / "ground.toml")],
     }
+
+
+def _point_pairs(folder):
+    """Four image points and their ground positions (a homography's worth)."""
+    pairs = folder / "pairs.csv"
+    pairs.write_text("u,v,x,y\n10,10,0,0\n50,10,4,0\n50,40,4,3\n10,40,0,3\n")
+    return pairs
 
 
 @pytest.mark.parametrize("command", ["analyze", "synth-events", "evaluate --json",
                                      "evaluate --per-frame", "evaluate-events --json",
-                                     "gt-stats --json", "overlay", "world"])
+                                     "gt-stats --json", "overlay", "world",
+                                     "calibrate ground"])
 def test_every_command_writing_into_a_run_folder_is_refused_while_a_run_holds_it(
         tmp_path, capsys, command):
     out = tmp_path / "run"

@@ -7,7 +7,7 @@ import logging
 import math
 import sys
 from pathlib import Path
-from typing import TYPE_CHECKING, TextIO
+from typing import TYPE_CHECKING, Callable, TextIO
 
 from ._common import checked_max_pixels, max_pixels_option
 from ..errors import (ConfigError, InputError, check_output_path, excerpt, finite_number, location,
@@ -38,7 +38,7 @@ def register(subparsers) -> None:
                    help="camera YAML to write (- for standard output)")
     c.add_argument("--force", action="store_true", help="overwrite an existing output")
     max_pixels_option(c)
-    c.set_defaults(func=cmd_chessboard)
+    c.set_defaults(func=_locked(cmd_chessboard))
 
     s = sub.add_parser("show", help="undistorted image with the projected ground grid")
     s.add_argument("camera", type=Path, help="camera file (.xml Tsai, .yml OpenCV, .toml)")
@@ -49,7 +49,7 @@ def register(subparsers) -> None:
     s.add_argument("--extent", default=None, help="grid extent xmin,xmax,ymin,ymax in metres (auto)")
     s.add_argument("--force", action="store_true", help="overwrite an existing output")
     max_pixels_option(s)
-    s.set_defaults(func=cmd_show)
+    s.set_defaults(func=_locked(cmd_show))
 
     ln = sub.add_parser("lines", help="thesis method: κ1 from straight lines + coplanar Tsai fit")
     ln.add_argument("image", type=Path, help="image of a grid of straight lines on the ground")
@@ -71,7 +71,7 @@ def register(subparsers) -> None:
                     help="camera .toml or .xml to write (- for TOML on standard output)")
     ln.add_argument("--force", action="store_true", help="overwrite an existing output")
     max_pixels_option(ln)
-    ln.set_defaults(func=cmd_lines)
+    ln.set_defaults(func=_locked(cmd_lines))
 
     g = sub.add_parser("ground", help="ground plane from image <-> world point pairs")
     g.add_argument("--points", type=Path, required=True, help="CSV u,v,x,y (pixels, metres)")
@@ -82,9 +82,24 @@ def register(subparsers) -> None:
                    help="ground.toml (homography) or camera .yml (with --intrinsics); - for "
                         "standard output")
     g.add_argument("--force", action="store_true", help="overwrite an existing output")
-    g.set_defaults(func=cmd_ground)
+    g.set_defaults(func=_locked(cmd_ground))
 
 
+
+
+def _locked(command: Callable[[argparse.Namespace], int]) -> Callable[[argparse.Namespace], int]:
+    """``command`` run holding the lock of its output's folder, as every command writing into a
+    folder does: a second writer there is refused at once, and what a killed writer left of the
+    output is removed first."""
+
+    def run(args: argparse.Namespace) -> int:
+        from ..io.atomic import writing_outputs
+
+        check_output_path(args.output, "-o")
+        with writing_outputs([args.output], force=True):   # --force is checked by the command
+            return command(args)
+
+    return run
 
 
 def _check_out(path: Path, force: bool) -> None:
