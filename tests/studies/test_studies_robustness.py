@@ -453,3 +453,23 @@ def test_tune_refuses_an_output_that_is_a_file(tmp_path, capsys, monkeypatch):
     assert main(["tune", "--train", WALKER, "--param", "motion.knn.dist2_threshold=100:400",
                  "-o", str(tmp_path / "t")]) == 2
     assert "is a file, not a folder" in one_error_line(capsys)
+
+
+def test_a_report_into_a_study_a_sweep_still_writes_is_refused(tmp_path, capsys):
+    from motiontrack.io.atomic import OutputLock
+
+    study = make_study(tmp_path / "study")
+    held = OutputLock(study)                                   # the sweep, still running
+    try:
+        assert main(["report", str(study)]) == 2
+        assert "is in use by another motiontrack run" in one_error_line(capsys)
+        assert not (study / "report.html").exists()
+        # elsewhere it is written, from the runs finished so far, and says so
+        assert main(["report", str(study), "-o", str(tmp_path / "r.html")]) == 0
+        assert (tmp_path / "r.html").is_file()
+        err = capsys.readouterr().err
+        assert "in use by another motiontrack run" in err and "finished so far" in err
+    finally:
+        held.release()
+    assert main(["report", str(study)]) == 0 and (study / "report.html").is_file()
+    assert "finished so far" not in capsys.readouterr().err

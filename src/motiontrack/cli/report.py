@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -17,17 +18,37 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def cmd_report(args) -> int:
-    from pathlib import Path
 
     from ..errors import check_output_path, printable
-    from ..io.atomic import check_writable, is_stdout
+    from ..io.atomic import is_stdout, writing_outputs
     from ..studies.report import write_report
 
     out = args.out or str(Path(args.study) / "report.html")
     if not is_stdout(out):
         check_output_path(out, "-o")  # not a folder, in a folder that can be written
-    check_writable([Path(out)], args.force)
-    written = write_report(args.study, out)
+    # the report's folder is locked while it is written: into a study a sweep is still running
+    # in, a report is refused as any second writer there is
+    with writing_outputs([out], args.force):
+        _note_running_sweep(Path(args.study), out)
+        written = write_report(args.study, out)
     if not is_stdout(out):
         print(f"outputs   {printable(written)}")
     return 0
+
+
+def _note_running_sweep(study, out: str) -> None:
+    """Warn when a sweep still holds ``study`` (the report shows the runs it has finished)."""
+    import logging
+    import os
+
+    from ..errors import InputError
+    from ..io.atomic import OutputLock, is_stdout
+
+    if not study.is_dir() or (not is_stdout(out)
+                              and os.path.samefile(Path(os.path.abspath(out)).parent, study)):
+        return   # a missing study is reported by the reader; our own lock is not a sweep's
+    try:
+        OutputLock(study).release()
+    except InputError as exc:
+        logging.getLogger("motiontrack.report").warning(
+            "%s: the report shows the runs finished so far", str(exc).split(";")[0])
