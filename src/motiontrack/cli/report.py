@@ -18,7 +18,6 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def cmd_report(args) -> int:
-
     from ..errors import check_output_path, printable
     from ..io.atomic import is_stdout, writing_outputs
     from ..studies.report import write_report
