@@ -100,14 +100,16 @@ def baseline_boxes(folder: Path):
 
 
 def shadow_ratios(folder: Path) -> None:
-    """Percentiles of frame / background brightness (sum of the channels, OpenCV's KNN with the
-    pipeline's 3x3 blur at full size) over every 5th frame of FIRST-LAST: for the ground truth's
-    shadow pixels (label 50), for car pixels (255) KNN marks as shadow (127), and for car
-    pixels it marks as foreground."""
+    """What tells cast shadows from cars, pixel by pixel, over every 5th frame of FIRST-LAST
+    (OpenCV's KNN with the pipeline's 3x3 blur at full size): percentiles of the brightness of
+    frame / background (sum of the channels), and medians of the shift of the blue share of the
+    colour (a shadow is lit by the sky) and of |Laplacian| (texture), for the ground truth's
+    shadow pixels (label 50), car pixels (255) KNN marks as shadow (127), car pixels darker than
+    0.4 of the background, and all car pixels."""
     sub = cv2.createBackgroundSubtractorKNN(500, 300.0, True)
-    parts: dict[str, list[np.ndarray]] = {"cast shadows (gt 50)": [],
-                                          "car pixels KNN calls shadow": [],
-                                          "car pixels KNN calls foreground": []}
+    names = ("cast shadows (gt 50)", "car pixels KNN calls shadow", "car pixels below 0.4",
+             "car pixels")
+    parts: dict[str, list[np.ndarray]] = {n: [] for n in names}
     for k, name in enumerate(sorted((folder / "input").glob("in*.jpg"))[:LAST]):
         frame = k + 1
         image = cv2.GaussianBlur(cv2.imread(str(name)), (3, 3), 0)
@@ -115,16 +117,21 @@ def shadow_ratios(folder: Path) -> None:
         if frame < FIRST or frame % 5:
             continue
         g = cv2.imread(str(folder / "groundtruth" / f"gt{frame:06d}.png"), cv2.IMREAD_GRAYSCALE)
-        ratio = ((image.astype(np.float32).sum(2) + 1)
-                 / (sub.getBackgroundImage().astype(np.float32).sum(2) + 1))
-        for key, where in zip(parts, (g == 50, (g == 255) & (raw == 127),
-                                      (g == 255) & (raw == 255))):
-            parts[key].append(ratio[where])
-    print("brightness of frame / background, percentiles 5 25 50 75 95 (KNN's shadows: 0.5-1)")
+        bg = sub.getBackgroundImage()
+        f32, b32 = image.astype(np.float32) + 1, bg.astype(np.float32) + 1
+        ratio = f32.sum(2) / b32.sum(2)
+        blue = f32[..., 0] / f32.sum(2) - b32[..., 0] / b32.sum(2)
+        lap = np.abs(cv2.Laplacian(cv2.cvtColor(image, cv2.COLOR_BGR2GRAY), cv2.CV_32F, ksize=3))
+        for key, where in zip(names, (g == 50, (g == 255) & (raw == 127),
+                                      (g == 255) & (ratio < 0.4), g == 255)):
+            parts[key].append(np.c_[ratio[where], blue[where], lap[where]])
+    print("frame / background brightness: percentiles 5 25 50 75 95 (KNN's shadows: 0.5-1); "
+          "medians of the blue shift and |Laplacian|")
     for key, values in parts.items():
         v = np.concatenate(values)
-        print(f"{key:<34}{len(v):>9} px  " + " ".join(f"{q:5.2f}" for q in
-                                                       np.percentile(v, [5, 25, 50, 75, 95])))
+        print(f"{key:<30}{len(v):>8} px " + " ".join(f"{q:5.2f}" for q in
+                                                     np.percentile(v[:, 0], [5, 25, 50, 75, 95]))
+              + f"   blue {np.median(v[:, 1]):+.3f}   |lap| {np.median(v[:, 2]):5.1f}")
 
 
 def main() -> None:
