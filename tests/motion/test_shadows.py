@@ -107,3 +107,20 @@ def test_people_keep_the_default_test(data):
         labels = {t.label for res in r for t in res.tracks}
         assert r.pipeline.detector.switches_shadows and "person" in labels
         assert r.pipeline.detector.sub.getShadowThreshold() == pytest.approx(0.5)
+
+
+def test_a_model_is_freed_as_soon_as_it_is_dropped():
+    """No reference cycle through the model's factory: a serve camera makes a new detector for
+    each segment, and a cycle kept each old one (megabytes of OpenCV's memory) alive until a
+    full garbage collection, which a long run hardly ever makes."""
+    import gc
+    import weakref
+
+    gc.disable()
+    try:
+        det = create_detector(load_config(None, []).motion)
+        gone = weakref.ref(det)
+        del det
+        assert gone() is None
+    finally:
+        gc.enable()

@@ -6,7 +6,8 @@ loitering event at the gate last night" is one query (``motiontrack events``, ``
 ``/api/events/search``). The file is in WAL mode: readers (a query, the browser) never block
 the writer, and the writer commits at least once a second (:attr:`EventStore.commit_every_s`),
 so a killed process loses at most the events of its last second and never leaves the file
-inconsistent.
+inconsistent. Several processes may write one store (``serve``'s cameras and its retention):
+each waits up to :data:`BUSY_TIMEOUT_MS` for another's write lock.
 
 The schema is versioned with SQLite's ``user_version``: :data:`MIGRATIONS` lists the statements
 that bring a file from one version to the next, applied in one transaction when a writer opens
@@ -47,6 +48,8 @@ __all__ = ["EventStore", "EventQuery", "StoredEvent", "STORE_NAME", "SCHEMA_VERS
 
 #: the store's file name in a run or serve output folder
 STORE_NAME = "events.db"
+#: how long a writer waits for another's write lock before it fails (milliseconds)
+BUSY_TIMEOUT_MS = 60_000
 
 #: ``MIGRATIONS[k]`` brings a file of version ``k`` to version ``k + 1``
 MIGRATIONS: tuple[tuple[str, ...], ...] = (
@@ -190,7 +193,9 @@ class EventStore:
                                            check_same_thread=False)
             else:
                 self._db = sqlite3.connect(self.path, check_same_thread=False)
-            self._db.execute("PRAGMA busy_timeout = 5000")
+            # several processes write one store (serve's cameras and its retention), each
+            # holding the write lock for a few milliseconds: waiting is fine, failing is not
+            self._db.execute(f"PRAGMA busy_timeout = {5000 if readonly else BUSY_TIMEOUT_MS}")
             version = self._db.execute("PRAGMA user_version").fetchone()[0]
         except sqlite3.DatabaseError as exc:
             raise InputError(f"{self.path}: not an event store ({exc})") from None
@@ -291,6 +296,11 @@ class EventStore:
                 n += self._db.execute("DELETE FROM events WHERE segment = ?", (name,)).rowcount
             self._db.commit()
         return n
+
+    @property
+    def pending(self) -> int:
+        """Changes made since the last commit."""
+        return self._pending
 
     def tick(self) -> bool:
         """Commit when the last commit is :attr:`commit_every_s` old (call it every frame);

@@ -219,12 +219,14 @@ class KNN(_SelectiveSubtractor):
         self.seed = int(seed)
         self.thresholds = (float(shadow_threshold), float(vehicle_shadow_threshold))
         self.switches_shadows = bool(detect_shadows) and len(set(self.thresholds)) == 2
-        self._vehicles = False
+        # the threshold a new model starts with; make() must not hold self: a cycle through it
+        # would keep each model (megabytes of OpenCV's memory) until a full garbage collection
+        self._tau = tau = [self.thresholds[0]]
 
         def make():
             sub = cv2.createBackgroundSubtractorKNN(int(history), float(dist2_threshold),
                                                     bool(detect_shadows))
-            sub.setShadowThreshold(self.thresholds[self._vehicles])
+            sub.setShadowThreshold(tau[0])
             sub.setNSamples(int(n_samples))
             sub.setkNNSamples(int(knn_samples))
             return sub
@@ -233,9 +235,10 @@ class KNN(_SelectiveSubtractor):
                          Hold(hold_threshold, accept_s) if hold else None, hold_speed)
 
     def vehicle_scene(self, vehicles: bool) -> None:
-        if self.switches_shadows and vehicles != self._vehicles:
-            self._vehicles = vehicles
-            self.sub.setShadowThreshold(self.thresholds[vehicles])
+        tau = self.thresholds[vehicles]
+        if self.switches_shadows and tau != self._tau[0]:
+            self._tau[0] = tau
+            self.sub.setShadowThreshold(tau)
 
 
 @DETECTORS.register("cnt")

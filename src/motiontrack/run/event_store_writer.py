@@ -92,7 +92,14 @@ class EventStoreWriter(Writer):
                     if snapshot is not None:
                         self._store.set_media(event_id, snapshot=snapshot)
             self._media(clips)
-            if self._store.tick():
+            if not self.paths and (records or clips):
+                # a store shared with other processes (serve's cameras, its retention): the
+                # write lock is held for this frame's events only, never from one frame to
+                # the next, so no writer waits on another for long
+                self._store.commit()
+            else:
+                self._store.tick()
+            if not self._store.pending:
                 self._uncommitted.clear()
         except DiskFullError:
             self._store.rollback()   # what was not committed is in _uncommitted

@@ -31,6 +31,7 @@ copies bytes.
 from __future__ import annotations
 
 import collections
+import gc
 import itertools
 import logging
 import math
@@ -476,6 +477,12 @@ def run_camera(spec: CameraSpec, out_dir: Path, channel: Channel, stop: _Flag,
                     job.run(should_stop=stop)
                 except KeyboardInterrupt:
                     break
+                finally:
+                    # the segment's pipeline goes now, whatever reference cycle it is in: a
+                    # camera runs for months, and cycles wait for a full collection, rare in a
+                    # long-lived process, with megabytes of OpenCV's memory each
+                    del job
+                    gc.collect()
                 if seg.ended:
                     cam.status = "ended"
                     break
