@@ -25,6 +25,8 @@ Checks at the end (exit 1 when one fails):
   held in the first half by more than half (removed segments take their events with them);
 - no event without its snapshot: every event of the store, at every sample and after the
   server stopped, has its snapshot file unless its segment was removed;
+- no camera fails: no camera process is started again by the server (seen as a new process
+  id of the camera);
 - memory is flat: the median RSS of the server and of each camera over the last quarter of the
   samples is at most 10 MB or 5% (the larger) above its median over the second quarter; the
   least-squares slope over the second half is printed beside it (MB per 24 h of video).
@@ -261,6 +263,10 @@ def soak(root: Path, args: argparse.Namespace) -> int:
     print(f"\n{last.hours:.2f} h of video per camera ({sum(last.frames.values()):,} frames) in "
           f"{last.wall / 60:.1f} min; serve exited {code}; the store holds {final_events} events")
     results = checks(samples, final_missing, args) if len(samples) >= 4 else []
+    restarts = {name: len({pid for (c, pid) in run.played if c == name}) - 1 for name in CAMERAS}
+    results.append(("camera processes started again (a camera that failed)",
+                    ", ".join(f"{n} {k}" for n, k in restarts.items()), "0",
+                    not any(restarts.values())))
     for what, measured, target_, met in results:
         print(f"  {'met ' if met else 'MISS'} {what}: {measured} (target {target_})")
     if args.json:

@@ -294,6 +294,8 @@ def test_serve_soak_benchmark_samples_both_cameras_and_checks_every_target(tmp_p
     assert samples[-1]["store_events"] > 0 and samples[-1]["disk_mb"] > 0, out
     checks = {c["what"].split(",")[0]: c for c in doc["checks"]}
     assert set(checks) == {"disk", "store", "events without their snapshot", "RSS server",
-                           "RSS crossing", "RSS runner"}, out
+                           "RSS crossing", "RSS runner",
+                           "camera processes started again (a camera that failed)"}, out
     assert checks["events without their snapshot"]["met"], out
+    assert checks["camera processes started again (a camera that failed)"]["met"], out
     assert "serve exited 0" in out
