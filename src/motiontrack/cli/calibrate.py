@@ -103,9 +103,9 @@ def _locked(command: Callable[[argparse.Namespace], int]) -> Callable[[argparse.
 
 
 def _check_out(path: Path, force: bool) -> None:
+    """An existing output only with ``--force`` (:func:`_locked` checked the path itself)."""
     from ..io.atomic import check_writable
 
-    check_output_path(path, "-o")
     check_writable([path], force)
 
 
