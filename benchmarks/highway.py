@@ -11,8 +11,10 @@ pipeline rows, contours for the baseline). The baseline is the recipe of benchma
 with its minimum contour area (500 px at 768x576) scaled to this frame size (87 px).
 
 Box F is the harmonic mean of recall and precision. Pixel F is CDnet's F-measure of the mask the
-regions are found in (after clean-up and the ghost filter; ``motiontrack evaluate-masks`` rules,
-ROI.bmp and label 170 excluded, shadow negative), over the same frames.
+pipeline reports (``FrameResult.mask``, what ``--mask-video`` writes: the regions' silhouettes,
+or with ``regions.silhouettes=false`` the mask the regions are found in, after clean-up and the
+ghost filter; ``motiontrack evaluate-masks`` rules, ROI.bmp and label 170 excluded, shadow
+negative), over the same frames.
 
 The last rows hold KNN's shadow test (a pixel at least ``shadow_threshold`` of the background's
 brightness, its colour kept, is a shadow) at one threshold, where the default takes 0.7 once the
@@ -158,6 +160,9 @@ def main() -> None:
         ("knn, shadow threshold 0.8 always", ["motion.knn.shadow_threshold=0.8",
                                               "motion.knn.vehicle_shadow_threshold=0.8"], None),
         ("knn, detect_shadows=false", ["motion.knn.detect_shadows=false"], None),
+        ("no light test", ["motion.light_share=0"], None),
+        ("mask as cleaned, no silhouettes", ["regions.silhouettes=false"], None),
+        ("neither", ["motion.light_share=0", "regions.silhouettes=false"], None),
     ]
     if args.shadows:
         shadow_ratios(folder)

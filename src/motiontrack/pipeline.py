@@ -36,7 +36,7 @@ import numpy as np
 from . import synth as _synth  # noqa: F401  (registers the synth: sources)
 from .classify import TrackClassifier
 from .classify.scene_kind import VehicleScene
-from .config import PipelineConfig, SourceConfig, load_config, warn_if_oversized
+from .config import MotionConfig, PipelineConfig, SourceConfig, load_config, warn_if_oversized
 from .detect import create as create_detector_model
 from .detect import detector_regions
 from .imaging import pixel_window, resolve_scale, scaled_size
@@ -47,7 +47,7 @@ from .motion.cleanup import clean_mask
 from .motion.ghosts import GhostFilter
 from .motion.stage import MotionStage
 from .motion.static import DualBackground
-from .motion.regions import find_regions
+from .motion.regions import find_regions, silhouettes, smallest_region
 from .people import PeopleStage, head_params
 from .people.heads import split_regions_by_heads
 from .preprocess import load_roi, preprocess
@@ -89,6 +89,12 @@ def _regions_from_detections(det: Annotations, rows: np.ndarray | None) -> list[
                           centroid=(float(x + w / 2), float(y + h / 2)), area=float(w * h),
                           score=float(det.scores[i])))
     return out
+
+
+def _ghost_filter(motion: MotionConfig) -> GhostFilter:
+    """The ghost filter of ``motion``'s settings (its light test included)."""
+    return GhostFilter(motion.ghost_ratio, pixels=motion.ghost_pixels,
+                       lit=(motion.light_share, motion.light_gain))
 
 
 def completes_tracks(cfg: PipelineConfig, external: bool) -> bool:
@@ -179,6 +185,8 @@ class Pipeline:
         self._last_ts: float | None = None
         self.image_size = image_size
         self.scale = resolve_scale(cfg.preprocess.scale, *image_size)
+        #: components of the mask smaller than this (processing pixels) are no region
+        self._speck = smallest_region(cfg.regions, self.scale, image_size)
         self.detections = detections
         self._det_index = detections.by_frame() if detections is not None else None
         self.fps = fps
@@ -264,7 +272,7 @@ class Pipeline:
         self._upright: float | None = None   # running mean of the frames' median region h/w
         self.ghosts = None
         if cfg.motion.ghost_ratio > 0 and self.detector is not None:
-            self.ghosts = GhostFilter(cfg.motion.ghost_ratio, pixels=cfg.motion.ghost_pixels)
+            self.ghosts = _ghost_filter(cfg.motion)
         self._prev_tracks: tuple = ()
         #: whether the recent tracks are mostly vehicles, for a detector whose shadow test
         #: depends on it (None: not asked)
@@ -308,8 +316,7 @@ class Pipeline:
     def reset_regions(self, index: int) -> None:
         """The ghost filter's background afresh, and the warm-up counted again from ``index``."""
         if self.ghosts is not None:
-            self.ghosts = GhostFilter(self.cfg.motion.ghost_ratio,
-                                      pixels=self.cfg.motion.ghost_pixels)
+            self.ghosts = _ghost_filter(self.cfg.motion)
         self._warm_from = index
         self._quiet_until = 0
 
@@ -560,6 +567,9 @@ class Pipeline:
         if self._scene_kind is not None:
             self._vehicles = self._scene_kind.update(tracks)
         self.frames_seen += 1
+        if mask is not None and self.cfg.regions.silhouettes:
+            # what is reported is the regions' silhouettes (the tracker had the mask itself)
+            mask = silhouettes(mask, self._speck)
         return FrameResult(index=frame.index, timestamp=frame.timestamp, frame=frame.image,
                            mask=mask, regions=tuple(regions), tracks=tuple(tracks),
                            raw_mask=det.motion.raw_mask, people=people,

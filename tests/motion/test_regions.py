@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from motiontrack.config import RegionsConfig
-from motiontrack.motion.regions import components, filter_regions, find_regions, merge_distance, merge_regions
+from motiontrack.motion.regions import (components, filter_regions, find_regions, merge_distance,
+                                        merge_regions, silhouettes, smallest_region)
 from motiontrack.types import Box, Region
 
 
@@ -155,3 +156,36 @@ def test_box_rejects_bad_values(args, message):
     with pytest.raises(ValueError, match=message):
         Box(*args)
     assert Box(0.5, -3, 1e-3, 2).w == 1e-3   # tiny, negative corner: valid
+
+
+def test_silhouettes_drop_specks_and_fill_the_holes_of_the_rest():
+    m = mask_with((10, 10, 30, 30), (70, 70, 3, 3))   # an object and a 9-pixel speck
+    m[20:25, 20:25] = 0                                # a hole in the object
+    m[22, 22] = 255                                    # with a speck inside it
+    out = silhouettes(m, 10)
+    assert out[10:40, 10:40].all()                     # the hole filled, its speck with it
+    assert not out[70:73, 70:73].any()                 # the speck outside gone
+    assert int((out > 0).sum()) == 900
+    assert (m[20:25, 20:25] == 0).sum() == 24          # the input is left as it was
+
+
+def test_silhouettes_keep_a_component_as_large_as_a_region_and_return_an_unchanged_mask_itself():
+    m = mask_with((10, 10, 3, 3), (50, 50, 10, 10))
+    assert silhouettes(m, 9) is m                      # nine pixels: a region may come from it
+    out = silhouettes(m, 10)
+    assert not out[10:13, 10:13].any() and out[50:60, 50:60].all()
+    assert silhouettes(np.zeros((20, 20), np.uint8), 10).sum() == 0
+
+
+def test_a_thin_component_is_counted_by_its_pixels_not_its_box():
+    m = np.zeros((40, 40), np.uint8)
+    np.fill_diagonal(m, 255)                           # 40 pixels in a 40 x 40 box
+    assert silhouettes(m, 41).sum() == 0 and silhouettes(m, 40) is m
+
+
+def test_the_smallest_region_follows_the_filters_and_merging():
+    cfg = RegionsConfig(min_area=100, min_size=0.001)
+    assert smallest_region(cfg, 0.5, (768, 576)) == pytest.approx(0.001 * 768 * 576 / 4)
+    assert smallest_region(cfg, 1.0, (320, 240)) == pytest.approx(100)
+    merging = RegionsConfig(min_area=100, min_size=0.0, merge_threshold=0.5)
+    assert smallest_region(merging, 1.0, (320, 240)) == pytest.approx(25)

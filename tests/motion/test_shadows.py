@@ -82,7 +82,9 @@ HIGHWAY = "cdnet-highway"
 @pytest.mark.slow
 def test_on_cdnet_highway_the_cars_switch_the_test_and_the_mask_scores_higher(data):
     """The default pipeline over frames 1-1000, its mask scored over CDnet's 470-1000: the cars'
-    grey bodies stay in the mask (recall 0.89, F 0.905 with the default test alone)."""
+    grey bodies stay in the mask (recall 0.89, F 0.905 with the default test alone), the sun on
+    the asphalt is no region, and the reported mask is the regions' silhouettes (F 0.938
+    without either)."""
     folder = data(HIGHWAY)
     roi = read_roi(folder / "ROI.bmp")
     counts = MaskCounts()
@@ -94,8 +96,9 @@ def test_on_cdnet_highway_the_cars_switch_the_test_and_the_mask_scores_higher(da
                                 cv2.IMREAD_GRAYSCALE)
                 counts = counts + compare_masks(gt, res.mask, roi)
         assert r.pipeline.detector.sub.getShadowThreshold() == pytest.approx(0.7)
+        assert r.pipeline.ghosts.lit > 0
     m = counts.metrics()
-    assert m["recall"] >= 0.95 and m["precision"] >= 0.91 and m["f_measure"] >= 0.93, m
+    assert m["recall"] >= 0.955 and m["precision"] >= 0.935 and m["f_measure"] >= 0.945, m
 
 
 @pytest.mark.data

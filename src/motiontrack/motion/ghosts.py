@@ -20,6 +20,12 @@ A ghost still joined to the person who left it (someone standing in the first fr
 off) is one region with the person's edges, so the region test keeps it. A pixel-level test
 (:meth:`GhostFilter._absorb`) takes such a ghost apart from its border: still pixels that look
 like the ground next to them and not like the background held at their place.
+
+The same regions are also tested for light (:func:`lit_share`): a patch of ground the sun or a
+lamp brightened shows the background a little brighter at nearly every pixel, where an object
+shows its own surface. OpenCV's shadow test already takes ground made darker with its colour
+kept; nothing takes ground made brighter, so without this test the sun coming out from behind
+a cloud over part of the scene is motion until the model learns it.
 """
 
 from __future__ import annotations
@@ -32,7 +38,7 @@ import numpy as np
 from ..types import Region
 from ..imaging import pixel_window, to_gray
 
-__all__ = ["GhostFilter", "outline_ratio", "edge_strength", "components"]
+__all__ = ["GhostFilter", "outline_ratio", "edge_strength", "components", "lit_share"]
 
 #: weight of each new frame in the running background, where the mask is background
 RATE = 0.05
@@ -40,6 +46,14 @@ RATE = 0.05
 #: scores about 1 (kept) instead of a ratio of two noise values
 FLAT = 1.0
 _K3 = np.ones((3, 3), np.uint8)
+#: lowest gain of a lit pixel: light the model calls foreground made the ground at least this
+#: much brighter, while the rim of plain ground the mask's clean-up leaves around every object
+#: has a gain of about 1
+LIT_LOW = 1.02
+#: largest difference between a lit pixel's gains in its three colour channels: light scales
+#: them alike, a coloured object does not (a synthetic walker 1.1 times brighter than the ground
+#: in gray differs by 0.4 between its channels; the sun on CDnet highway's asphalt by 0.01)
+LIT_SPREAD = 0.1
 #: offsets of a pixel's 3x3 neighbourhood
 _DY, _DX = (a.ravel() for a in np.mgrid[-1:2, -1:2])
 
@@ -77,6 +91,36 @@ def outline_ratio(current: np.ndarray, background: np.ndarray, mask: np.ndarray)
     return (cur + FLAT) / (bg + FLAT)
 
 
+def lit_share(current: np.ndarray, background: np.ndarray, mask: np.ndarray, gain: float,
+              held: np.ndarray | None = None) -> float:
+    """The share of ``mask``'s foreground pixels where ``current`` is ``background`` brightened
+    alike in every colour channel, by a factor between :data:`LIT_LOW` and ``gain`` (channels'
+    gains within :data:`LIT_SPREAD` of each other). ``current`` and ``background``: the same
+    (h, w, 3) crop, uint8 BGR; ``mask``: (h, w) 0/255; ``held``: (h, w) pixels that count as
+    not lit whatever they show (those of an object the detector holds)."""
+    on = mask > 0
+    n = int(np.count_nonzero(on))
+    if not n:
+        return 0.0
+    if held is not None:
+        on &= held == 0
+    g = (current[on].astype(np.float32) + 1) / (background[on].astype(np.float32) + 1)
+    lo, hi = g.min(1), g.max(1)
+    return float(np.count_nonzero((lo >= LIT_LOW) & (hi <= gain) & (hi - lo <= LIT_SPREAD))) / n
+
+
+def _component_in(crop: np.ndarray, inner: tuple[int, int, int, int]) -> np.ndarray:
+    """The 8-connected component of ``crop`` (uint8 0/255) with the most pixels in its part
+    ``inner`` (x1, y1, x2, y2), as a bool mask: the region whose box that part is, not a
+    neighbour reaching into the crop's margin."""
+    n, labels, _, _ = cv2.connectedComponentsWithStats(crop, connectivity=8)
+    if n <= 2:
+        return crop > 0
+    x1, y1, x2, y2 = inner
+    counts = np.bincount(labels[y1:y2, x1:x2].ravel(), minlength=n)
+    return labels == 1 + int(np.argmax(counts[1:]))
+
+
 def components(mask: np.ndarray, min_box: int) -> Iterator[tuple[int, int, int, int, np.ndarray]]:
     """Each outer connected component of ``mask`` (uint8, non-zero set) whose bounding box
     covers at least ``min_box`` pixels: its window ``y1, y2, x1, x2`` (the box grown by 2 px,
@@ -108,6 +152,10 @@ class GhostFilter:
     ----------
     ratio : a region whose outline ratio (current / background gradient) is below this is a ghost.
     pixels : also take ghosts apart pixel by pixel from their border (:meth:`_absorb`).
+    lit : ``(share, gain)``: a region whose mean colour and at least ``share`` of whose pixels
+        show the background brightened by up to ``gain`` (:func:`lit_share`) is light, not an
+        object: it is dropped and taken out of the mask (this frame only; ``share`` 0 = off).
+        Colour frames only: in gray a coloured object can look like the ground brightened.
     """
 
     #: gray levels within which a remembered ghost pixel still shows the same ground
@@ -120,11 +168,17 @@ class GhostFilter:
     #: place must differ more, and the rings of pixels taken per run
     ABSORB_EVERY, STILL, STILL_T, MATCH, MARGIN, STEPS = 3, 2, 8, 10.0, 10.0, 2
 
-    def __init__(self, ratio: float, pixels: bool = True) -> None:
+    def __init__(self, ratio: float, pixels: bool = True,
+                 lit: tuple[float, float] = (0.0, 1.0)) -> None:
         self.ratio = float(ratio)
         self.pixels = bool(pixels)
+        self.lit_share, self.lit_gain = float(lit[0]), float(lit[1])
+        self.lit = 0           # regions dropped as light
         self._bg: np.ndarray | None = None     # running background (float32 gray)
         self._bg8: np.ndarray | None = None    # the same in uint8
+        #: the running background in colour (float32 BGR) and in uint8, for the light test
+        self._bgc: np.ndarray | None = None
+        self._bgc8: np.ndarray | None = None
         self._ghost: np.ndarray | None = None  # ground seen at remembered ghost pixels, or -1
         #: (y1, y2, x1, x2): every remembered ghost pixel lies in this window (None: none is)
         self._win: tuple[int, int, int, int] | None = None
@@ -148,6 +202,9 @@ class GhostFilter:
             gray = to_gray(image)
             self._bg = gray.astype(np.float32)
             self._bg8 = gray.copy()
+            colour = self.lit_share > 0 and image.ndim == 3
+            self._bgc = image.astype(np.float32) if colour else None
+            self._bgc8 = image.copy() if colour else None
             self._ghost = np.full(gray.shape, -1, np.int16)
             self._win = None
             self._prev = []
@@ -174,16 +231,24 @@ class GhostFilter:
                 gray = to_gray(image)
             mask = self._absorb(gray, mask, keep)
         regions = find(mask)
-        keep = []
+        keep_px, keep = keep, []
         for r in regions:
             # two pixels of margin: the outline's outer side and the 3x3 support
-            b = r.box
-            x1, y1, x2, y2 = pixel_window((b.x, b.y, b.w, b.h), scale, mask.shape, margin=2)
+            b = (r.box.x, r.box.y, r.box.w, r.box.h)
+            x1, y1, x2, y2 = pixel_window(b, scale, mask.shape, margin=2)
             cur = (to_gray(image[y1:y2, x1:x2]) if gray is None  # only the crop is needed
                    else gray[y1:y2, x1:x2])
             crop = mask[y1:y2, x1:x2]
             if outline_ratio(cur, self._bg8[y1:y2, x1:x2], crop) >= self.ratio:
-                keep.append(r)
+                if self._lit(image, crop, keep_px, (y1, y2, x1, x2)):
+                    if mask is detected:
+                        mask = mask.copy()
+                    bx1, by1, bx2, by2 = pixel_window(b, scale, mask.shape)
+                    inner = (bx1 - x1, by1 - y1, bx2 - x1, by2 - y1)
+                    mask[y1:y2, x1:x2][_component_in(crop, inner)] = 0
+                    self.lit += 1
+                else:
+                    keep.append(r)
                 continue
             self.dropped += 1
             on = crop > 0
@@ -195,7 +260,28 @@ class GhostFilter:
             cv2.accumulateWeighted(to_gray(image) if gray is None else gray, self._bg,
                                    1 - (1 - RATE) ** self.EVERY, mask=cv2.bitwise_not(detected))
             self._bg8 = cv2.convertScaleAbs(self._bg)
+            if self._bgc is not None:
+                cv2.accumulateWeighted(image, self._bgc, 1 - (1 - RATE) ** self.EVERY,
+                                       mask=cv2.bitwise_not(detected))
+                self._bgc8 = cv2.convertScaleAbs(self._bgc)
         return mask, keep
+
+    def _lit(self, image: np.ndarray, crop: np.ndarray, held: np.ndarray | None,
+             window: tuple[int, int, int, int]) -> bool:
+        """Whether the region in ``crop`` (the mask in ``window``) is light (see ``lit``): its
+        mean colour is the background's brightened alike in every channel, and so are at least
+        ``lit_share`` of its pixels. The pixels the detector holds for a stopped object
+        (``held``, the whole frame) count as not lit."""
+        if self._bgc8 is None or image.ndim != 3:
+            return False
+        y1, y2, x1, x2 = window
+        cur, bg = image[y1:y2, x1:x2], self._bgc8[y1:y2, x1:x2]
+        # the means first: they turn away almost every object at a fraction of the pixels' cost
+        gain = np.add(cv2.mean(cur, mask=crop)[:3], 1) / np.add(cv2.mean(bg, mask=crop)[:3], 1)
+        if gain.min() < LIT_LOW or gain.max() > self.lit_gain or np.ptp(gain) > LIT_SPREAD:
+            return False
+        return lit_share(cur, bg, crop, self.lit_gain,
+                         None if held is None else held[y1:y2, x1:x2]) >= self.lit_share
 
     def _absorb(self, gray: np.ndarray, mask: np.ndarray,
                 keep: np.ndarray | None = None) -> np.ndarray:

@@ -20,7 +20,8 @@ import numpy as np
 from ..config import RegionsConfig
 from ..types import Box, Region
 
-__all__ = ["find_regions", "components", "filter_regions", "merge_regions", "merge_distance"]
+__all__ = ["find_regions", "components", "filter_regions", "merge_regions", "merge_distance",
+           "smallest_region", "silhouettes"]
 
 
 def components(mask: np.ndarray, connectivity: int = 8, scale: float = 1.0,
@@ -188,3 +189,44 @@ def find_regions(mask: np.ndarray, cfg: RegionsConfig, scale: float, image_size:
     regions = components(mask, cfg.connectivity, scale, min_pixels=max(1, int(min_px)))
     regions = merge_regions(regions, cfg.merge_threshold)
     return filter_regions(regions, cfg, image_area)
+
+
+def smallest_region(cfg: RegionsConfig, scale: float, image_size: tuple[int, int]) -> float:
+    """Pixels (at processing scale) of the smallest component :func:`find_regions` can make a
+    region of: the minimum area, or a quarter of it when regions are merged (specks below that
+    are dropped before merging)."""
+    width, height = image_size
+    least = max(cfg.min_area, cfg.min_size * width * height) * scale * scale
+    return least / 4.0 if cfg.merge_threshold > 0 else least
+
+
+def silhouettes(mask: np.ndarray, min_pixels: float) -> np.ndarray:
+    """``mask`` (uint8 0/255) as the silhouettes of its regions: without the 8-connected
+    components of fewer than ``min_pixels`` pixels (no region comes from them) and with the
+    holes of the others filled (an object's pixels the background model took for ground, such
+    as a grey car's roof on grey asphalt); ``mask`` itself when neither changes anything.
+
+    A component is counted by the mask's pixels in its bounding box, so a speck whose box
+    another component reaches into may be kept (never the other way round)."""
+    contours, tree = cv2.findContours(mask, cv2.RETR_TREE, cv2.CHAIN_APPROX_SIMPLE)
+    if tree is None:
+        return mask
+    parents = tree[0][:, 3]
+    specks, holes = set(), []
+    for i, c in enumerate(contours):
+        if parents[i] < 0:   # a component's outline (the others lie inside it)
+            x, y, w, h = cv2.boundingRect(c)
+            if w * h < min_pixels or cv2.countNonZero(mask[y:y + h, x:x + w]) < min_pixels:
+                specks.add(i)
+    for i, c in enumerate(contours):
+        # a hole of a component that stays: filled with whatever lies inside it
+        if parents[i] >= 0 and parents[parents[i]] < 0 and parents[i] not in specks:
+            holes.append(c)
+    if not specks and not holes:
+        return mask
+    out = mask.copy()
+    if holes:
+        cv2.drawContours(out, holes, -1, 255, thickness=-1)
+    if specks:
+        cv2.drawContours(out, [contours[i] for i in sorted(specks)], -1, 0, thickness=-1)
+    return out
