@@ -160,27 +160,28 @@ def test_box_rejects_bad_values(args, message):
 
 def test_silhouettes_drop_specks_and_fill_the_holes_of_the_rest():
     m = mask_with((10, 10, 30, 30), (70, 70, 3, 3))   # an object and a 9-pixel speck
-    m[20:25, 20:25] = 0                                # a hole in the object
-    m[22, 22] = 255                                    # with a speck inside it
+    m[20:27, 20:27] = 0                                # a hole in the object
+    m[23, 23] = 255                                    # with a speck inside it
     out = silhouettes(m, 10)
     assert out[10:40, 10:40].all()                     # the hole filled, its speck with it
     assert not out[70:73, 70:73].any()                 # the speck outside gone
     assert int((out > 0).sum()) == 900
-    assert (m[20:25, 20:25] == 0).sum() == 24          # the input is left as it was
+    assert (m[20:27, 20:27] == 0).sum() == 48          # the input is left as it was
 
 
-def test_silhouettes_keep_a_component_as_large_as_a_region_and_return_an_unchanged_mask_itself():
-    m = mask_with((10, 10, 3, 3), (50, 50, 10, 10))
-    assert silhouettes(m, 9) is m                      # nine pixels: a region may come from it
-    out = silhouettes(m, 10)
-    assert not out[10:13, 10:13].any() and out[50:60, 50:60].all()
+def test_silhouettes_join_parts_two_pixels_apart_and_keep_a_component_as_large_as_a_region():
+    m = mask_with((10, 10, 10, 20), (22, 10, 10, 20), (50, 50, 3, 3))
+    out = silhouettes(m, 9)
+    assert out[10:30, 20:22].all()                     # the gap closed
+    assert out[50:53, 50:53].all()                     # nine pixels: a region may come from it
+    assert not silhouettes(m, 10)[50:53, 50:53].any()
     assert silhouettes(np.zeros((20, 20), np.uint8), 10).sum() == 0
 
 
 def test_a_thin_component_is_counted_by_its_pixels_not_its_box():
-    m = np.zeros((40, 40), np.uint8)
-    np.fill_diagonal(m, 255)                           # 40 pixels in a 40 x 40 box
-    assert silhouettes(m, 41).sum() == 0 and silhouettes(m, 40) is m
+    m = mask_with((0, 0, 40, 1), (0, 0, 1, 40))        # an L: 79 pixels in a 40 x 40 box
+    assert silhouettes(m, 80).sum() == 0
+    assert np.array_equal(silhouettes(m, 79), m)
 
 
 def test_the_smallest_region_follows_the_filters_and_merging():

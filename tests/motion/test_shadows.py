@@ -98,7 +98,7 @@ def test_on_cdnet_highway_the_cars_switch_the_test_and_the_mask_scores_higher(da
         assert r.pipeline.detector.sub.getShadowThreshold() == pytest.approx(0.7)
         assert r.pipeline.ghosts.lit > 0
     m = counts.metrics()
-    assert m["recall"] >= 0.955 and m["precision"] >= 0.935 and m["f_measure"] >= 0.945, m
+    assert m["recall"] >= 0.96 and m["precision"] >= 0.93 and m["f_measure"] >= 0.95, m
 
 
 @pytest.mark.data
