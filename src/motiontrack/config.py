@@ -368,8 +368,9 @@ class MotionConfig(_Section):
                                          "who left it)", when={"ghost_ratio": Not(0.0, 0.7)})
     light_share: float = param(0.5, lo=0.0, hi=1.0,
                                doc="with the ghost filter on, drop a region as light (ground the "
-                                   "sun or a lamp brightened) when this share of its pixels shows "
-                                   "the background up to light_gain times brighter (0 = off)",
+                                   "sun or a lamp brightened) when its mean colour and this share "
+                                   "of its pixels show the background 1.02 to light_gain times "
+                                   "brighter, alike in every channel (0 = off)",
                                when={"ghost_ratio": Not(0.0, 0.7)})
     light_gain: float = param(1.25, lo=1.0, hi=4.0, doc="brightest gain of the light test",
                               when={"light_share": Not(0.0, 0.5)})
@@ -438,8 +439,9 @@ class RegionsConfig(_Section):
     merge_threshold: float = param(0.0, lo=0.0,
                                    doc="REGION_MERGE_THRESH: merge regions whose distance D is below this (0 = off)")
     silhouettes: bool = param(True, doc="the mask reported (masks video, evaluate-masks) is the "
-                                        "regions' silhouettes: components too small to be a region "
-                                        "left out, holes filled; false = the mask as cleaned")
+                                        "regions' silhouettes: closed by a 3x3 square, components "
+                                        "too small to be a region left out, holes filled; false = "
+                                        "the mask as cleaned")
 
 
 @dataclass(frozen=True)

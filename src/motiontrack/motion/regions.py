@@ -200,13 +200,13 @@ def smallest_region(cfg: RegionsConfig, scale: float, image_size: tuple[int, int
     return least / 4.0 if cfg.merge_threshold > 0 else least
 
 
-#: the closing of :func:`silhouettes`: it joins parts of one object a pixel apart
+#: the closing of :func:`silhouettes`: it joins parts of one object up to two pixels apart
 _CLOSE = cv2.getStructuringElement(cv2.MORPH_RECT, (3, 3))
 
 
 def silhouettes(mask: np.ndarray, min_pixels: float) -> np.ndarray:
     """``mask`` (uint8 0/255) as the silhouettes of its regions: closed by a 3x3 square (gaps of
-    a pixel joined), without the 8-connected components of fewer than ``min_pixels`` pixels (no
+    up to two pixels joined), without the 8-connected components of fewer than ``min_pixels`` pixels (no
     region comes from them), and with the holes of the others filled (an object's pixels the
     background model took for ground, such as a grey car's roof on grey asphalt). Always a new
     array.
