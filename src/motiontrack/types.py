@@ -284,8 +284,10 @@ class PeopleFrame:
 class FrameResult:
     """What the pipeline yields for each frame.
 
-    ``mask`` is the cleaned motion mask (``uint8``, 0/255) at processing resolution, or ``None``
-    when detections came from elsewhere; ``raw_mask`` the detector's mask before clean-up.
+    ``mask`` is the cleaned motion mask (``uint8``, 0/255) at processing resolution as the
+    regions' silhouettes (``regions.silhouettes``: closed, specks out, holes filled; the tracker
+    had the mask before that), or ``None`` when detections came from elsewhere; ``raw_mask`` the
+    detector's mask before clean-up.
     ``people`` is what the people stage (or ``people.auto_split``'s head search) found, when it
     ran; ``static`` the recently stopped objects of the dual background, when the run asked
     for them (a scene with ``[abandoned]``). ``earlier`` holds the tracks confirmed in this frame at the earlier frames where they
