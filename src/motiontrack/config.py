@@ -366,14 +366,14 @@ class MotionConfig(_Section):
     ghost_pixels: bool = param(True, doc="with the ghost filter on, also take a ghost apart pixel by "
                                          "pixel from its border (a ghost still joined to the person "
                                          "who left it)", when={"ghost_ratio": Not(0.0, 0.7)})
-    light_share: float = param(0.5, lo=0.0, hi=1.0,
+    light_share: float = param(0.8, lo=0.0, hi=1.0,
                                doc="with the ghost filter on, drop a region as light (ground the "
                                    "sun or a lamp brightened) when its mean colour and this share "
                                    "of its pixels show the background 1.02 to light_gain times "
                                    "brighter, alike in every channel (0 = off)",
                                when={"ghost_ratio": Not(0.0, 0.7)})
     light_gain: float = param(1.25, lo=1.0, hi=4.0, doc="brightest gain of the light test",
-                              when={"light_share": Not(0.0, 0.5)})
+                              when={"light_share": Not(0.0, 0.8)})
     keep_stopped: bool = param(
         False, doc="keep people who stop walking in the mask: a dual background's static "
                    "foreground (long-term foreground, short-term background) inside the box of a "
