@@ -439,9 +439,9 @@ class RegionsConfig(_Section):
     merge_threshold: float = param(0.0, lo=0.0,
                                    doc="REGION_MERGE_THRESH: merge regions whose distance D is below this (0 = off)")
     silhouettes: bool = param(True, doc="the mask reported (masks video, evaluate-masks) is the "
-                                        "regions' silhouettes: closed by a 3x3 square, components "
-                                        "too small to be a region left out, holes filled; false = "
-                                        "the mask as cleaned")
+                                        "regions' silhouettes: components too small to be a region "
+                                        "left out, holes filled, closed by a 3x3 square among "
+                                        "vehicles; false = the mask as cleaned")
 
 
 @dataclass(frozen=True)

@@ -568,8 +568,9 @@ class Pipeline:
             self._vehicles = self._scene_kind.update(tracks)
         self.frames_seen += 1
         if mask is not None and self.cfg.regions.silhouettes:
-            # what is reported is the regions' silhouettes (the tracker had the mask itself)
-            mask = silhouettes(mask, self._speck)
+            # what is reported is the regions' silhouettes (the tracker had the mask itself),
+            # closed while the scene's tracks are mostly vehicles
+            mask = silhouettes(mask, self._speck, close=bool(self._vehicles))
         return FrameResult(index=frame.index, timestamp=frame.timestamp, frame=frame.image,
                            mask=mask, regions=tuple(regions), tracks=tuple(tracks),
                            raw_mask=det.motion.raw_mask, people=people,

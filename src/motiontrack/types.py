@@ -285,7 +285,7 @@ class FrameResult:
     """What the pipeline yields for each frame.
 
     ``mask`` is the cleaned motion mask (``uint8``, 0/255) at processing resolution as the
-    regions' silhouettes (``regions.silhouettes``: closed, specks out, holes filled; the tracker
+    regions' silhouettes (``regions.silhouettes``: specks out, holes filled; the tracker
     had the mask before that), or ``None`` when detections came from elsewhere; ``raw_mask`` the
     detector's mask before clean-up.
     ``people`` is what the people stage (or ``people.auto_split``'s head search) found, when it

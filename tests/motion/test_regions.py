@@ -169,9 +169,10 @@ def test_silhouettes_drop_specks_and_fill_the_holes_of_the_rest():
     assert (m[20:27, 20:27] == 0).sum() == 48          # the input is left as it was
 
 
-def test_silhouettes_join_parts_two_pixels_apart_and_keep_a_component_as_large_as_a_region():
+def test_closed_silhouettes_join_parts_two_pixels_apart_and_keep_a_component_as_large_as_a_region():
     m = mask_with((10, 10, 10, 20), (22, 10, 10, 20), (50, 50, 3, 3))
-    out = silhouettes(m, 9)
+    assert not silhouettes(m, 9)[10:30, 20:22].any()   # not closed unless asked
+    out = silhouettes(m, 9, close=True)
     assert out[10:30, 20:22].all()                     # the gap closed
     assert out[50:53, 50:53].all()                     # nine pixels: a region may come from it
     assert not silhouettes(m, 10)[50:53, 50:53].any()

@@ -204,16 +204,17 @@ def smallest_region(cfg: RegionsConfig, scale: float, image_size: tuple[int, int
 _CLOSE = cv2.getStructuringElement(cv2.MORPH_RECT, (3, 3))
 
 
-def silhouettes(mask: np.ndarray, min_pixels: float) -> np.ndarray:
-    """``mask`` (uint8 0/255) as the silhouettes of its regions: closed by a 3x3 square (gaps of
-    up to two pixels joined), without the 8-connected components of fewer than ``min_pixels`` pixels (no
-    region comes from them), and with the holes of the others filled (an object's pixels the
+def silhouettes(mask: np.ndarray, min_pixels: float, close: bool = False) -> np.ndarray:
+    """``mask`` (uint8 0/255) as the silhouettes of its regions: with ``close``, closed by a 3x3
+    square first (gaps of up to two pixels joined: right for a car, which has none, wrong for a
+    person's legs); without the 8-connected components of fewer than ``min_pixels`` pixels (no
+    region comes from them); and with the holes of the others filled (an object's pixels the
     background model took for ground, such as a grey car's roof on grey asphalt). Always a new
     array.
 
     A component is counted by the mask's pixels in its bounding box, so a speck whose box
     another component reaches into may be kept (never the other way round)."""
-    out = cv2.morphologyEx(mask, cv2.MORPH_CLOSE, _CLOSE)
+    out = cv2.morphologyEx(mask, cv2.MORPH_CLOSE, _CLOSE) if close else mask.copy()
     contours, tree = cv2.findContours(out, cv2.RETR_TREE, cv2.CHAIN_APPROX_SIMPLE)
     if tree is None:
         return out
