@@ -275,9 +275,10 @@ class Pipeline:
             self.ghosts = _ghost_filter(cfg.motion)
         self._prev_tracks: tuple = ()
         #: whether the recent tracks are mostly vehicles, for a detector whose shadow test
-        #: depends on it (None: not asked)
+        #: depends on it and for the reported silhouettes (None: not asked)
         self._scene_kind = (VehicleScene() if self.classes is not None and self.detector is not None
-                            and self.detector.switches_shadows else None)
+                            and (self.detector.switches_shadows or cfg.regions.silhouettes)
+                            else None)
         self._vehicles: bool | None = False if self._scene_kind is not None else None
         self.bridge = None
         if cfg.tracker.bridge != "none" and not self.tracker_sees_pictures:

@@ -4,7 +4,9 @@ The motion model's shadow test takes a darker copy of the ground for a shadow; a
 car on asphalt is such a copy over much of its body, so the default test cuts cars into pieces
 while it keeps people's shadows off them. The pipeline asks :class:`VehicleScene` each frame and
 gives the model its vehicles' shadow threshold while the answer is yes
-(``motion.knn.vehicle_shadow_threshold``, docs/pipeline.md "Shadows").
+(``motion.knn.vehicle_shadow_threshold``, docs/pipeline.md "Shadows"), and closes the
+silhouettes of the mask it reports (a car has no gaps a pixel or two wide; a person's legs do:
+docs/pipeline.md "Regions").
 """
 
 from __future__ import annotations
