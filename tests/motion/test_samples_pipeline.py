@@ -54,6 +54,7 @@ class _Recorder:
     protect = True
     relearns = True
     protect_speed = None
+    switches_shadows = False
 
     def __init__(self) -> None:
         self.calls: list[tuple] = []
