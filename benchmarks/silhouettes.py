@@ -10,7 +10,8 @@ Rows per scene:
 Scenes: the synthetic people scenes (walker, crossing, crowd, column; seed 0, frames from 30 on)
 and ``mixed`` (people and cars), and CDnet highway frames 470-1000 (run from frame 1).
 
-Run: .venv/bin/python benchmarks/silhouettes.py [--data ../shared/data]
+Run: .venv/bin/python benchmarks/silhouettes.py [--data ../shared/data] [--scenes walker,...,highway]
+         [--frames N]
 """
 
 from __future__ import annotations
@@ -38,10 +39,10 @@ def _scored(gt: np.ndarray, mask: np.ndarray, roi: np.ndarray | None) -> MaskCou
     return compare_masks(gt, mask, roi)
 
 
-def scene_counts(source: str, truth, first: int, last: int | None, roi=None,
+def scene_counts(source: str, truth, first: int, roi=None,
                  overrides: tuple[str, ...] = ()) -> dict[str, MaskCounts]:
-    """Counts of each row over the frames ``first``..``last`` (indices; ``truth(i)`` is the gt
-    mask of frame index ``i``)."""
+    """Counts of each row over the frames from index ``first`` on (``truth(i)`` is the gt mask of
+    frame index ``i``)."""
     counts = {row: MaskCounts() for row in ROWS}
     cfg = load_config(None, ["regions.silhouettes=false", *overrides])
     with run(source, cfg) as r:
@@ -66,25 +67,31 @@ def main() -> None:
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--data", default=os.environ.get(
         "MOTIONTRACK_DATA", Path(__file__).resolve().parents[2] / "shared" / "data"))
+    ap.add_argument("--scenes", default=",".join((*SYNTH, "highway")),
+                    help="comma-separated: synthetic scene names and/or highway")
+    ap.add_argument("--frames", type=int, default=0,
+                    help="frames of each synthetic scene (0 = its own length)")
     args = ap.parse_args()
+    wanted = args.scenes.split(",")
     print("pixel precision / recall / F of the reported mask (CDnet rules)")
     print(f"{'scene':<22}" + "".join(f"{row:>22}" for row in ROWS))
     scenes = []
-    for name in SYNTH:
+    for name in (n for n in wanted if n != "highway"):
         spec = f"synth:{name}?seed=0"
         scene = parse_synth_spec(spec)
-        scenes.append((name, spec, scene.foreground_mask, 30, None, ()))
+        frames = (f"source.max_frames={args.frames}",) if args.frames else ()
+        scenes.append((name, spec, scene.foreground_mask, 30, None, frames))
     folder = Path(args.data) / "cdnet-highway"
-    if (folder / "input").is_dir():
+    if "highway" in wanted and not (folder / "input").is_dir():
+        print(f"(CDnet highway not found in {folder}: set MOTIONTRACK_DATA or --data)")
+    elif "highway" in wanted:
         def truth(i: int, folder=folder) -> np.ndarray:
             return cv2.imread(str(folder / "groundtruth" / f"gt{i + 1:06d}.png"),
                               cv2.IMREAD_GRAYSCALE)
         scenes.append(("CDnet highway", str(folder / "input" / "*.jpg"), truth, 469,
                        read_roi(folder / "ROI.bmp"), ("source.max_frames=1000",)))
-    else:
-        print(f"(CDnet highway not found in {folder}: set MOTIONTRACK_DATA or --data)")
     for name, source, truth, first, roi, overrides in scenes:
-        counts = scene_counts(source, truth, first, None, roi, overrides)
+        counts = scene_counts(source, truth, first, roi, overrides)
         cells = []
         for row in ROWS:
             m = counts[row].metrics()

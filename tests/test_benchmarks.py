@@ -299,3 +299,13 @@ def test_serve_soak_benchmark_samples_both_cameras_and_checks_every_target(tmp_p
     assert checks["events without their snapshot"]["met"], out
     assert checks["camera processes started again (a camera that failed)"]["met"], out
     assert "serve exited 0" in out
+
+
+def test_silhouettes_benchmark_scores_every_step_and_leaves_people_unclosed():
+    out = subprocess.run([sys.executable, str(REPO / "benchmarks" / "silhouettes.py"),
+                          "--scenes", "walker", "--frames", "60"],
+                         capture_output=True, text=True, timeout=120, check=True).stdout
+    rows = re.findall(r"^(\w+)\s+((?:\s*\d\.\d{3}/\d\.\d{3}/\d\.\d{3}){4})$", out, re.M)
+    assert [name for name, _ in rows] == ["walker"], out
+    cleaned, not_closed, closed, default = rows[0][1].split()
+    assert default == not_closed != closed, out     # a scene of people is not closed
