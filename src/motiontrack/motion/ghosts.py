@@ -51,8 +51,8 @@ _K3 = np.ones((3, 3), np.uint8)
 #: has a gain of about 1
 LIT_LOW = 1.02
 #: largest difference between a lit pixel's gains in its three colour channels: light scales
-#: them alike, a coloured object does not (a synthetic walker 1.1 times brighter than the ground
-#: in gray differs by 0.4 between its channels; the sun on CDnet highway's asphalt by 0.01)
+#: them alike, a coloured object does not (clothes may be as bright as the ground in gray, not
+#: in each channel)
 LIT_SPREAD = 0.1
 #: offsets of a pixel's 3x3 neighbourhood
 _DY, _DX = (a.ravel() for a in np.mgrid[-1:2, -1:2])
