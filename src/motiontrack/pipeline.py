@@ -417,7 +417,7 @@ class Pipeline:
         if cut is not None:
             self.reset_motion()
         protect, relearn, vehicles = feedback
-        if vehicles is not None and self.detector.switches_shadows:
+        if vehicles is not None:
             self.detector.vehicle_scene(vehicles)
         out = self.stage.apply(small, protect, relearn)
         raw = out.raw

@@ -8,6 +8,7 @@ import numpy as np
 
 from helpers.stops import frames_by_track, stopping_person
 from motiontrack.config import load_config
+from motiontrack.motion.base import MotionDetector
 from motiontrack.pipeline import Pipeline
 from motiontrack.synth.sequence import SyntheticScene
 from motiontrack.types import Frame
@@ -47,14 +48,13 @@ def test_person_who_stops_is_learnt_without_the_protect_mask():
     assert stop.sum() <= STAND - 15
 
 
-class _Recorder:
+class _Recorder(MotionDetector):
     """A detector that records what the pipeline passes it."""
 
     wants_color = False
     protect = True
     relearns = True
     protect_speed = None
-    switches_shadows = False
 
     def __init__(self) -> None:
         self.calls: list[tuple] = []
