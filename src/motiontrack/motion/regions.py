@@ -97,9 +97,18 @@ def _components_labelled(mask: np.ndarray, connectivity: int, scale: float,
     return out
 
 
+#: components below this share of the minimum area are specks, dropped before merging
+_SPECK = 0.25
+
+
+def _least_area(cfg: RegionsConfig, image_area: float) -> float:
+    """A region's minimum area in original pixels: the larger of ``min_area`` and ``min_size``."""
+    return max(cfg.min_area, cfg.min_size * image_area)
+
+
 def filter_regions(regions: list[Region], cfg: RegionsConfig, image_area: float) -> list[Region]:
     """Keep regions whose area and height/width ratio are within the limits of ``cfg``."""
-    lo = max(cfg.min_area, cfg.min_size * image_area)
+    lo = _least_area(cfg, image_area)
     hi_px = [v for v in (cfg.max_area, cfg.max_size * image_area) if v > 0]
     hi = min(hi_px) if hi_px else np.inf
     out = []
@@ -185,7 +194,7 @@ def find_regions(mask: np.ndarray, cfg: RegionsConfig, scale: float, image_size:
     """
     width, height = image_size
     image_area = float(width * height)
-    min_px = max(cfg.min_area, cfg.min_size * image_area) * scale * scale / 4.0
+    min_px = _least_area(cfg, image_area) * scale * scale * _SPECK
     regions = components(mask, cfg.connectivity, scale, min_pixels=max(1, int(min_px)))
     regions = merge_regions(regions, cfg.merge_threshold)
     return filter_regions(regions, cfg, image_area)
@@ -195,9 +204,8 @@ def smallest_region(cfg: RegionsConfig, scale: float, image_size: tuple[int, int
     """Pixels (at processing scale) of the smallest component :func:`find_regions` can make a
     region of: the minimum area, or a quarter of it when regions are merged (specks below that
     are dropped before merging)."""
-    width, height = image_size
-    least = max(cfg.min_area, cfg.min_size * width * height) * scale * scale
-    return least / 4.0 if cfg.merge_threshold > 0 else least
+    least = _least_area(cfg, float(image_size[0] * image_size[1])) * scale * scale
+    return least * _SPECK if cfg.merge_threshold > 0 else least
 
 
 #: the closing of :func:`silhouettes`: it joins parts of one object up to two pixels apart
