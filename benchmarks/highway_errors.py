@@ -28,7 +28,8 @@ from motiontrack.motion import ghosts
 from motiontrack.pipeline import run
 from motiontrack.tracking.association import iou_matrix
 
-FIRST, LAST = 470, 1000
+# benchmarks/ is on sys.path when a script here runs
+from highway import FIRST, LAST, gt_boxes
 
 
 def pixel_errors(folder: Path) -> None:
@@ -58,14 +59,12 @@ def merged_cars(folder: Path, threshold: float) -> None:
             frame = res.index + 1
             if frame < FIRST:
                 continue
-            g = cv2.imread(str(folder / "groundtruth" / f"gt{frame:06d}.png"), cv2.IMREAD_GRAYSCALE)
-            n, _, stats, _ = cv2.connectedComponentsWithStats((g == 255).astype(np.uint8))
-            gt = np.array([stats[i, :4] for i in range(1, n) if stats[i, 4] >= 200], float)
+            gt = gt_boxes(folder, frame)
             boxes = np.array([t.box.as_array() for t in res.tracks], float).reshape(-1, 4)
             cars += len(gt)
             if not len(gt) or not len(boxes):
                 continue
-            iou = iou_matrix(gt.reshape(-1, 4), boxes)
+            iou = iou_matrix(gt, boxes)
             best = iou.argmax(1)
             for i, j in enumerate(best):
                 if iou[i, j] >= 0.5:
@@ -86,10 +85,9 @@ def light_regions(source: str, frames: int, label: str) -> None:
         if self._bgc8 is not None and image.ndim == 3:
             y1, y2, x1, x2 = window
             cur, bg = image[y1:y2, x1:x2], self._bgc8[y1:y2, x1:x2]
-            mean = (np.add(cv2.mean(cur, mask=crop)[:3], 1)
-                    / np.add(cv2.mean(bg, mask=crop)[:3], 1))
-            if (mean.min() >= ghosts.LIT_LOW and mean.max() <= self.lit_gain
-                    and np.ptp(mean) <= ghosts.LIT_SPREAD):
+            if ghosts.lit_on_average(cur, bg, crop, self.lit_gain):
+                mean = (np.add(cv2.mean(cur, mask=crop)[:3], 1)
+                        / np.add(cv2.mean(bg, mask=crop)[:3], 1))
                 on = crop > 0
                 gains = ((cur[on].astype(np.float32) + 1) / (bg[on].astype(np.float32) + 1)).mean(1)
                 share = ghosts.lit_share(cur, bg, crop, self.lit_gain,
