@@ -173,6 +173,14 @@ def _protect(default: bool):
                               "learnt, so people who stop stay foreground")
 
 
+def _shadow_inside():
+    """The ``shadow_inside`` field of the subtractors with a shadow test (MOG2, KNN)."""
+    return param(True, when={"detect_shadows": True},
+                 doc="a shadow pixel with its region's foreground above and below it in its "
+                     "column is the object's (a dark sweater, a grey car's roof), not a cast "
+                     "shadow (docs/pipeline.md, Shadows)")
+
+
 def _protect_threshold():
     """The ``protect_threshold`` field that goes with :func:`_protect` (MOG2, KNN)."""
     return param(30, lo=1, hi=255, doc="inside tracked objects (not learnt): difference from the "
@@ -192,6 +200,7 @@ class MOG2Params(_Section):
         doc="a shadow is the background darkened to no less than this fraction of its brightness, "
             "its colour kept (OpenCV shadowThreshold); higher where objects are darker copies of "
             "the ground, such as grey cars on asphalt (docs/pipeline.md, Shadows)")
+    shadow_inside: bool = _shadow_inside()
     learning_rate: float = param(-1.0, lo=-1.0, hi=1.0, doc="-1 = automatic (1/history)")
     protect: bool = _protect(False)
     protect_threshold: int = _protect_threshold()
@@ -213,6 +222,7 @@ class KNNParams(_Section):
         0.7, lo=0.0, hi=1.0, when={"detect_shadows": True},
         doc="shadow_threshold while most of the scene's classified tracks are vehicles (needs "
             "classes.enabled); equal to shadow_threshold to keep one")
+    shadow_inside: bool = _shadow_inside()
     learning_rate: float = param(-1.0, lo=-1.0, hi=1.0, doc="-1 = automatic (1/history)")
     n_samples: int = param(7, lo=1, hi=50,
                            doc="samples kept per pixel in each of the model's three time scales "

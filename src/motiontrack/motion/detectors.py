@@ -12,6 +12,7 @@ from ..config import check_knn_samples
 from ..imaging import to_gray
 from .base import DETECTORS, MotionDetector
 from .hold import Hold
+from .shadows import enclosed_shadows
 
 #: the random generator is seeded with ``seed * _SEED_STRIDE + frame``: seeds do not share
 #: sequences for videos shorter than this many frames
@@ -111,8 +112,11 @@ class _SelectiveSubtractor(_OpenCVSubtractor):
 
     def __init__(self, make: Callable[[], Any], learning_rate: float = -1.0,
                  protect: bool = False, protect_threshold: int = 30,
-                 hold: Hold | None = None, hold_speed: float | None = None) -> None:
+                 hold: Hold | None = None, hold_speed: float | None = None,
+                 shadow_inside: bool = False) -> None:
         super().__init__(make, learning_rate)
+        #: shadow pixels between a region's own foreground above and below are the object's
+        self.shadow_inside = bool(shadow_inside)
         #: the model itself does not learn the protected pixels
         self.feeds = bool(protect)
         self.protect_threshold = int(protect_threshold)
@@ -154,7 +158,7 @@ class _SelectiveSubtractor(_OpenCVSubtractor):
             for _ in range(self.prime):
                 self.sub.apply(image, learningRate=self.learning_rate)
         if self.hold is not None:
-            raw = self.sub.apply(image, learningRate=self.learning_rate)
+            raw = self._subtract(image)
             if relearn is True:
                 self.hold.reset()
                 relearn = None
@@ -162,17 +166,23 @@ class _SelectiveSubtractor(_OpenCVSubtractor):
         if not self.feeds or protect is None or self._frames < 3 or not protect.any():
             if self._frames % self.BG_REFRESH == 0:
                 self._bg = None
-            return _binary(self.sub.apply(image, learningRate=self.learning_rate))
+            return _binary(self._subtract(image))
         if self._bg is None or self._frames % self.BG_REFRESH == 0 or self._bg.shape != image.shape:
             self._bg = self.sub.getBackgroundImage()
             if self._bg.shape != image.shape:  # gray model on colour input or vice versa
-                return _binary(self.sub.apply(image, learningRate=self.learning_rate))
+                return _binary(self._subtract(image))
         fed = image.copy()
         fed[protect] = self._bg[protect]
-        fg = _binary(self.sub.apply(fed, learningRate=self.learning_rate))
+        fg = _binary(self._subtract(fed))
         diff = _absdiff_max(image, self._bg)
         fg[protect] = np.where(diff[protect] > self.protect_threshold, 255, 0)
         return fg
+
+    def _subtract(self, image: np.ndarray) -> np.ndarray:
+        """The subtractor's output for ``image`` (0, 127 shadow, 255), the shadow pixels inside
+        a region's own foreground made foreground (``shadow_inside``)."""
+        raw = self.sub.apply(image, learningRate=self.learning_rate)
+        return enclosed_shadows(raw) if self.shadow_inside else raw
 
     def held(self) -> np.ndarray | None:
         return self.hold.held if self.hold is not None else None
@@ -190,15 +200,17 @@ class MOG2(_SelectiveSubtractor):
     """Gaussian-mixture background (Zivkovic 2004/2006), OpenCV's MOG2; shadows are not foreground."""
 
     def __init__(self, history: int = 500, var_threshold: float = 16.0, detect_shadows: bool = True,
-                 shadow_threshold: float = 0.5, learning_rate: float = -1.0,
-                 protect: bool = False, protect_threshold: int = 30) -> None:
+                 shadow_threshold: float = 0.5, shadow_inside: bool = True,
+                 learning_rate: float = -1.0, protect: bool = False,
+                 protect_threshold: int = 30) -> None:
         def make():
             sub = cv2.createBackgroundSubtractorMOG2(int(history), float(var_threshold),
                                                      bool(detect_shadows))
             sub.setShadowThreshold(float(shadow_threshold))
             return sub
 
-        super().__init__(make, learning_rate, protect, protect_threshold)
+        super().__init__(make, learning_rate, protect, protect_threshold,
+                         shadow_inside=bool(detect_shadows) and shadow_inside)
 
 
 @DETECTORS.register("knn")
@@ -211,7 +223,7 @@ class KNN(_SelectiveSubtractor):
 
     def __init__(self, history: int = 500, dist2_threshold: float = 300.0, detect_shadows: bool = True,
                  shadow_threshold: float = 0.5, vehicle_shadow_threshold: float = 0.7,
-                 learning_rate: float = -1.0, protect: bool = False, protect_threshold: int = 30,
+                 shadow_inside: bool = True, learning_rate: float = -1.0, protect: bool = False, protect_threshold: int = 30,
                  seed: int = 0, n_samples: int = 7, knn_samples: int = 2, hold: bool = True,
                  hold_threshold: int = 30, hold_speed: float = 0.2,
                  accept_s: float = 180.0) -> None:
@@ -232,7 +244,8 @@ class KNN(_SelectiveSubtractor):
             return sub
 
         super().__init__(make, learning_rate, protect, protect_threshold,
-                         Hold(hold_threshold, accept_s) if hold else None, hold_speed)
+                         Hold(hold_threshold, accept_s) if hold else None, hold_speed,
+                         bool(detect_shadows) and shadow_inside)
 
     def vehicle_scene(self, vehicles: bool) -> None:
         tau = self.thresholds[vehicles]
