@@ -262,7 +262,7 @@ def test_a_section_built_directly_names_its_keys_as_users_write_them():
      "unknown config key(s) motion.knn.nope; valid keys in motion.knn: accept_s, "
      "detect_shadows, dist2_threshold, history, hold, hold_speed, hold_threshold, "
      "knn_samples, learning_rate, n_samples, protect, protect_threshold, seed, "
-     "shadow_threshold, vehicle_shadow_threshold"),
+     "shadow_inside, shadow_threshold, vehicle_shadow_threshold"),
     (lambda: from_dict(PipelineConfig, 3), "the config must be a table, got 3"),
 ])
 def test_config_errors_name_the_key_never_the_class(make, message):

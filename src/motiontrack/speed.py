@@ -1,4 +1,5 @@
-"""The speed of a track: one definition for the scene rule ``[speed]`` and ``summary.json``.
+"""The mean speed of a track: the measure of ``summary.json``'s track speeds and of the track
+classes' pace.
 
 A track's **speed at a frame** is the straight distance from its oldest position within the last
 ``window_s`` seconds to its position in that frame, over their time apart, measured once that
@@ -11,7 +12,11 @@ A track's **mean speed** is the mean of its speeds at every frame where one is m
 per second. Frames are frame numbers; ``fps`` turns them into seconds, so footage stored at a
 rate other than it was recorded at gives true speeds only with the true rate (``--fps``).
 
-A module of the lowest layer: ``analytics.rules.speed`` and ``calibrate.measure`` both use it.
+An alarm needs more than a mean: the scene rule ``[speed]`` measures the same window over the
+track's smoothed trajectory, with its uncertainty (:mod:`motiontrack.analytics.smoothing`),
+so one jittery second raises no alarm.
+
+A module of the lowest layer: ``calibrate.measure`` and ``classify`` use it.
 """
 
 from __future__ import annotations

@@ -238,23 +238,70 @@ def test_a_discontinuity_drops_every_track_without_events_and_keeps_the_totals()
 
 
 # ------------------------------------------------------------------------ stationary and speed
+STAY = {"stationary": {"after_s": 0.3, "radius_px": 3}}   # release 1.5: 4.5 px once stationary
+
+
 def test_stationary_start_and_end():
-    scene = {"stationary": {"after_s": 0.3, "radius_px": 3}}
-    xs = [50, 51, 50, 52, 51, 60, 61]
-    # frames 1-5 within 3 px of their mean: after 3 frames (frame 4) stationary_start;
-    # frame 6 is 9+ px away: stationary_end, the stay lasted frames 1..5 = 0.4 s
-    ev = run(scene, {f: {2: (x, 50)} for f, x in enumerate(xs, 1)})
+    # frames 1-10 still at x = 50: the stay lasts 3 frames at frame 4 (stationary_start); from
+    # frame 11 a walk at 2 px a frame (2 heights a second): the smoothed position lags the
+    # box, is within 4.5 px of the stay's centre up to frame 12 and beyond it at frame 13
+    xs = [50] * 10 + [50 + 2 * k for k in range(1, 15)]
+    ev = run(STAY, {f: {2: (x, 50)} for f, x in enumerate(xs, 1)})
     assert kinds(ev, "duration_s") == [("stationary_start", 4, 2, None),
-                                       ("stationary_end", 6, 2, 0.4)]
+                                       ("stationary_end", 13, 2, 1.1)]
 
 
-def test_speeding_once_per_episode_in_pixels_per_second():
-    scene = {"speed": {"limit_px_s": 100, "window_s": 0.2}}
-    # 5 px/frame = 50 px/s for frames 1-4, then 20 px/frame = 200 px/s, then slow again
-    xs = [0, 5, 10, 15, 35, 55, 75, 80, 85, 90, 95]
-    ev = run(scene, {f: {1: (x, 50)} for f, x in enumerate(xs, 1)})
-    # speed over 2 frames at frame 5: (35 - 10) * 10 / 2 = 125 > 100 → speeding once
-    assert kinds(ev, "speed_px_s") == [("speeding", 5, 1, 125.0)]
+def test_a_box_that_jumps_for_one_frame_does_not_end_a_stop():
+    # frame 11: the box 8 px off (8 sigma of its 1 px jitter: a neighbour joined the blob);
+    # the raw anchor would be 8 px from the stay's centre, the smoothed one skips it
+    xs = [50] * 10 + [58] + [50] * 5
+    ev = run(STAY, {f: {2: (x, 50)} for f, x in enumerate(xs, 1)})
+    assert kinds(ev) == [("stationary_start", 4, 2)]
+
+
+def test_a_stop_ends_only_beyond_its_release():
+    # shifting the weight 4 px (1.33 radii) away stays one stop; a step 7 px away (2.33 radii)
+    # ends it at frame 16 and starts a new stay there, stationary again 3 frames later
+    shift = [50] * 10 + [51, 52, 53, 54] + [54] * 10
+    assert kinds(run(STAY, {f: {2: (x, 50)} for f, x in enumerate(shift, 1)})) == [
+        ("stationary_start", 4, 2)]
+    step = [50] * 10 + [51, 52, 53, 54, 55, 56, 57] + [57] * 10
+    assert kinds(run(STAY, {f: {2: (x, 50)} for f, x in enumerate(step, 1)}), "duration_s") == [
+        ("stationary_start", 4, 2, None), ("stationary_end", 16, 2, 1.4),
+        ("stationary_start", 19, 2, None)]
+
+
+def _jittered_run(fast: int) -> list[float]:
+    """A walk at 5 px a frame (50 px/s), ``fast`` px a frame from frame 21 to 40, 5 px again
+    after; the box jumps 3 px ahead and back every other frame."""
+    xs, x = [], 0.0
+    for f in range(1, 61):
+        x += fast if 20 < f <= 40 else 5
+        xs.append(x + (3 if f % 2 else -3))
+    return xs
+
+
+def test_box_jitter_raises_no_speeding():
+    # 50 px/s with +-3 px of jitter: from one frame to the next the raw anchors read up to
+    # 110 px/s, above the 100 px/s limit; the smoothed speed stays near 50
+    xs = _jittered_run(fast=5)
+    assert run({"speed": {"limit_px_s": 100, "window_s": 0.5}},
+               {f: {1: (x, 50)} for f, x in enumerate(xs, 1)}) == []
+    assert max(abs(b - a) for a, b in zip(xs, xs[1:])) * FPS == 110
+
+
+def test_speeding_once_per_episode_after_min_s():
+    # 200 px/s from frame 21 to 40; the filter follows the change of pace, the 0.5 s window
+    # reads it once it lies past the change, and the speed is over the limit by two standard
+    # deviations for min_s = 1 s at frame 36: one event, none while it stays fast
+    xs = _jittered_run(fast=20)
+    ev = run({"speed": {"limit_px_s": 100, "window_s": 0.5}},
+             {f: {1: (x, 50)} for f, x in enumerate(xs, 1)})
+    assert kinds(ev) == [("speeding", 36, 1)] and ev[0]["speed_px_s"] == pytest.approx(200, abs=5)
+    # min_s = 0: as soon as the lower bound passes the limit, ten frames earlier
+    ev = run({"speed": {"limit_px_s": 100, "window_s": 0.5, "min_s": 0}},
+             {f: {1: (x, 50)} for f, x in enumerate(xs, 1)})
+    assert kinds(ev) == [("speeding", 26, 1)]
 
 
 # ---------------------------------------------------------------------------------- the scene
@@ -313,16 +360,18 @@ class _ShiftCamera:
 def test_world_geometry_and_metre_rules_go_through_the_camera():
     cam = _ShiftCamera()
     scene = parse_scene({"line": [{"name": "g", "world": [[-10, -10], [10, -10]]}],
-                         "speed": {"limit_mps": 3.0, "window_s": 0.2}}, camera=cam)
+                         "speed": {"limit_mps": 3.0, "window_s": 0.2, "min_s": 0.2}},
+                        camera=cam)
     assert scene.lines[0].a == (0.0, 100.0) and scene.lines[0].b == (200.0, 100.0)
     an = Analytics(scene, FPS, camera=cam)
     ev = []
-    for f, y in enumerate([80, 95, 110, 125], 1):  # 15 px = 1.5 m per frame = 15 m/s
-        ev += an.step(f, [1], [foot(100, y)]).events
-    # the speed is measured once the window spans half its length (1 frame): frame 2; the
-    # line y = 100 px is crossed at frame 3 (y = 110, 10 px past it)
-    assert [(e.type, e.frame) for e in ev] == [("speeding", 2), ("line_cross", 3)]
-    assert ev[0].speed_mps == 15.0 and (ev[1].X, ev[1].Y) == (0.0, -9.0)
+    for f, y in enumerate([80, 95, 110, 125, 140, 155, 170, 185, 200], 1):
+        ev += an.step(f, [1], [foot(100, y)]).events       # 15 px = 1.5 m a frame = 15 m/s
+    # the line y = 100 px is crossed at frame 3 (y = 110, 10 px past it); the speed, on the
+    # ground through the camera, is over 3 m/s by two deviations from frame 2 (the first window
+    # spanning half its length) and speeding min_s = 0.2 s later, at frame 4
+    assert [(e.type, e.frame) for e in ev] == [("line_cross", 3), ("speeding", 4)]
+    assert (ev[0].X, ev[0].Y) == (0.0, -9.0) and ev[1].speed_mps == pytest.approx(15.0, abs=0.5)
 
 
 def test_abandoned_without_static_foreground_yields_no_events_and_says_why(caplog):

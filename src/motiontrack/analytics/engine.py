@@ -31,6 +31,7 @@ from .objects import StaticObjects
 from .rule import FrameTable, Rule, RuleContext, TrackMemory
 from .rules import RULES
 from .scene import Scene
+from .smoothing import Smoother, jacobians
 
 __all__ = ["Analytics"]
 
@@ -86,6 +87,9 @@ class Analytics:
             None if camera is None else (lambda boxes: world_positions(boxes, camera)))
         self.rules: dict[str, Rule] = {r.name: RULES.create(r.name, spec=spec, context=self.context)
                                        for r, spec in active}
+        #: the smoothed trajectories the rules measure, by unit ("px", "m"): see .smoothing
+        self.smoothers = {unit: Smoother(self.fps) for unit in sorted(
+            {u for rule in self.rules.values() for u in rule.smooths})}
         self._order = RULES.event_order()
         self._types = tuple(e.name for e in RULES.event_types())
         self._rows = _Rows()
@@ -133,7 +137,8 @@ class Analytics:
         ids, boxes = ids[first], np.asarray(boxes, dtype=np.float64).reshape(-1, 4)[first]
         if labels is not None:
             labels = np.asarray(labels, dtype=object).reshape(-1)[first]
-        gone = [] if self.objects is None else self.objects.step(frame, ids, boxes, static)
+        gone = [] if self.objects is None else self.objects.step(frame, ids, boxes, static,
+                                                                  labels)
         events = self._forget(frame)
         table, states = self._table(frame, ids, boxes, static, gone, labels)
         for rule in self.rules.values():
@@ -193,11 +198,25 @@ class Analytics:
             states.append(st)
         rows = np.fromiter((st.row for st in states), dtype=np.int64, count=len(states))
         known = np.fromiter((st.last_frame > 0 for st in states), dtype=bool, count=len(states))
-        table = FrameTable(frame, ids, boxes, self.context.anchors(boxes),
-                           self.context.world(boxes), rows, known, self._rows.point[rows],
-                           np.asarray(fresh, dtype=np.int64), self.context, static, gone,
-                           labels)
+        fresh_rows = np.asarray(fresh, dtype=np.int64)
+        points, world = self.context.anchors(boxes), self.context.world(boxes)
+        table = FrameTable(frame, ids, boxes, points, world, rows, known,
+                           self._rows.point[rows], fresh_rows, self.context, static, gone,
+                           labels, self._smoothed(frame, rows, fresh_rows, points, world, boxes))
         return table, states
+
+    def _smoothed(self, frame: int, rows: np.ndarray, fresh: np.ndarray, points: np.ndarray,
+                  world: np.ndarray | None, boxes: np.ndarray) -> dict[str, Any]:
+        """Each smoother stepped with the frame's anchors (pixels) or foot points (metres)."""
+        out = {}
+        for unit, smoother in self.smoothers.items():
+            smoother.clear(fresh)
+            if unit == "m" and world is not None:
+                out[unit] = smoother.step(frame, rows, world, boxes[:, 3],
+                                          jacobians(self.context.world_of, boxes))
+            else:
+                out[unit] = smoother.step(frame, rows, points, boxes[:, 3])
+        return out
 
     def _remember(self, table: FrameTable, states: list[TrackMemory]) -> None:
         """The tracks' last sighting, for the next frame's rules and for forgetting."""

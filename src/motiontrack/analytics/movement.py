@@ -1,26 +1,34 @@
-"""Per-track movement rules: stationary (stays within a radius) and speeding (over a window).
+"""Per-track movement rules: stationary (stays within a radius) and speeding (over a window),
+both on the tracks' smoothed trajectories (:mod:`.smoothing`).
 
 * **Stationary**: a track's *stay* starts at a position; each later position within
   ``radius`` of the mean of the stay's positions extends it, the first one farther away ends it
   and starts a new stay there. ``stationary_start`` is emitted when a stay has lasted
-  ``after_s``; ``stationary_end`` when that stay ends, with the time it lasted.
-* **Speeding**: the speed is :class:`motiontrack.speed.WindowSpeed`: the straight distance
-  from the oldest position of the last ``window_s`` seconds to the current one over their time
-  apart, measured once that span is at least half a window. ``speeding`` is emitted when it
-  exceeds the limit; the track is armed
-  again once its speed falls to 90 % of the limit, so a speed hovering at the limit is one event.
+  ``after_s``; from then on the stay holds positions up to ``release`` times the radius from its
+  mean (hysteresis: a standing person who shifts their weight stays one stop), and
+  ``stationary_end`` is emitted when it ends, with the time it lasted.
+* **Speeding**: the speed is the straight distance between the smoothed positions at the two
+  ends of the last ``window_s`` seconds over their time apart, measured once that span is at
+  least half a window; its uncertainty is that distance's standard deviation (the two
+  positions' covariances along the direction of motion) over the same time. ``speeding`` is
+  emitted once the speed minus :data:`SIGMAS` standard deviations has exceeded the limit for
+  ``min_s``; the track is armed again once its speed falls to :data:`REARM` of the limit, so a
+  speed hovering at the limit is one event.
 """
 
 from __future__ import annotations
 
 import math
+from collections import deque
 
-from ..speed import WindowSpeed
+import numpy as np
 
-__all__ = ["Stay", "SpeedWindow", "REARM"]
+__all__ = ["Stay", "SpeedWindow", "REARM", "SIGMAS"]
 
 #: fraction of the limit a speeding track must slow down to before it can speed again
 REARM = 0.9
+#: standard deviations of its speed by which a track must exceed the limit (one-sided 97.7 %)
+SIGMAS = 2.0
 
 
 class Stay:
@@ -38,12 +46,13 @@ class Stay:
         self.stationary = False
 
     def step(self, p: tuple[float, float], frame: int, radius: float,
-             after_frames: float) -> tuple[str | None, int]:
+             after_frames: float, release: float = 1.0) -> tuple[str | None, int]:
         """Add a position. Returns ``("start", 0)`` when the stay has just lasted
         ``after_frames``, ``("end", frames)`` when a stationary stay ended (``frames``: from
-        its first to its last frame), else ``(None, 0)``; a position out of the radius starts
-        a new stay."""
-        if self.n and math.hypot(p[0] - self.sx / self.n, p[1] - self.sy / self.n) <= radius:
+        its first to its last frame), else ``(None, 0)``; a position out of the radius (once
+        stationary, out of ``release`` times the radius) starts a new stay."""
+        reach = radius * release if self.stationary else radius
+        if self.n and math.hypot(p[0] - self.sx / self.n, p[1] - self.sy / self.n) <= reach:
             self.sx += p[0]
             self.sy += p[1]
             self.n += 1
@@ -58,12 +67,38 @@ class Stay:
         return ("end", lasted) if ended else (None, 0)
 
 
-class SpeedWindow(WindowSpeed):
-    """One track's speed (:class:`~motiontrack.speed.WindowSpeed`, the definition
-    ``summary.json``'s track speeds share) and whether it is speeding now."""
+class SpeedWindow:
+    """One track's speed over a trailing window of ``window_s`` seconds of its smoothed
+    positions at ``fps`` frames a second (:meth:`add`), and its alarm state."""
 
-    __slots__ = ("speeding",)
+    __slots__ = ("samples", "window_frames", "fps", "speeding", "over_since", "updates")
 
     def __init__(self, window_s: float, fps: float) -> None:
-        super().__init__(window_s, fps)
+        self.samples: deque[tuple[int, np.ndarray, np.ndarray]] = deque()
+        self.window_frames = window_s * fps
+        self.fps = fps
         self.speeding = False
+        #: the first frame of the current run of frames over the limit (None: not over it)
+        self.over_since: int | None = None
+        #: the smoother's measurements when last seen: fewer means it started again
+        self.updates = 0
+
+    def add(self, frame: int, p: np.ndarray, cov: np.ndarray) -> tuple[float, float] | None:
+        """Add the smoothed position ``p`` (2,) with covariance ``cov`` (2, 2) at ``frame``;
+        the speed over the window ending there (units per second) and its standard deviation,
+        or None while the window spans less than half its length."""
+        self.samples.append((frame, p, cov))
+        while frame - self.samples[0][0] > self.window_frames + 1e-9:
+            self.samples.popleft()
+        f0, p0, cov0 = self.samples[0]
+        span = frame - f0
+        if span < self.window_frames / 2.0 or span == 0:
+            return None
+        d = p - p0
+        dist = math.hypot(d[0], d[1])
+        c = cov + cov0
+        # the two ends' covariances along the direction of motion (any direction at rest: the
+        # largest); their correlation makes this an upper bound
+        var = (float(d @ c @ d) / (dist * dist) if dist > 0
+               else float(np.linalg.eigvalsh(c)[-1]))
+        return dist * self.fps / span, math.sqrt(max(var, 0.0)) * self.fps / span

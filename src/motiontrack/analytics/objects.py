@@ -11,9 +11,15 @@ the track whose box, widened by a fifth of its height, touched it most recently 
 difference from the short-term background) is below :data:`STILL_LEVELS`: a bag lies still to
 the pixel, the legs of someone standing behind an obstacle shift now and then.
 
-An object has one event id for all rules: the id of a track lying on it (IoU >= ``SAME_IOU``,
-not its owner) when a rule first needs one, else a new id from :data:`OBJECT_IDS` up, apart from
-the tracker's ids.
+An object **continues a track** when a track other than its owner lay on it (IoU >=
+``SAME_IOU``) within the last :data:`OWNER_S` seconds when it appeared, or in a frame since: the
+track that stopped there and that the tracker then lost (a bag tracked for a moment after it was
+set down, a person the tracker lost standing still). It keeps that track's id and class
+(:attr:`TrackedObject.origin`, :attr:`TrackedObject.origin_label`).
+
+An object has one event id for all rules: the track it continues, else the id of a track lying
+on it (IoU >= ``SAME_IOU``, not its owner) when a rule first needs one, else a new id from
+:data:`OBJECT_IDS` up, apart from the tracker's ids.
 """
 
 from __future__ import annotations
@@ -59,7 +65,7 @@ class TrackedObject:
     __slots__ = ("box", "first_seen", "last_seen", "since", "frames", "seen", "still",
                  "still_seen", "owner", "owner_h",
                  "oid", "away_since", "owner_away", "done", "still_frames", "stationary",
-                 "stay_first", "merged")
+                 "stay_first", "merged", "origin", "origin_label")
 
     def __init__(self, box: np.ndarray, frame: int, evidence: int, owner: int | None,
                  owner_h: float) -> None:
@@ -81,6 +87,9 @@ class TrackedObject:
         self.stationary: str | None = None
         self.stay_first = self.since
         self.merged: int | None = None   # the stationary track reporting this place
+        #: the track it continues (a track other than its owner that lay on it), and its class
+        self.origin: int | None = None
+        self.origin_label = ""
 
 
 class StaticObjects:
@@ -96,18 +105,24 @@ class StaticObjects:
     def __init__(self, fps: float, forget_frames: float) -> None:
         self.fps, self.forget_frames = float(fps), forget_frames
         self.objects: list[TrackedObject] = []
-        self.history: deque[tuple[int, np.ndarray, np.ndarray]] = deque()
+        self.history: deque[tuple[int, np.ndarray, np.ndarray, np.ndarray | None]] = deque()
         self.next_id = OBJECT_IDS
 
     def step(self, frame: int, ids: np.ndarray, boxes: np.ndarray,
-             static: StaticFrame | None) -> list[TrackedObject]:
-        """Follow this frame's static objects; returns the objects forgotten in it."""
-        self.history.append((frame, ids, boxes))
+             static: StaticFrame | None, labels: np.ndarray | None = None
+             ) -> list[TrackedObject]:
+        """Follow this frame's static objects (``labels``: the tracks' classes, when they were
+        classified); returns the objects forgotten in it."""
+        self.history.append((frame, ids, boxes, labels))
         while self.history and frame - self.history[0][0] > OWNER_S * self.fps:
             self.history.popleft()
         for o in self.objects:
             o.seen = o.still = False
         self._follow(frame, static)
+        for o in self.objects:
+            if o.origin is None and o.seen:
+                self._find_origin(o, self.history if o.first_seen == frame
+                                  else (self.history[-1],))
         gone = [o for o in self.objects if frame - o.last_seen > self.forget_frames]
         if gone:
             self.objects = [o for o in self.objects if frame - o.last_seen <= self.forget_frames]
@@ -121,6 +136,8 @@ class StaticObjects:
     def object_id(self, o: TrackedObject, ids: np.ndarray, boxes: np.ndarray) -> int:
         """The object's event id, fixed the first time it is asked for: a track lying on the
         object (not its owner), else a new object id."""
+        if o.oid is None:
+            o.oid = o.origin
         if o.oid is None:
             if len(ids):
                 iou = box_iou(o.box, boxes)
@@ -153,10 +170,24 @@ class StaticObjects:
             o.still_seen += o.still
             taken.add(id(o))
 
+    def _find_origin(self, o: TrackedObject, frames) -> None:
+        """The track ``o`` continues: the latest of ``frames`` (``(frame, ids, boxes, labels)``)
+        with a track other than its owner lying on it, the one overlapping it most."""
+        for _, ids, boxes, labels in reversed(frames):
+            if not len(ids):
+                continue
+            iou = box_iou(o.box, boxes)
+            iou[ids == o.owner] = 0.0
+            k = int(iou.argmax())
+            if iou[k] >= SAME_IOU:
+                o.origin = int(ids[k])
+                o.origin_label = "" if labels is None else str(labels[k] or "")
+                return
+
     def _owner(self, box: np.ndarray) -> tuple[int | None, float]:
         """The track that touched ``box`` most recently (largest overlap among those of that
         frame), at least ``1 / BAG_RATIO`` times as tall; ``(None, 0)`` when none did."""
-        for _, ids, boxes in reversed(self.history):
+        for _, ids, boxes, _ in reversed(self.history):
             if not len(ids):
                 continue
             tall = boxes[:, 3] * BAG_RATIO >= box[3]

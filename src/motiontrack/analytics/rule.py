@@ -174,6 +174,9 @@ class FrameTable:
     labels : (N,) object array of str, or None
         Each track's class (``person``, ``vehicle``, ``other``) when the tracks were
         classified; events carry it and rules with ``classes`` count only those classes.
+    smoothed : mapping of unit → :class:`~.smoothing.Smoothed`
+        The tracks' smoothed trajectories in the units the rules asked for
+        (:attr:`BaseRule.smooths`: ``"px"`` anchors, ``"m"`` foot points on the ground).
     """
 
     frame: int
@@ -189,6 +192,7 @@ class FrameTable:
     static: StaticFrame | None = None
     gone: Sequence[Any] = ()
     labels: np.ndarray | None = None
+    smoothed: Mapping[str, Any] = field(default_factory=dict)
 
     def __len__(self) -> int:
         return len(self.ids)
@@ -230,6 +234,8 @@ class Rule(Protocol):
     keys: ClassVar[tuple[SceneKey, ...]]
     #: whether it needs each frame's static objects (``track --scene`` keeps a dual background)
     uses_static: ClassVar[bool]
+    #: the units of the smoothed trajectories it measures (``"px"``, ``"m"``)
+    smooths: tuple[str, ...]
 
     @classmethod
     def parse(cls, data: Any, camera: Any, where: str) -> Any:
@@ -279,6 +285,9 @@ class BaseRule:
     exactly_one: ClassVar[tuple[tuple[str, ...], ...]] = ()
     keys: ClassVar[tuple[SceneKey, ...]] = ()
     uses_static: ClassVar[bool] = False
+    #: the units of the smoothed trajectories the rule measures (``"px"``, ``"m"``): the
+    #: engine keeps them (:mod:`.smoothing`) and hands them in :attr:`FrameTable.smoothed`
+    smooths: tuple[str, ...] = ()
 
     def __init__(self, spec: Any, context: RuleContext) -> None:
         self.spec, self.context = spec, context

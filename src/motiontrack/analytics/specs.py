@@ -111,8 +111,13 @@ class StationarySpec(SceneSection):
     radius_px: float | None = positive(None, "the radius in pixels (exactly one of radius_px "
                                              "and radius_m)")
     radius_m: float | None = positive(None, "the radius in metres on the ground; needs a camera")
+    release: float = param(1.5, lo=1.0, hi=100.0,
+                           doc="once stationary, a stay ends only beyond this many radii from "
+                               "its centre (one alarm per stop while a person shifts on the "
+                               "spot)")
     classes: tuple[str, ...] | None = param(
-        None, max_items=3, doc=CLASSES_DOC + "; static objects the tracker lost count as other")
+        None, max_items=3, doc=CLASSES_DOC + "; a static object the tracker lost has the class "
+                                             "of the track it continues")
 
 
 @dataclass(frozen=True)
@@ -137,4 +142,8 @@ class SpeedSpec(SceneSection):
     limit_mps: float | None = positive(None, "limit in metres per second; needs a camera "
                                              "(exactly one of limit_mps and limit_px_s)")
     limit_px_s: float | None = positive(None, "limit in pixels per second")
-    window_s: float = positive(SPEED_WINDOW_S, "window of the speed measurement")
+    window_s: float = positive(SPEED_WINDOW_S, "window of the speed measurement, over the "
+                                               "track's smoothed positions")
+    min_s: float = param(1.0, lo=0.0, hi=COORD_LIMIT,
+                         doc="seconds the speed must exceed the limit by two of its standard "
+                             "deviations before `speeding` (0: at once)")

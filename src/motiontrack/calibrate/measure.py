@@ -7,9 +7,10 @@ Method
   ground and the box bottom touches the feet.
 * **Path length**: per track, positions are ordered by frame; the path length is the sum of the
   distances between consecutive valid positions (box jitter included).
-* **Speed**: :func:`motiontrack.speed.mean_speed`, the definition the scene rule ``[speed]``
-  uses: the mean over the track's frames of the straight distance from its oldest position of
-  the last ``window_s`` seconds to the current one over their time apart (frames / ``fps``).
+* **Speed**: :func:`motiontrack.speed.mean_speed`: the mean over the track's frames of the
+  straight distance from its oldest position of the last ``window_s`` seconds to the current one
+  over their time apart (frames / ``fps``). The scene rule ``[speed]`` measures the same window
+  on the track's smoothed trajectory, with its uncertainty (an alarm, not a mean).
 * **Height** (the "vertical through the foot point" construction, cf. Criminisi, Reid & Zisserman,
   "Single view metrology", IJCV 2000, for the single-view idea): the head is assumed to lie on the
   world vertical ``L(s) = F + s e_z`` through the foot point ``F``. The top-centre pixel of the box

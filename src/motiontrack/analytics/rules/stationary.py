@@ -1,6 +1,9 @@
-"""``[stationary]``: tracks that stay within a radius for ``after_s`` (``stationary_start``,
-``stationary_end``), and, with the video's static foreground (``track --scene``), static
-objects the tracker lost once they stopped.
+"""``[stationary]``: tracks whose smoothed position (:mod:`..smoothing`) stays within a radius
+for ``after_s`` (``stationary_start``) until it leaves ``release`` radii (``stationary_end``),
+and, with the video's static foreground (``track --scene``), static objects that continue a
+track the tracker lost once it stopped (:attr:`..objects.TrackedObject.origin`: under that
+track's id and class). A static object that continues no track (a change of the background
+nobody was seen to bring) raises no alarm.
 
 A place is reported once: an object half covered by a stationary track is that track's stay
 (a track becoming stationary on a reported object reports nothing), and a lost stationary
@@ -65,6 +68,7 @@ class Stationary(BaseRule):
 
     def __init__(self, spec: StationarySpec, context: RuleContext) -> None:
         super().__init__(spec, context)
+        self.smooths = ("m",) if spec.radius_m is not None else ("px",)
         self.objects = context.objects
         self.stays: dict[int, Stay] = {}   # every live track's stay, in the engine's order
         self.silent: set[int] = set()      # stationary tracks whose place an object reports
@@ -90,14 +94,13 @@ class Stationary(BaseRule):
     def step(self, frame: FrameTable) -> list[Event]:
         events: list[Event] = []
         self._track_stays(frame, events)
-        if self.objects is not None and (self.spec.classes is None
-                                         or "other" in self.spec.classes):
+        if self.objects is not None:
             self._object_stays(frame, events)
         return events
 
     def _track_stays(self, frame: FrameTable, events: list[Event]) -> None:
         spec, f = self.spec, frame.frame
-        pos = frame.world if spec.radius_m is not None else frame.points
+        pos = frame.smoothed[self.smooths[0]].position
         radius = spec.radius_m if spec.radius_m is not None else spec.radius_px
         stays = [self.stays.setdefault(int(tid), Stay()) for tid in frame.ids.tolist()]
         # a track of a class the rule does not name never stays (``classes``)
@@ -106,7 +109,7 @@ class Stationary(BaseRule):
             if not finite[i]:
                 continue
             what, lasted = stay.step((pos[i, 0], pos[i, 1]), f, radius,
-                                     spec.after_s * self.context.fps)
+                                     spec.after_s * self.context.fps, spec.release)
             tid = int(frame.ids[i])
             if what == "start":
                 if self._object_reports(frame.boxes[i]):
@@ -121,34 +124,37 @@ class Stationary(BaseRule):
                                           duration_s=self.context.seconds(lasted)))
 
     def _object_stays(self, frame: FrameTable, events: list[Event]) -> None:
-        """``stationary`` of static objects: ``stationary_start`` once an object has been static
-        foreground for ``after_s``, if it is seen still in this frame, was followed for a second
-        and seen still in 40 % of the frames since (a blob of static pixels that only just formed
-        or a person swaying on the spot is not a still object), unless a stationary track covers
-        it (that track reports the place); ``stationary_end`` when a reported object is
-        forgotten."""
+        """``stationary`` of static objects that continue a track: ``stationary_start`` once an
+        object has been static foreground for ``after_s``, if it is seen still in this frame,
+        was followed for a second and seen still in 40 % of the frames since (a blob of static
+        pixels that only just formed or a person swaying on the spot is not a still object),
+        unless a stationary track covers it (that track reports the place); ``stationary_end``
+        when a reported object is forgotten. Events carry the continued track's class."""
         ctx, f = self.context, frame.frame
         after = self.spec.after_s * ctx.fps
+        classes = self.spec.classes
         for o in frame.gone:
             if o.stationary == "open":
                 events.append(ctx.box_event("stationary_end", f, o.oid, o.box,
-                                            duration_s=ctx.seconds(o.last_seen - o.stay_first)))
+                                            duration_s=ctx.seconds(o.last_seen - o.stay_first),
+                                            **_label(o)))
         for o in self.objects.objects:
             if o.stationary == "track":
                 stay = self.stays.get(o.merged)
                 if stay is not None and stay.stationary:
                     continue
                 o.stationary = o.merged = None     # the track moved on: the object stays alone
-            if (o.stationary is not None or not (o.seen and o.still)
+            if (o.stationary is not None or o.origin is None or not (o.seen and o.still)
                     or f - o.since < after - 1e-9 or f - o.first_seen < ctx.fps - 1e-9
-                    or o.still_seen < STATIONARY_STILL * (f - o.first_seen + 1)):
+                    or o.still_seen < STATIONARY_STILL * (f - o.first_seen + 1)
+                    or (classes is not None and (o.origin_label or "other") not in classes)):
                 continue
             tid = self._reporting_track(o, frame)
             if tid is not None:
                 o.stationary, o.merged = "track", tid
                 continue
             o.stationary, o.stay_first = "open", o.since
-            events.append(ctx.box_event("stationary_start", f, o.oid, o.box))
+            events.append(ctx.box_event("stationary_start", f, o.oid, o.box, **_label(o)))
 
     def _reporting_track(self, o: TrackedObject, frame: FrameTable) -> int | None:
         """The stationary track that reports the place of ``o``: one covering it, else the
@@ -192,3 +198,8 @@ class Stationary(BaseRule):
         return {"stationary_at_end": (
             sum(1 for t, s in self.stays.items() if s.stationary and t not in self.silent)
             + sum(1 for o in objects if o.stationary == "open"))}
+
+
+def _label(o: TrackedObject) -> dict[str, str]:
+    """The ``label`` field of an object's events: the class of the track it continues."""
+    return {"label": o.origin_label} if o.origin_label else {}
