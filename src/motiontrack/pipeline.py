@@ -243,9 +243,12 @@ class Pipeline:
         self.tracker = TRACKERS.get(cfg.tracker.method)(tracker_cfg, image_size, fps)
         #: the tracker weighs the appearance of external detections in the frame's picture
         self.tracker_sees_pictures = isinstance(self.tracker, _detections.DetectionTracker)
-        # a confirmed track's tentative frames (FrameResult.earlier)
-        self.tracker.keep_tentative = (cfg.tracker.backfill
-                                       and completes_tracks(cfg, detections is not None))
+        #: a confirmed track's tentative frames are reported (FrameResult.earlier)
+        self._report_earlier = (cfg.tracker.backfill
+                                and completes_tracks(cfg, detections is not None))
+        # the tracker keeps them for that, and for the classes: a track's class is decided from
+        # its tentative frames too, so its first events carry it (docs/classes.md)
+        self.tracker.keep_tentative = self._report_earlier or cfg.classes.enabled
 
     def _init_stages(self, cfg: PipelineConfig, fps: float | None, camera: Any,
                      static: bool) -> None:
@@ -556,6 +559,8 @@ class Pipeline:
             self.bridge.remember(frame.image, tracks)
         earlier = tuple(self.tracker.confirmed_earlier)
         if self.classes is not None:
+            # the tentative frames of the tracks confirmed now vote first
+            self.classes.confirm(earlier, frame.index)
             # HOG looks at the processing-scale frame, or the frame itself without the motion
             # stage (none in a source of detections alone)
             if small is None:
@@ -564,6 +569,8 @@ class Pipeline:
                                          self.cfg.detector.vote, image=image, scale=scale)
             earlier = tuple((f, replace(t, label=n, label_score=s))
                             for f, t in earlier for n, s in [self.classes.label(t.id)])
+        if not self._report_earlier:
+            earlier = ()
         self._prev_tracks = tuple(tracks)
         if self._scene_kind is not None:
             self._vehicles = self._scene_kind.update(tracks)

@@ -80,3 +80,11 @@ def test_loiter_fires_within_half_a_second_of_the_ground_truth(tracked, seed):
     (pred,) = [e for e in r.pred if e.type == "loiter"]
     assert pred.zone == gt.zone == "plaza"
     assert abs(pred.t - gt.t) <= 0.5
+
+
+@pytest.mark.parametrize("name, seed", EXACT)
+def test_no_event_carries_other_because_its_track_is_young(tracked, name, seed):
+    """A person's first event (often a zone_enter at the edge of the view) already says person:
+    the track's tentative frames voted for its class when it was confirmed."""
+    r = tracked(name, seed)
+    assert r.pred and {e.label for e in r.pred} == {"person"}

@@ -30,6 +30,37 @@ def _walk(clf: TrackClassifier, frames: int, w: float, h: float, step: float,
     return out
 
 
+def test_a_track_is_classified_from_the_frame_it_is_confirmed_in() -> None:
+    """The tentative frames of a track vote when it is confirmed (the tracker keeps them): with
+    confirm_hits = min_frames = 5, its first reported frame has the five votes it needs, so its
+    first events carry its class, not ``other``."""
+    clf = TrackClassifier(ClassesConfig(min_frames=5), FPS)
+    for f in range(4):                 # tentative: the tracker reports nothing, HOG sees nothing
+        clf.update([])
+    earlier = [(f, _track(1, 10 + 3 * f, 50, 30, 90)) for f in range(4)]
+    clf.confirm(earlier, 4)
+    (t,) = clf.update([_track(1, 22, 50, 30, 90)])
+    assert (t.label, t.label_score) == ("person", 1.0)
+    # without them, four frames short of evidence
+    young = TrackClassifier(ClassesConfig(min_frames=5), FPS)
+    for f in range(4):
+        young.update([])
+    assert young.update([_track(1, 22, 50, 30, 90)])[0].label == "other"
+
+
+def test_the_tentative_frames_measure_the_pace_in_their_own_frames() -> None:
+    """A box 10 px tall moving 20 px a frame (20 heights a second at 10 fps), of a shape that
+    is neither class's, tentative for ten frames: its pace is known once half a second has
+    passed (frame 5), so frames 0-4 vote other and frames 5-10 vehicle, counted in the frames
+    they were seen in (with the wrong frame numbers no pace would ever be known)."""
+    clf = TrackClassifier(ClassesConfig(min_frames=3, person_aspect=2.0, vehicle_aspect=0.1), FPS)
+    for f in range(10):
+        clf.update([])
+    clf.confirm([(f, _track(1, 20 * f, 50, 8, 10)) for f in range(10)], 10)
+    (t,) = clf.update([_track(1, 200, 50, 8, 10)])
+    assert (t.label, t.label_score) == ("vehicle", round(6 / 11, 3))
+
+
 def test_an_upright_walker_is_a_person_after_min_frames() -> None:
     clf = TrackClassifier(ClassesConfig(min_frames=5), FPS)
     # 4 frames of evidence: not enough yet
@@ -116,9 +147,11 @@ def test_the_annotated_label_names_the_class_once_known() -> None:
 def test_a_camera_run_writes_each_tracks_class(pets_camera_run) -> None:
     tracks = read_mot(pets_camera_run / "tracks.txt", kind="results")
     summary = json.loads((pets_camera_run / "summary.json").read_text())
-    # PETS S2L1 shows people only: each row has the class its track had in that frame
-    # (other until min_frames of evidence), each track ends a person
-    assert set(tracks.classes.tolist()) == {0, 1}
+    # PETS S2L1 shows people only: each row has the class its track had in that frame, decided
+    # from its first confirmed frame on (its tentative frames vote too); a box of two people
+    # side by side may look like neither for a frame or two, and each track ends a person
+    classes = tracks.classes.tolist()
+    assert classes.count(1) >= 0.98 * len(classes)
     last = {int(t): int(k) for t, k in zip(tracks.ids, tracks.classes)}   # sorted by frame
     assert set(last.values()) == {1}
     assert {v["class"] for v in summary["classes"].values()} == {"person"}

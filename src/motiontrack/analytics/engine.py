@@ -221,12 +221,15 @@ class Analytics:
     def _remember(self, table: FrameTable, states: list[TrackMemory]) -> None:
         """The tracks' last sighting, for the next frame's rules and for forgetting."""
         points, world, frame = table.points, table.world, table.frame
+        labels = table.labels
         self._rows.point[table.rows] = points
         for i, st in enumerate(states):
             st.last_frame = frame
             st.point = (float(points[i, 0]), float(points[i, 1]))
             st.box = table.boxes[i]
             st.world = None if world is None else (float(world[i, 0]), float(world[i, 1]))
+            if labels is not None:
+                st.label = str(labels[i] or "")
         self.last_frame = frame
         self.frames += 1
 

@@ -78,10 +78,11 @@ def row_of(world: np.ndarray | None, i: int) -> tuple[float, float] | None:
 
 class TrackMemory:
     """What the engine remembers of one track between frames: its row in every rule's
-    per-track columns, the frame it was last seen in and its last box, anchor and ground
-    position (updated after the rules of a frame ran, so they see the previous sighting)."""
+    per-track columns, the frame it was last seen in and its last box, anchor, ground
+    position and class (updated after the rules of a frame ran, so they see the previous
+    sighting)."""
 
-    __slots__ = ("row", "last_frame", "point", "world", "box")
+    __slots__ = ("row", "last_frame", "point", "world", "box", "label")
 
     def __init__(self, row: int) -> None:
         self.row = row
@@ -89,6 +90,7 @@ class TrackMemory:
         self.point = (0.0, 0.0)
         self.box = np.zeros(4)
         self.world: tuple[float, float] | None = None
+        self.label = ""
 
 
 @dataclass(frozen=True)
@@ -137,6 +139,14 @@ class RuleContext:
             xy = {"X": rounded(w[0], 3), "Y": rounded(w[1], 3)}
         return Event(kind, frame, rounded((frame - 1) / self.fps, 6), int(tid),
                      rounded(p[0], 2), rounded(p[1], 2), **xy, **fields)
+
+    def last_event(self, kind: str, frame: int, tid: int, state: TrackMemory,
+                   **fields: Any) -> Event:
+        """An event of a track at its last sighting ``state`` (a track forgotten in ``frame``),
+        with the class it had then."""
+        if state.label:
+            fields.setdefault("label", state.label)
+        return self.event(kind, frame, tid, state.point, state.world, **fields)
 
     def box_event(self, kind: str, frame: int, tid: int, box: np.ndarray, **fields: Any) -> Event:
         """An event at the anchor of ``box`` (4,) (a static object rather than a track)."""

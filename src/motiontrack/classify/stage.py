@@ -138,6 +138,19 @@ class TrackClassifier:
         """Forget every track (a discontinuity ended them)."""
         self._tracks.clear()
 
+    def confirm(self, earlier: Sequence[tuple[int, Track]], frame: int) -> None:
+        """The votes of the tentative frames of the tracks confirmed at ``frame`` (0-based, the
+        frame :meth:`update` is called for next): ``(frame, Track)`` pairs, each measured in its
+        frame (:attr:`~motiontrack.tracking.tracker.MultiObjectTracker.confirmed_earlier`). A
+        track then has its class from the frame it is confirmed in, as if it had been classified
+        from its first frame (HOG aside, which saw none of them)."""
+        by_frame: dict[int, list[Track]] = {}
+        for f, t in earlier:
+            by_frame.setdefault(f, []).append(t)
+        for f in sorted(by_frame):
+            # the classifier's own count of that frame (it counts its updates)
+            self._vote(by_frame[f], self._frames + 1 - (frame - f))
+
     def label(self, tid: int) -> tuple[str, float]:
         """The class and confidence of track ``tid`` now (``("other", 0.0)`` when unknown)."""
         ev = self._tracks.get(tid)
@@ -168,14 +181,16 @@ class TrackClassifier:
         return out
 
     # -------------------------------------------------------------------------------- votes
-    def _vote(self, tracks: Sequence[Track]) -> None:
+    def _vote(self, tracks: Sequence[Track], at: int | None = None) -> None:
+        """One vote of each of ``tracks``, measured at the classifier's frame count ``at``
+        (None: this frame)."""
         boxes = np.array([t.box.as_array() for t in tracks], dtype=np.float64)
         evs = []
         for t in tracks:
             ev = self._tracks.get(t.id)
             if ev is None:
                 ev = self._tracks[t.id] = _Evidence(self.fps)
-            ev.last_seen = self._frames
+            ev.last_seen = self._frames if at is None else at
             evs.append(ev)
         votes = self._image_votes(boxes, evs)
         if self.camera is not None:

@@ -79,8 +79,8 @@ class Stationary(BaseRule):
         stay = self.stays.pop(tid, None)
         events = []
         if stay is not None and stay.stationary and not self._handed_over(tid, state, stay) and tid not in self.silent:
-            events.append(self.context.event(
-                "stationary_end", frame, tid, state.point, state.world,
+            events.append(self.context.last_event(
+                "stationary_end", frame, tid, state,
                 duration_s=self.context.seconds(stay.last - stay.first)))
         self.silent.discard(tid)
         return events

@@ -103,9 +103,9 @@ class Zones(BaseRule):
         events = []
         for k in np.flatnonzero(self.state.inside[state.row]):
             dwell = state.last_frame - enter_frame[k]
-            events.append(self.context.event("zone_exit", frame, tid, state.point, state.world,
-                                             zone=self.spec[k].name,
-                                             dwell_s=self.context.seconds(dwell)))
+            events.append(self.context.last_event("zone_exit", frame, tid, state,
+                                                  zone=self.spec[k].name,
+                                                  dwell_s=self.context.seconds(dwell)))
             self._exited(k, dwell)
         return events
 
