@@ -52,6 +52,7 @@ from .people import PeopleStage, head_params
 from .people.heads import split_regions_by_heads
 from .preprocess import load_roi, preprocess
 from .tracking import detections as _detections  # noqa: F401  (registers tracker "detections")
+from .tracking.association import iou_matrix
 from .tracking.bridge import Bridge
 from .tracking.tracker import TRACKERS
 from .types import (Annotations, Box, Discontinuity, Frame, FrameResult, PeopleFrame, Region,
@@ -75,6 +76,16 @@ def resolve_config(config: PipelineConfig | str | Path | None) -> PipelineConfig
     if isinstance(config, PipelineConfig):
         return config
     return load_config(config)
+
+
+def _covered(box: np.ndarray, boxes: np.ndarray) -> float:
+    """The largest share of ``box`` (4,) that one of ``boxes`` (N, 4) covers (0 for none)."""
+    if not len(boxes):
+        return 0.0
+    iw = np.minimum(box[0] + box[2], boxes[:, 0] + boxes[:, 2]) - np.maximum(box[0], boxes[:, 0])
+    ih = np.minimum(box[1] + box[3], boxes[:, 1] + boxes[:, 3]) - np.maximum(box[1], boxes[:, 1])
+    inter = np.clip(iw, 0, None) * np.clip(ih, 0, None)
+    return float(inter.max() / max(box[2] * box[3], 1e-9))
 
 
 def _regions_from_detections(det: Annotations, rows: np.ndarray | None) -> list[Region]:
@@ -207,6 +218,8 @@ class Pipeline:
         #: filter's ghost pixels to re-learn, and the static objects not to learn
         self._relearn: np.ndarray | None = None
         self._static_prev: StaticFrame | None = None
+        #: the static objects the hold kept in the last protect mask (boxes)
+        self._held_static: list[np.ndarray] = []
         #: the last frame given feedback carried a discontinuity (two-thread order)
         self._fed_cut = False
         #: feedback is made right before each frame's detection (one thread), not a frame ahead
@@ -239,7 +252,8 @@ class Pipeline:
             # and no fragment at an occluder's edge to tilt the Kalman velocity (coasting at the
             # median pace there: HOTA the same in sum over the benchmark's rows, MOTA -0.028
             # with 20% dropped boxes)
-            tracker_cfg = replace(tracker_cfg, split_merged=False, coast_frames=0)
+            tracker_cfg = replace(tracker_cfg, split_merged=False, group_fragments=False,
+                                  coast_frames=0)
         self.tracker = TRACKERS.get(cfg.tracker.method)(tracker_cfg, image_size, fps)
         #: the tracker weighs the appearance of external detections in the frame's picture
         self.tracker_sees_pictures = isinstance(self.tracker, _detections.DetectionTracker)
@@ -314,6 +328,7 @@ class Pipeline:
         if self.stage is not None:
             self.stage.reset(create_detector(self.cfg.motion, self.fps))
         self._static_prev = None
+        self._held_static = []
         if self.static is not None:
             self.static = DualBackground(self.static.fps, self.scale)
 
@@ -382,7 +397,7 @@ class Pipeline:
         boxes = list(self.tracker.moving_boxes(slower=slower))
         static = self._static_prev
         if static is not None and self.detector.relearns:
-            boxes += [o.box.as_array() for o in static.objects]
+            boxes += self._static_held(static)
         if not boxes:
             return None
         mask = np.zeros(shape, bool)
@@ -391,6 +406,22 @@ class Pipeline:
             if x2 > x1 and y2 > y1:
                 mask[y1:y2, x1:x2] = True
         return mask
+
+    def _static_held(self, static: StaticFrame) -> list[np.ndarray]:
+        """The static objects the hold keeps: those at least half covered by a named track's box
+        (something tracked that stopped), and those that overlap one kept the frame before (a
+        bag after its owner walked off). A static object no track brought is a change of the
+        background, such as the place a person stood in the first frame: it is learnt."""
+        tracks = self.tracker.named_boxes()
+        kept = np.array(self._held_static).reshape(-1, 4)
+        held = []
+        for o in static.objects:
+            b = o.box.as_array()
+            cover = _covered(b, tracks)
+            if cover >= 0.5 or (len(kept) and iou_matrix(b[None], kept).max() >= 0.3):
+                held.append(b)
+        self._held_static = held
+        return held
 
     def detect(self, frame: Frame, index: int, small: np.ndarray | None = None) -> Detection:
         """Motion stage of one frame. ``index`` counts frames from the start of this run (for

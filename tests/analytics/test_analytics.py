@@ -238,7 +238,8 @@ def test_a_discontinuity_drops_every_track_without_events_and_keeps_the_totals()
 
 
 # ------------------------------------------------------------------------ stationary and speed
-STAY = {"stationary": {"after_s": 0.3, "radius_px": 3}}   # release 1.5: 4.5 px once stationary
+#: release 1.5: 4.5 px once stationary; a stay ends at the first position out of reach
+STAY = {"stationary": {"after_s": 0.3, "radius_px": 3, "leave_s": 0}}
 
 
 def test_stationary_start_and_end():
@@ -269,6 +270,19 @@ def test_a_stop_ends_only_beyond_its_release():
     assert kinds(run(STAY, {f: {2: (x, 50)} for f, x in enumerate(step, 1)}), "duration_s") == [
         ("stationary_start", 4, 2, None), ("stationary_end", 16, 2, 1.4),
         ("stationary_start", 19, 2, None)]
+
+
+def test_a_passer_by_who_hides_a_standing_person_for_a_moment_ends_nothing():
+    # frames 11-15 the box is 10 px off (merged with someone walking past), then back: with
+    # leave_s = 1 s (10 frames) nothing ends; with 0.3 s the stop ends at frame 14 (3 frames
+    # out) and a new one starts when the box is back
+    xs = [50] * 10 + [60] * 5 + [50] * 15
+    frames = {f: {2: (x, 50)} for f, x in enumerate(xs, 1)}
+    patient = {"stationary": {"after_s": 0.3, "radius_px": 3, "leave_s": 1.0}}
+    assert kinds(run(patient, frames)) == [("stationary_start", 4, 2)]
+    hasty = {"stationary": {"after_s": 0.3, "radius_px": 3, "leave_s": 0.3}}
+    assert [k for k, *_ in kinds(run(hasty, frames))] == [
+        "stationary_start", "stationary_end", "stationary_start"]
 
 
 def _jittered_run(fast: int) -> list[float]:

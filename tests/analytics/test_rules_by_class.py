@@ -83,7 +83,7 @@ def test_a_zone_with_classes_holds_only_those_classes() -> None:
 
 
 def test_stationary_with_classes_reports_only_those_classes() -> None:
-    scene = parse_scene({"stationary": {"after_s": 0.3, "radius_px": 5,
+    scene = parse_scene({"stationary": {"after_s": 0.3, "radius_px": 5, "leave_s": 0,
                                         "classes": ["person"]}})
     # the 40 px step at frame 2 gives the young track a speed of 400 px/s; standing at x = 80
     # from then on, frames 3-5 are outliers to it until the third starts the smoothed

@@ -70,16 +70,23 @@ class _Recorder(MotionDetector):
         return None
 
 
-def test_static_objects_of_the_previous_frame_are_not_learnt():
+def test_static_objects_a_track_brought_are_not_learnt():
     from motiontrack.types import Box, StaticFrame, StaticObject
 
     cfg = load_config(None, ["motion.method=vibe", "preprocess.scale=0.5"])
     pipe = Pipeline(cfg, (320, 240), fps=FPS, static=True)
     assert pipe._protect_mask((120, 160)) is None       # no track, no static object
-    pipe._static_prev = StaticFrame((StaticObject(Box(100.0, 60.0, 40.0, 20.0), 800.0, 12, 2.0),),
-                                    np.zeros((120, 160), np.uint8))
+    bag = StaticFrame((StaticObject(Box(100.0, 60.0, 40.0, 20.0), 800.0, 12, 2.0),),
+                      np.zeros((120, 160), np.uint8))
+    pipe._static_prev = bag
+    # no track lies on it: a change of the background (the place someone stood at the start)
+    assert pipe._protect_mask((120, 160)) is None
+    pipe.tracker.named_boxes = lambda: np.array([[95.0, 50.0, 50.0, 40.0]])   # a track on it
     mask = pipe._protect_mask((120, 160))
     assert mask[30:40, 50:70].all() and mask.sum() == 200   # the box at half scale
+    # the track walks off: the object it left stays kept (it overlaps the one kept before)
+    pipe.tracker.named_boxes = lambda: np.zeros((0, 4))
+    assert pipe._protect_mask((120, 160)).sum() == 200
 
 
 def test_the_ghost_filters_ghost_pixels_reach_the_detector_with_the_next_frame():

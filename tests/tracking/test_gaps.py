@@ -78,13 +78,16 @@ def test_filling_applies_to_external_detections_by_default():
     assert fill_gap_frames(on, 10.0, external=False) == 5
     off = load_config(None, ["tracker.fill_gaps_s=0"])
     assert fill_gap_frames(off, 10.0, external=True) == 0
-    # the tracker keeps tentative boxes for the same runs
+    # the same runs report the tentative boxes (the tracker keeps them for the classes too)
     det = Annotations.from_columns([1], [-1], [[10, 10, 20, 40]])
-    assert Pipeline(cfg, (320, 240), detections=det).tracker.keep_tentative
-    assert not Pipeline(cfg, (320, 240)).tracker.keep_tentative
-    assert Pipeline(on, (320, 240)).tracker.keep_tentative
+    assert Pipeline(cfg, (320, 240), detections=det)._report_earlier
+    assert not Pipeline(cfg, (320, 240))._report_earlier
+    assert Pipeline(cfg, (320, 240)).tracker.keep_tentative           # classes.enabled
+    assert Pipeline(on, (320, 240))._report_earlier
     no = load_config(None, ["tracker.backfill=false"])
-    assert not Pipeline(no, (320, 240), detections=det).tracker.keep_tentative
+    assert not Pipeline(no, (320, 240), detections=det)._report_earlier
+    plain = load_config(None, ["classes.enabled=false"])
+    assert not Pipeline(plain, (320, 240)).tracker.keep_tentative
 
 
 @pytest.fixture(scope="module")

@@ -5,8 +5,10 @@ both on the tracks' smoothed trajectories (:mod:`.smoothing`).
   ``radius`` of the mean of the stay's positions extends it, the first one farther away ends it
   and starts a new stay there. ``stationary_start`` is emitted when a stay has lasted
   ``after_s``; from then on the stay holds positions up to ``release`` times the radius from its
-  mean (hysteresis: a standing person who shifts their weight stays one stop), and
-  ``stationary_end`` is emitted when it ends, with the time it lasted.
+  mean (hysteresis: a standing person who shifts their weight stays one stop). A stay ends only
+  once the positions have been out of its reach for ``leave_s`` (a passer-by who hides the
+  person for a moment, or merges with them into one box, ends nothing), and
+  ``stationary_end`` is emitted then, with the time the stay lasted.
 * **Speeding**: the speed is the straight distance between the smoothed positions at the two
   ends of the last ``window_s`` seconds over their time apart, measured once that span is at
   least half a window; its uncertainty is that distance's standard deviation (the two
@@ -34,33 +36,43 @@ SIGMAS = 2.0
 class Stay:
     """One track's current stay (positions in the rule's unit: pixels or metres)."""
 
-    __slots__ = ("sx", "sy", "n", "first", "last", "stationary")
+    __slots__ = ("sx", "sy", "n", "first", "last", "stationary", "out_since")
 
     def __init__(self) -> None:
         self.n = 0
         self.stationary = False
+        self.out_since: int | None = None
 
     def restart(self, p: tuple[float, float], frame: int) -> None:
         self.sx, self.sy, self.n = p[0], p[1], 1
         self.first = self.last = frame
         self.stationary = False
+        self.out_since = None
 
-    def step(self, p: tuple[float, float], frame: int, radius: float,
-             after_frames: float, release: float = 1.0) -> tuple[str | None, int]:
+    def step(self, p: tuple[float, float], frame: int, radius: float, after_frames: float,
+             release: float = 1.0, leave_frames: float = 0.0) -> tuple[str | None, int]:
         """Add a position. Returns ``("start", 0)`` when the stay has just lasted
         ``after_frames``, ``("end", frames)`` when a stationary stay ended (``frames``: from
-        its first to its last frame), else ``(None, 0)``; a position out of the radius (once
-        stationary, out of ``release`` times the radius) starts a new stay."""
+        its first to its last frame within reach), else ``(None, 0)``. A position out of the
+        radius (once stationary, out of ``release`` times the radius) is not part of the stay;
+        once positions have been out for ``leave_frames`` the stay ends and a new one starts
+        there (a passer-by who hides the object for a moment ends nothing)."""
         reach = radius * release if self.stationary else radius
         if self.n and math.hypot(p[0] - self.sx / self.n, p[1] - self.sy / self.n) <= reach:
             self.sx += p[0]
             self.sy += p[1]
             self.n += 1
             self.last = frame
+            self.out_since = None
             if not self.stationary and frame - self.first >= after_frames - 1e-9:
                 self.stationary = True
                 return "start", 0
             return None, 0
+        if self.n:
+            if self.out_since is None:
+                self.out_since = frame
+            if frame - self.out_since < leave_frames - 1e-9:
+                return None, 0
         ended = self.stationary
         lasted = self.last - self.first if self.n else 0
         self.restart(p, frame)

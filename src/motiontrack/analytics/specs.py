@@ -115,6 +115,9 @@ class StationarySpec(SceneSection):
                            doc="once stationary, a stay ends only beyond this many radii from "
                                "its centre (one alarm per stop while a person shifts on the "
                                "spot)")
+    leave_s: float = param(1.0, lo=0.0, hi=COORD_LIMIT,
+                           doc="seconds the position must stay out of reach before a stay ends "
+                               "(a passer-by who hides the object for a moment ends nothing)")
     classes: tuple[str, ...] | None = param(
         None, max_items=3, doc=CLASSES_DOC + "; a static object the tracker lost has the class "
                                              "of the track it continues")

@@ -117,6 +117,7 @@ class _SelectiveSubtractor(_OpenCVSubtractor):
         super().__init__(make, learning_rate)
         #: shadow pixels between a region's own foreground above and below are the object's
         self.shadow_inside = bool(shadow_inside)
+        self.sideways = False
         #: the model itself does not learn the protected pixels
         self.feeds = bool(protect)
         self.protect_threshold = int(protect_threshold)
@@ -182,7 +183,7 @@ class _SelectiveSubtractor(_OpenCVSubtractor):
         """The subtractor's output for ``image`` (0, 127 shadow, 255), the shadow pixels inside
         a region's own foreground made foreground (``shadow_inside``)."""
         raw = self.sub.apply(image, learningRate=self.learning_rate)
-        return enclosed_shadows(raw) if self.shadow_inside else raw
+        return enclosed_shadows(raw, self.sideways) if self.shadow_inside else raw
 
     def held(self) -> np.ndarray | None:
         return self.hold.held if self.hold is not None else None
@@ -248,6 +249,7 @@ class KNN(_SelectiveSubtractor):
                          bool(detect_shadows) and shadow_inside)
 
     def vehicle_scene(self, vehicles: bool) -> None:
+        self.sideways = vehicles
         tau = self.thresholds[vehicles]
         if self.switches_shadows and tau != self._tau[0]:
             self._tau[0] = tau

@@ -6,8 +6,8 @@ is (its mask of everything that moves is unchanged) and keeps a background image
 does not learn under the boxes of tracked objects (the selective update of the Reading People
 Tracker's background maintenance, kept beside the subtractor rather than inside it). Each frame,
 inside the boxes the pipeline passes as ``protect`` (confirmed tracks that have travelled at least
-one body height and have slowed down, ``motion.knn.hold_speed``, and static objects when it keeps
-a dual background):
+half their height and have slowed down, ``motion.knn.hold_speed``, and the static objects of a
+dual background that a track brought):
 
 1. **Held pixels.** A pixel the subtractor calls background (not a shadow either) where the frame
    differs from the hold's background by more than ``threshold`` levels (largest colour channel)

@@ -25,10 +25,11 @@ __all__ = ["enclosed_shadows", "SHADOW", "FOREGROUND"]
 SHADOW, FOREGROUND = 127, 255
 
 
-def enclosed_shadows(raw: np.ndarray) -> np.ndarray:
+def enclosed_shadows(raw: np.ndarray, sideways: bool = False) -> np.ndarray:
     """``raw`` (h, w) uint8 0/127/255 with every shadow pixel that lies between foreground
-    pixels of its own region, above and below in its column, made foreground. ``raw`` itself
-    when no pixel changes, else a new array."""
+    pixels of its own region, above and below in its column (with ``sideways``, also left and
+    right in its row), made foreground. ``raw`` itself when no pixel changes, else a new
+    array."""
     if not raw.size or not cv2.countNonZero(cv2.inRange(raw, SHADOW, SHADOW)):
         return raw
     n, labels, stats, _ = cv2.connectedComponentsWithStats(
@@ -52,6 +53,12 @@ def enclosed_shadows(raw: np.ndarray) -> np.ndarray:
         bottom = np.where(has, h - 1 - fg[::-1].argmax(axis=0), -1)
         rows = np.arange(h)[:, None]
         inside = shadow & (rows > top) & (rows < bottom)
+        if sideways and inside.any():
+            wide = fg.any(axis=1)
+            left = np.where(wide, fg.argmax(axis=1), w)
+            right = np.where(wide, w - 1 - fg[:, ::-1].argmax(axis=1), -1)
+            cols = np.arange(w)[None, :]
+            inside &= (cols > left[:, None]) & (cols < right[:, None])
         if inside.any():
             if out is raw:
                 out = raw.copy()

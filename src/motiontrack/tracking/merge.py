@@ -21,10 +21,122 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["split_merged", "anchor_partial"]
+__all__ = ["split_merged", "anchor_partial", "group_fragments", "fragment_matrix"]
 
 #: reference height / width from which a track is taken for a person (upright) in the claim test
 UPRIGHT = 1.5
+#: IoU with a blob at which a track too large to claim a share of it is the blob's one object
+SOLE_IOU = 0.5
+#: a prediction is grown by this fraction of its size on each side to hold its fragments
+FRAGMENT_MARGIN = 0.15
+#: share of a detection's box inside one track's grown prediction that makes it a fragment of it
+FRAGMENT_INSIDE = 0.7
+#: a fragment is smaller than this share of the prediction's area (a whole object is not one)
+FRAGMENT_AREA = 0.8
+
+
+def fragment_matrix(pred: np.ndarray, established: np.ndarray, det: np.ndarray,
+                    ref: np.ndarray, alone: bool = True) -> tuple[np.ndarray, np.ndarray]:
+    """(N, M) bool: detection ``j`` is a piece of track ``i`` (see :func:`group_fragments`;
+    without ``alone``, also a piece that lies in several tracks' boxes or touches another's
+    prediction), and (N, 2) the size of each track's expected box."""
+    size = ref * (1 + 2 * FRAGMENT_MARGIN)
+    cx, cy = _centre(pred)
+    x1, y1 = cx - size[:, 0] / 2, cy - size[:, 1] / 2
+    x2, y2 = x1 + size[:, 0], y1 + size[:, 1]
+    dx2, dy2 = det[:, 0] + det[:, 2], det[:, 1] + det[:, 3]
+    iw = np.clip(np.minimum(x2[:, None], dx2[None]) - np.maximum(x1[:, None], det[None, :, 0]),
+                 0, None)
+    ih = np.clip(np.minimum(y2[:, None], dy2[None]) - np.maximum(y1[:, None], det[None, :, 1]),
+                 0, None)
+    area = det[:, 2] * det[:, 3]
+    share = iw * ih / np.maximum(area, 1e-9)[None, :]
+    inside = (share >= FRAGMENT_INSIDE) & established[:, None]
+    part = inside & (area[None, :] < FRAGMENT_AREA * (ref[:, 0] * ref[:, 1])[:, None])
+    if alone:
+        # a piece in two tracks' boxes, or touching another track's prediction, is not taken
+        touches = (_overlap(pred, det) > 0) & established[:, None]
+        part &= (inside.sum(axis=0) == 1)[None, :] & ((touches & ~part).sum(axis=0) == 0)[None, :]
+    return part, size
+
+
+def group_fragments(pred: np.ndarray, established: np.ndarray, det: np.ndarray,
+                    ref: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Join the pieces of one tracked object into one measurement.
+
+    A moving object's mask breaks into parts as it slows, turns or crosses a background of its
+    own colour (a person's head, torso and legs). Each part alone is a poor measurement, and an
+    unmatched part starts a track of its own. Each established track's *expected box* is its
+    reference size centred on its prediction, grown by :data:`FRAGMENT_MARGIN` on each side. A
+    detection is a fragment of a track when at least :data:`FRAGMENT_INSIDE` of it lies in that
+    track's expected box, it is smaller than :data:`FRAGMENT_AREA` of the track's reference
+    area, and it lies in no other established track's expected box nor overlaps another's
+    prediction (a neighbour's own measurement is never taken). Two or more fragments of a track
+    whose bounding box fits in its expected box are replaced by that bounding box.
+
+    Parameters
+    ----------
+    pred : (N, 4) float64
+        Predicted track boxes ``x, y, w, h``.
+    established : (N,) bool
+        Tracks whose fragments are joined (confirmed or lost, not tentative).
+    det : (M, 4) float64
+        Measured boxes.
+    ref : (N, 2) float64
+        Each track's reference (unoccluded) size ``w, h``.
+
+    Returns
+    -------
+    boxes : (K, 4) float64
+        The detections that are no fragment of a track with several, in their order, then one
+        box per track with several fragments.
+    origin : (K,) int64
+        Index into ``det`` of each output box (for a joined box, its largest fragment).
+    """
+    pred = np.asarray(pred, np.float64).reshape(-1, 4)
+    det = np.asarray(det, np.float64).reshape(-1, 4)
+    ref = np.asarray(ref, np.float64).reshape(-1, 2)
+    est = np.asarray(established, bool)
+    m = len(det)
+    keep_all = (det.copy(), np.arange(m))
+    if m < 2 or not est.any():
+        return keep_all
+    part, size = fragment_matrix(pred, est, det, ref)
+    area = det[:, 2] * det[:, 3]
+    counts = part.sum(axis=1)
+    joined = np.zeros(m, bool)
+    boxes, origin = [], []
+    for i in np.flatnonzero(counts >= 2):
+        cols = np.flatnonzero(part[i])
+        d = det[cols]
+        lo = d[:, :2].min(axis=0)
+        hi = (d[:, :2] + d[:, 2:]).max(axis=0)
+        if ((hi - lo) > size[i]).any():     # the pieces would make a larger object
+            continue
+        joined[cols] = True
+        boxes.append(np.concatenate([lo, hi - lo]))
+        origin.append(cols[np.argmax(area[cols])])
+    if not boxes:
+        return keep_all
+    rest = np.flatnonzero(~joined)
+    return (np.concatenate([det[rest], np.array(boxes)]),
+            np.concatenate([rest, np.array(origin, np.int64)]))
+
+
+def _iou(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(N, M) IoU of boxes ``a`` and ``b``."""
+    inter = _overlap(a, b)
+    union = (a[:, 2] * a[:, 3])[:, None] + (b[:, 2] * b[:, 3])[None, :] - inter
+    return inter / np.maximum(union, 1e-9)
+
+
+def _overlap(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(N, M) intersection areas of boxes ``a`` and ``b``."""
+    iw = np.minimum(a[:, None, 0] + a[:, None, 2], b[None, :, 0] + b[None, :, 2]) \
+        - np.maximum(a[:, None, 0], b[None, :, 0])
+    ih = np.minimum(a[:, None, 1] + a[:, None, 3], b[None, :, 1] + b[None, :, 3]) \
+        - np.maximum(a[:, None, 1], b[None, :, 1])
+    return np.clip(iw, 0, None) * np.clip(ih, 0, None)
 
 
 def split_merged(pred: np.ndarray, established: np.ndarray, det: np.ndarray,
@@ -77,7 +189,13 @@ def split_merged(pred: np.ndarray, established: np.ndarray, det: np.ndarray,
     inside = _centres_inside(pred, det) & established[:, None]
     if not (inside.sum(axis=0) >= 2).any():  # the common case: nothing to split
         return _unsplit(det)
-    return _split(pred, det, _claims(pred, det, inside, max_share, ref), size, own)
+    claim = _claims(pred, det, inside, max_share, ref)
+    # a blob one established track explains on its own (its prediction, too large to claim a
+    # share, covers it) is that object: the smaller tracks inside are pieces of it, not people
+    # merged with it
+    whole = inside & ~claim & (_iou(pred, det) >= SOLE_IOU)
+    claim[:, whole.any(axis=0)] = False
+    return _split(pred, det, claim, size, own)
 
 
 def _split(pred: np.ndarray, det: np.ndarray, claim: np.ndarray, size: np.ndarray | None,

@@ -39,7 +39,7 @@ from . import kalman
 from .appearance import bhattacharyya, histograms
 from .association import (INF_COST, assign_in_stages, association_cost, center_distance_matrix,
                           iou_matrix)
-from .merge import anchor_partial, split_merged
+from .merge import anchor_partial, fragment_matrix, group_fragments, split_merged
 
 __all__ = ["TRACKERS", "MultiObjectTracker", "TrackView"]
 
@@ -51,6 +51,21 @@ MAX_PARTIAL_FRAMES = 8
 REF_RATE = 0.2
 #: running-average rate of a track's appearance histogram
 APPEARANCE_RATE = 0.1
+#: a track with this share of its box inside a track at least 1 / NEST_AREA times larger, both
+#: seen, for NEST_S seconds in a row is a piece of the larger one (:meth:`_drop_nested`)
+NEST_INSIDE, NEST_AREA, NEST_S = 0.8, 0.6, 0.5
+#: a track has moved once its centre is this many of its heights from where it was first seen:
+#: only what has moved is held when it slows down (a flickering light or a ghost never moved)
+MOVED = 0.5
+
+
+def _intersections(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(N, M) intersection areas of boxes ``a`` and ``b`` (``x, y, w, h``)."""
+    iw = (np.minimum(a[:, None, 0] + a[:, None, 2], b[None, :, 0] + b[None, :, 2])
+          - np.maximum(a[:, None, 0], b[None, :, 0]))
+    ih = (np.minimum(a[:, None, 1] + a[:, None, 3], b[None, :, 1] + b[None, :, 3])
+          - np.maximum(a[:, None, 1], b[None, :, 1]))
+    return np.clip(iw, 0, None) * np.clip(ih, 0, None)
 
 
 def _recent_velocity(history: deque, k: int) -> np.ndarray | None:
@@ -83,7 +98,7 @@ class TrackView:
 
 class _TrackState:
     __slots__ = ("tid", "state", "hits", "age", "tsu", "history", "score", "partials", "ref",
-                 "origin", "moved", "bridged", "hist", "tentative", "reported")
+                 "origin", "moved", "bridged", "hist", "tentative", "reported", "nested")
 
     def __init__(self, history: int, size: np.ndarray) -> None:
         self.ref = np.asarray(size, np.float64).copy()  # reference (unoccluded) w, h
@@ -96,11 +111,12 @@ class _TrackState:
         self.score = 1.0
         self.partials = 0
         self.origin: tuple[float, float] | None = None   # centre where it was first matched
-        self.moved = False                        # has travelled at least one body height
+        self.moved = False                        # has travelled MOVED of its height
         self.bridged = False                      # last matched to a bridge measurement
         self.hist: np.ndarray | None = None       # appearance (colour histogram), running average
         self.tentative: list[tuple] = []  # (frame, Track fields) of each frame while tentative
         self.reported: int | None = None          # the last frame it was reported in
+        self.nested = 0                           # frames in a row inside a larger track
 
 
 @TRACKERS.register("kalman")
@@ -112,7 +128,8 @@ class MultiObjectTracker:
         self.cfg = cfg or TrackerConfig()
         self.image_size = image_size
         #: frames a lost track may coast (``max_lost_s`` at ``fps``; 25 fps when unknown)
-        self.max_lost = int(round(self.cfg.max_lost_s * (fps or 25.0)))
+        self.fps = fps or 25.0
+        self.max_lost = int(round(self.cfg.max_lost_s * self.fps))
         self.x = np.zeros((0, 8))
         self.P = np.zeros((0, 3, 4))  # covariance as 2x2 blocks (see kalman)
         self.meta: list[_TrackState] = []
@@ -198,6 +215,7 @@ class MultiObjectTracker:
         owned, located = self._by_index(owned, located, hypotheses)
         held = self.x[:, 2:4].copy()   # sizes before this step's size velocity (merged blobs)
         pred = self.predict(dt)
+        before = self._fragment_hosts(pred)
         det, det_scores, owner, n_real = self._measurements(pred, det, det_scores, owned, located,
                                                             held)
         det_hist = (histograms(image, det, mask, scale)
@@ -205,12 +223,30 @@ class MultiObjectTracker:
         matches, un_tracks, un_dets = assign_in_stages(*self._cost(pred, det, owner, n_real, det_hist))
         self._correct(matches, pred, det, det_scores, owner, n_real, det_hist)
         self._miss(un_tracks, dt)
+        if self.cfg.group_fragments:
+            self._drop_nested()
         self._name_confirmed()
         for m in self.meta:
             m.age += dt
-        # synthetic (split) and owned (bridge, hypothesis) measurements never start tracks
-        self._spawn(un_dets[owner[un_dets] < 0], det, det_scores, det_hist)
+        # synthetic (split) and owned (bridge, hypothesis) measurements never start tracks, nor
+        # does a piece of a tracked object
+        new = un_dets[owner[un_dets] < 0]
+        if self.cfg.group_fragments and len(new) and before is not None:
+            hosts, established, ref = before
+            pieces = fragment_matrix(hosts, established, det[new], ref, alone=False)[0]
+            new = new[~pieces.any(axis=0)]
+        self._spawn(new, det, det_scores, det_hist)
         return self._snapshots(self.frame_count - 1 if frame is None else frame)
+
+    def _fragment_hosts(self, pred: np.ndarray):
+        """``(pred, established, ref)`` of the tracks whose pieces are no new track
+        (:func:`~.merge.fragment_matrix`), or None when there is none."""
+        if not self.cfg.group_fragments or not len(self.meta):
+            return None
+        established = np.array([m.state != TrackState.TENTATIVE for m in self.meta], bool)
+        if not established.any():
+            return None
+        return pred.copy(), established, np.array([m.ref for m in self.meta], np.float64)
 
     # ------------------------------------------------------------------------ update steps
     def _by_index(self, owned: Mapping[int, np.ndarray] | None,
@@ -241,14 +277,17 @@ class MultiObjectTracker:
 
         Returns ``(boxes, scores, owner, n_real)``: ``owner`` is the track index a synthetic
         measurement belongs to (-1 for a detection); rows from ``n_real`` on are owned ones."""
+        established = np.array([m.state != TrackState.TENTATIVE for m in self.meta], bool)
+        ref = np.array([m.ref for m in self.meta], np.float64).reshape(-1, 2)
+        if self.cfg.group_fragments and len(det) > 1:
+            det, origin = group_fragments(pred, established, det, ref)
+            det_scores = det_scores[origin]
         if self.cfg.split_merged and len(det):
-            established = np.array([m.state != TrackState.TENTATIVE for m in self.meta], bool)
             own = None
             if located:
                 own = np.full((len(pred), 4), np.nan)
                 for t, box in located.items():
                     own[t] = box
-            ref = np.array([m.ref for m in self.meta], np.float64).reshape(-1, 2)
             size = ref if held is None else np.maximum(ref, held)
             det, origin, owner = split_merged(pred, established, det, own=own, size=size, ref=ref)
             det_scores = det_scores[origin]
@@ -335,7 +374,7 @@ class MultiObjectTracker:
                 cx, cy = centres[k]
                 if m.origin is None:
                     m.origin = (cx, cy)
-                elif math.hypot(cx - m.origin[0], cy - m.origin[1]) > m.ref[1]:
+                elif math.hypot(cx - m.origin[0], cy - m.origin[1]) > MOVED * m.ref[1]:
                     m.moved = True
             m.score = scores[k]
             if m.state == TrackState.TENTATIVE and m.hits >= c.confirm_hits:
@@ -370,6 +409,38 @@ class MultiObjectTracker:
             if m.tsu > self.max_lost or self._outside(boxes[t]):
                 keep[t] = False
         if not keep.all():
+            self._keep(keep)
+
+    def _drop_nested(self) -> None:
+        """A named track that has lain inside a larger one, seen in the same frames, for
+        :data:`NEST_S` seconds is a piece of it (a person's torso tracked on its own while the
+        mask broke apart): it ends, and the larger one carries on, under the older id of the
+        two."""
+        named = [i for i, m in enumerate(self.meta) if m.tid > 0]
+        if len(named) < 2:
+            for m in self.meta:
+                m.nested = 0
+            return
+        boxes = self._boxes()[named]
+        seen = np.array([self.meta[i].tsu == 0 for i in named], bool)
+        area = boxes[:, 2] * boxes[:, 3]
+        inter = _intersections(boxes, boxes)
+        np.fill_diagonal(inter, 0.0)
+        host = ((inter >= NEST_INSIDE * area[:, None]) & (area[:, None] < NEST_AREA * area[None, :])
+                & seen[:, None] & seen[None, :])
+        limit = max(1, int(round(NEST_S * self.fps)))
+        drop = []
+        for k, i in enumerate(named):
+            m = self.meta[i]
+            m.nested = m.nested + 1 if host[k].any() else 0
+            if m.nested >= limit:
+                j = named[int(np.argmax(np.where(host[k], area, -1)))]
+                if m.tid < self.meta[j].tid:        # the piece is the older track: its id lives on
+                    self.meta[j].tid, m.tid = m.tid, self.meta[j].tid
+                drop.append(i)
+        if drop:
+            keep = np.ones(len(self.meta), bool)
+            keep[drop] = False
             self._keep(keep)
 
     def _name_confirmed(self) -> None:
@@ -492,9 +563,10 @@ class MultiObjectTracker:
 
     def moving_boxes(self, margin: float = 0.1, unseen: int = 2,
                      slower: float | None = None) -> np.ndarray:
-        """Boxes (N, 4) where established tracks that have travelled at least one body height and
-        were seen in the last ``unseen`` frames are expected next frame (current box moved by one
-        step of velocity, grown by ``margin`` of its size on each side); with ``slower``, only
+        """Boxes (N, 4) where established tracks that have travelled at least :data:`MOVED` of
+        their height and were seen in the last ``unseen`` frames are expected next frame
+        (current box moved by one step of velocity, grown by ``margin`` of its size on each
+        side); with ``slower``, only
         those whose speed is below that many box heights a frame. Used to protect them from
         being learnt into the background, and to keep people who stop in the mask."""
         keep = [i for i, m in enumerate(self.meta) if m.moved and m.state != TrackState.TENTATIVE
@@ -509,6 +581,11 @@ class MultiObjectTracker:
         b = kalman.z_to_box(x[:, :4] + x[:, 4:8])
         grow = margin * b[:, 2:4]
         return np.column_stack([b[:, :2] - grow, b[:, 2:4] + 2 * grow])
+
+    def named_boxes(self) -> np.ndarray:
+        """(N, 4) the current boxes of the named tracks (confirmed or lost)."""
+        named = [i for i, m in enumerate(self.meta) if m.tid > 0]
+        return self._boxes()[named] if named else np.zeros((0, 4))
 
     def camera_moved(self, step: np.ndarray) -> None:
         """The camera moved between the previous frame and the next: every track's state, its

@@ -109,7 +109,8 @@ class Stationary(BaseRule):
             if not finite[i]:
                 continue
             what, lasted = stay.step((pos[i, 0], pos[i, 1]), f, radius,
-                                     spec.after_s * self.context.fps, spec.release)
+                                     spec.after_s * self.context.fps, spec.release,
+                                     spec.leave_s * self.context.fps)
             tid = int(frame.ids[i])
             if what == "start":
                 if self._object_reports(frame.boxes[i]):
