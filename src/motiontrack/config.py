@@ -45,6 +45,7 @@ __all__ = [
     "FrameDiffParams",
     "MOG2Params",
     "KNNParams",
+    "BGSLibraryParams",
     "VibeParams",
     "MedianParams",
     "CNTParams",
@@ -259,6 +260,34 @@ class KNNParams(_Section):
 
 
 @dataclass(frozen=True)
+class BGSLibraryParams(_Section):
+    """A background model of BGSLibrary (Sobral's C++ library of 43 models, its Python binding
+    ``pybgs``: the optional ``bgslibrary`` extra), with our shadow test and hold on its mask."""
+
+    algorithm: str = param("SuBSENSE", doc="the BGSLibrary model by its class name in pybgs "
+                                           "(SuBSENSE, PAWCS, LOBSTER, ViBe, ...: `motiontrack "
+                                           "list` shows those installed)")
+    shadows: bool = param(True, doc="take shadows out of the model's mask: a foreground pixel "
+                                    "that is the model's background darkened to shadow_threshold-1 "
+                                    "of its brightness, its colour kept, and not inside its "
+                                    "region's own foreground (docs/pipeline.md, Shadows)")
+    shadow_threshold: float = param(0.5, lo=0.0, hi=1.0, when={"shadows": True},
+                                    doc="darkest shadow, as a fraction of the background's "
+                                        "brightness")
+    hold: bool = param(True, doc="keep people and objects that stop in the mask, as KNN's hold "
+                                 "does (docs/pipeline.md, The hold)")
+    hold_threshold: int = param(30, lo=1, hi=255, when={"hold": True},
+                                doc="difference from the hold's background (levels, largest "
+                                    "colour channel) that keeps a pixel under a box foreground")
+    hold_speed: float = param(0.2, lo=0.0, hi=100.0, when={"hold": True},
+                              doc="a track is held while its speed is below this many box heights "
+                                  "a second")
+    accept_s: float = param(180.0, lo=0.0, hi=86400.0, when={"hold": True},
+                            doc="seconds a held pixel stays foreground before it is learnt; 0 = "
+                                "never")
+
+
+@dataclass(frozen=True)
 class VibeParams(_Section):
     """Sample-based background with selective update (ViBe family; docs/pipeline.md)."""
 
@@ -410,6 +439,7 @@ class MotionConfig(_Section):
     gsoc: GSOCParams = field(default_factory=GSOCParams)
     gmg: GMGParams = field(default_factory=GMGParams)
     farneback: FarnebackParams = field(default_factory=FarnebackParams)
+    bgslibrary: BGSLibraryParams = field(default_factory=BGSLibraryParams)
 
     def params_for(self, method: str | None = None) -> dict[str, Any]:
         """The parameter section of ``method`` (default: the selected one) as a dict."""

@@ -288,7 +288,7 @@ class Pipeline:
             self.auto_heads = head_params(cfg.people)
         self._upright: float | None = None   # running mean of the frames' median region h/w
         self.ghosts = None
-        if cfg.motion.ghost_ratio > 0 and self.detector is not None:
+        if cfg.motion.ghost_ratio > 0 and self.detector is not None and not self.detector.own_ghosts:
             self.ghosts = _ghost_filter(cfg.motion)
         self._prev_tracks: tuple = ()
         #: whether the recent tracks are mostly vehicles, for a detector whose shadow test

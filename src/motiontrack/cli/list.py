@@ -20,9 +20,13 @@ def cmd_list(args) -> int:
 
     from ..config import presets
     from ..io.video import encodable_codecs
+    from ..motion.bgslibrary import algorithms
 
     groups = [("presets (motiontrack track --preset NAME)", presets()),
               ("motion detectors (--set motion.method=NAME)", DETECTORS.describe()),
+              ("BGSLibrary models (--set motion.method=bgslibrary "
+               "--set motion.bgslibrary.algorithm=NAME)",
+               {n: "" for n in algorithms()} or {"(none)": "pybgs is not installed"}),
               ("trackers (--set tracker.method=NAME)", TRACKERS.describe()),
               ("single-object trackers (motiontrack follow --tracker NAME)",
                SINGLE_TRACKERS.describe()),
@@ -36,5 +40,5 @@ def cmd_list(args) -> int:
     for title, items in groups:
         print(title)
         for name, doc in items.items():
-            print(f"  {name:<12} {doc}")
+            print(f"  {name:<12} {doc}".rstrip())
     return 0

@@ -9,6 +9,7 @@ from .base import DETECTORS, MotionDetector
 from .cleanup import clean_mask
 from . import detectors as _detectors  # noqa: F401  (registers the built-in detectors)
 from . import samples as _samples  # noqa: F401  (registers the sample-based model)
+from . import bgslibrary as _bgslibrary  # noqa: F401  (registers BGSLibrary's models)
 
 __all__ = ["DETECTORS", "MotionDetector", "clean_mask", "create_detector"]
 

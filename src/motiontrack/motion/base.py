@@ -25,6 +25,9 @@ class MotionDetector:
     protect_speed: float | None = None
     #: whether the model takes another shadow test in a scene of vehicles (:meth:`vehicle_scene`)
     switches_shadows = False
+    #: whether the model finds ghosts itself (it absorbs them by feedback, as SuBSENSE does): the
+    #: pipeline's ghost filter is not run on its mask
+    own_ghosts = False
 
     def apply(self, image: np.ndarray, protect: np.ndarray | None = None) -> np.ndarray:  # pragma: no cover
         """Foreground mask of ``image``.

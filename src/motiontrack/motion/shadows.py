@@ -19,10 +19,13 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-__all__ = ["enclosed_shadows", "SHADOW", "FOREGROUND"]
+__all__ = ["enclosed_shadows", "shadow_test", "SHADOW", "FOREGROUND", "CHROMA"]
 
 #: subtractor output of a shadow pixel, and of a foreground pixel
 SHADOW, FOREGROUND = 127, 255
+#: largest colour distortion of a shadow: the distance from the frame's colour to the
+#: background's colour darkened to the same brightness, over that darkened colour's length
+CHROMA = 0.1
 
 
 def enclosed_shadows(raw: np.ndarray, sideways: bool = False) -> np.ndarray:
@@ -63,4 +66,29 @@ def enclosed_shadows(raw: np.ndarray, sideways: bool = False) -> np.ndarray:
             if out is raw:
                 out = raw.copy()
             out[win][inside] = FOREGROUND
+    return out
+
+
+def shadow_test(image: np.ndarray, background: np.ndarray, fg: np.ndarray,
+                darkest: float) -> np.ndarray:
+    """A model's foreground mask ``fg`` (h, w uint8, non-zero foreground) with its shadow pixels
+    marked :data:`SHADOW` and the others :data:`FOREGROUND`, for models without a shadow test of
+    their own (BGSLibrary's): a pixel is a shadow where the frame is the background darkened,
+    ``image = a * background`` with ``darkest <= a < 1`` (the brightness ratio that best fits,
+    over the colour channels) and a colour distortion ``|image - a * background|`` below
+    :data:`CHROMA` of ``|a * background|`` (the test of OpenCV's MOG2 and KNN, Horprasert et al.
+    1999). ``image`` and ``background``: (h, w, 3) uint8 BGR; gray images are never shadowed."""
+    out = np.where(fg > 0, FOREGROUND, 0).astype(np.uint8)
+    if image.ndim != 3 or background is None or background.shape != image.shape:
+        return out
+    ys, xs = np.nonzero(fg)
+    if not len(ys):
+        return out
+    f = image[ys, xs].astype(np.float32)
+    b = background[ys, xs].astype(np.float32)
+    bb = (b * b).sum(axis=1)
+    a = (f * b).sum(axis=1) / np.maximum(bb, 1.0)
+    dist2 = ((f - a[:, None] * b) ** 2).sum(axis=1)
+    shadow = (a >= darkest) & (a < 1.0) & (dist2 < (CHROMA ** 2) * a * a * bb) & (bb > 0)
+    out[ys[shadow], xs[shadow]] = SHADOW
     return out
