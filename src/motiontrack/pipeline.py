@@ -354,6 +354,7 @@ class Pipeline:
         if self._scene_kind is not None:
             self._scene_kind.reset()
             self._vehicles = False
+            self.tracker.vehicles = False
 
     def _frame_gap(self, frame: Frame) -> int:
         """Frame periods since the previous frame, from the timestamps (wall-clock for live
@@ -605,6 +606,7 @@ class Pipeline:
         self._prev_tracks = tuple(tracks)
         if self._scene_kind is not None:
             self._vehicles = self._scene_kind.update(tracks)
+            self.tracker.vehicles = bool(self._vehicles)
         self.frames_seen += 1
         if mask is not None and self.cfg.regions.silhouettes:
             # what is reported is the regions' silhouettes (the tracker had the mask itself),

@@ -18,15 +18,19 @@ __all__ = ["VehicleScene"]
 
 
 class VehicleScene:
-    """The labels of the last :attr:`RECENT` tracks that had a person or vehicle label; the
-    scene is a vehicles' scene when at least :attr:`MIN_VEHICLES` of them are vehicles and they
-    outnumber the people."""
+    """The labels of the last :attr:`RECENT` tracks that had a person or vehicle label, each
+    weighed by the frames it was seen in: the scene is a vehicles' scene when at least
+    :attr:`MIN_VEHICLES` of them are vehicles and the vehicles' frames are at least
+    :attr:`MAJORITY` times the people's (a flickering light, or a person near the camera whose
+    box the frame's edge cuts square, does not make an office a road)."""
 
     RECENT = 100
     MIN_VEHICLES = 2
+    MAJORITY = 2.0
 
     def __init__(self) -> None:
-        self._labels: collections.OrderedDict[int, str] = collections.OrderedDict()
+        #: track id → [its latest label, frames it was seen in]
+        self._labels: collections.OrderedDict[int, list] = collections.OrderedDict()
 
     def reset(self) -> None:
         self._labels.clear()
@@ -36,9 +40,11 @@ class VehicleScene:
         the scene is a vehicles' scene now."""
         for t in tracks:
             if t.label in ("person", "vehicle"):
-                self._labels[t.id] = t.label
+                seen = self._labels.get(t.id)
+                self._labels[t.id] = [t.label, 1 if seen is None else seen[1] + 1]
                 self._labels.move_to_end(t.id)
                 if len(self._labels) > self.RECENT:
                     self._labels.popitem(last=False)
-        vehicles = sum(1 for v in self._labels.values() if v == "vehicle")
-        return vehicles >= self.MIN_VEHICLES and vehicles > len(self._labels) - vehicles
+        vehicles = [n for label, n in self._labels.values() if label == "vehicle"]
+        people = sum(n for label, n in self._labels.values() if label == "person")
+        return len(vehicles) >= self.MIN_VEHICLES and sum(vehicles) >= self.MAJORITY * max(people, 1)

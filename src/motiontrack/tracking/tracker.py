@@ -141,6 +141,10 @@ class MultiObjectTracker:
         #: ``(frame, snapshot)`` of the tracks confirmed in the last update, at each earlier frame
         #: where they were tentative (empty unless :attr:`keep_tentative`)
         self.confirmed_earlier: list[tuple[int, Track]] = []
+        #: the pieces of a tracked object are joined (``group_fragments``), unless the pipeline
+        #: says the scene's tracks are mostly vehicles: a car's silhouette does not break apart,
+        #: and cars one behind the other in a lane would be taken for one car's pieces
+        self.vehicles = False
 
     def reset(self) -> None:
         """End every track at once (after a discontinuity of the source): none is reported
@@ -223,7 +227,7 @@ class MultiObjectTracker:
         matches, un_tracks, un_dets = assign_in_stages(*self._cost(pred, det, owner, n_real, det_hist))
         self._correct(matches, pred, det, det_scores, owner, n_real, det_hist)
         self._miss(un_tracks, dt)
-        if self.cfg.group_fragments:
+        if self.joins_pieces:
             self._drop_nested()
         self._name_confirmed()
         for m in self.meta:
@@ -231,17 +235,22 @@ class MultiObjectTracker:
         # synthetic (split) and owned (bridge, hypothesis) measurements never start tracks, nor
         # does a piece of a tracked object
         new = un_dets[owner[un_dets] < 0]
-        if self.cfg.group_fragments and len(new) and before is not None:
+        if self.joins_pieces and len(new) and before is not None:
             hosts, established, ref = before
             pieces = fragment_matrix(hosts, established, det[new], ref, alone=False)[0]
             new = new[~pieces.any(axis=0)]
         self._spawn(new, det, det_scores, det_hist)
         return self._snapshots(self.frame_count - 1 if frame is None else frame)
 
+    @property
+    def joins_pieces(self) -> bool:
+        """Whether the pieces of tracked objects are joined this frame (see :attr:`vehicles`)."""
+        return self.cfg.group_fragments and not self.vehicles
+
     def _fragment_hosts(self, pred: np.ndarray):
         """``(pred, established, ref)`` of the tracks whose pieces are no new track
         (:func:`~.merge.fragment_matrix`), or None when there is none."""
-        if not self.cfg.group_fragments or not len(self.meta):
+        if not self.joins_pieces or not len(self.meta):
             return None
         established = np.array([m.state != TrackState.TENTATIVE for m in self.meta], bool)
         if not established.any():
@@ -279,7 +288,7 @@ class MultiObjectTracker:
         measurement belongs to (-1 for a detection); rows from ``n_real`` on are owned ones."""
         established = np.array([m.state != TrackState.TENTATIVE for m in self.meta], bool)
         ref = np.array([m.ref for m in self.meta], np.float64).reshape(-1, 2)
-        if self.cfg.group_fragments and len(det) > 1:
+        if self.joins_pieces and len(det) > 1:
             det, origin = group_fragments(pred, established, det, ref)
             det_scores = det_scores[origin]
         if self.cfg.split_merged and len(det):
