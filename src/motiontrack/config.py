@@ -426,6 +426,13 @@ class MotionConfig(_Section):
         20.0, lo=0.0, hi=255.0,
         doc="sudden change: a jump of the frame's mean brightness (grey levels) from the previous "
             "frame that makes the background model re-learn the scene; 0 = off")
+    bootstrap_s: float = param(
+        0.0, lo=0.0, hi=600.0,
+        doc="seconds after the start (and after each discontinuity) at which the background "
+            "model re-learns from the per-pixel median of frames kept over them, so people "
+            "standing in the first frame leave no ghost when they walk off; whatever stood "
+            "still for half of them is learnt too (0 = off; docs/pipeline.md, The first "
+            "background)")
     relearn_frames: int = param(2, lo=1, hi=1000,
                                 doc="frames from a sudden change on (that frame included) whose "
                                     "regions are ignored while the model settles (tracks coast); "

@@ -142,6 +142,8 @@ class Motion:
     discontinuity: Discontinuity | None = None
     #: the background model re-learnt at this frame after a sudden change of the whole picture
     relearned: bool = False
+    #: the first background the model re-learnt from at this frame (``motion.bootstrap_s``)
+    seed: np.ndarray | None = None
     #: the camera's motion since the previous frame while it moves ((2, 3), previous frame's
     #: pixels → this frame's, processing scale): the tracker carries its tracks with it
     step: np.ndarray | None = None
@@ -202,8 +204,8 @@ class Pipeline:
         self._det_index = detections.by_frame() if detections is not None else None
         self.fps = fps
         #: the motion stage: detector, camera-motion compensation, sudden-change handling
-        self.stage = (MotionStage(create_detector(cfg.motion, fps), cfg.motion, cfg.stabilize)
-                      if detections is None else None)
+        self.stage = (MotionStage(create_detector(cfg.motion, fps), cfg.motion, cfg.stabilize,
+                                  fps) if detections is None else None)
         pre = cfg.preprocess
         if self.detector is not None and self.detector.wants_color and pre.grayscale:
             pre = replace(pre, grayscale=False)
@@ -465,6 +467,7 @@ class Pipeline:
         background = self.detector.background() if self._wants_background else None
         return Motion(clean_mask(raw, self.cfg.cleanup), raw_mask=raw, small=small, static=static,
                       background=background, discontinuity=cut, relearned=out.relearned,
+                      seed=out.seed,
                       step=out.step, held=out.held)
 
     def regions_of(self, index: int, motion: Motion) -> Detection:
@@ -487,6 +490,8 @@ class Pipeline:
             regions = self._find(mask)
         if motion.relearned:
             self._quiet_until = index + self.cfg.motion.relearn_frames
+        if motion.seed is not None and self.ghosts is not None:
+            self.ghosts.seed(motion.seed)
         if index - self._warm_from < self.cfg.motion.warmup or index < self._quiet_until:
             regions = []
         heads = None

@@ -59,6 +59,13 @@ class MotionDetector:
         frame (which then shows no motion)."""
         raise NotImplementedError
 
+    def reseed(self, image: np.ndarray, keep: np.ndarray | None = None) -> None:
+        """Start the background model again from ``image``, a background known for the frames
+        to come (the first background of ``motion.bootstrap_s``); ``keep`` ((h, w) bool): the
+        pixels the last frame showed as foreground, where what the detector holds for stopped
+        tracked objects keeps the background it knew (default: :meth:`relearn`)."""
+        self.relearn(image)
+
     def background(self) -> np.ndarray | None:
         """Current background estimate (for `--save background`), or None."""
         return None

@@ -179,6 +179,18 @@ class _SelectiveSubtractor(_OpenCVSubtractor):
         fg[protect] = np.where(diff[protect] > self.protect_threshold, 255, 0)
         return fg
 
+    def reseed(self, image: np.ndarray, keep: np.ndarray | None = None) -> None:
+        """A new model that has learnt ``image``; the hold takes ``image`` as its background
+        except at ``keep`` and the pixels it holds."""
+        self._before += self._frames
+        self.sub = self._make()
+        self._bg = None
+        for _ in range(self.prime + 1):
+            self.sub.apply(image, learningRate=self.learning_rate)
+        self._frames = 1
+        if self.hold is not None:
+            self.hold.reseed(image, keep)
+
     def _subtract(self, image: np.ndarray) -> np.ndarray:
         """The subtractor's output for ``image`` (0, 127 shadow, 255), the shadow pixels inside
         a region's own foreground made foreground (``shadow_inside``)."""

@@ -364,6 +364,21 @@ class GhostFilter:
         self._remember(int(top), int(bottom) + 1, int(left), int(right) + 1)
         return out
 
+    def seed(self, background: np.ndarray) -> None:
+        """The running backgrounds start again from ``background`` (the first background of
+        ``motion.bootstrap_s``: gray or BGR, processing scale); remembered ghost pixels are
+        forgotten."""
+        if self._bg is None or self._bg.shape != background.shape[:2]:
+            return
+        gray = to_gray(background)
+        self._bg = gray.astype(np.float32)
+        self._bg8 = gray.copy()
+        if self._bgc is not None and background.ndim == 3:
+            self._bgc = background.astype(np.float32)
+            self._bgc8 = background.copy()
+        self._ghost.fill(-1)
+        self._win = None
+
     def ghost_pixels(self, shape: tuple[int, int]) -> np.ndarray | None:
         """The remembered ghost pixels (bool, ``shape``: processing scale), or None when there
         are none: a detector that can re-learn them at once makes them background there."""

@@ -163,6 +163,17 @@ class Hold:
         self._seen = seen
         return out
 
+    def reseed(self, image: np.ndarray, keep: np.ndarray | None = None) -> None:
+        """``image`` becomes the background except at the pixels held or remembered and at
+        ``keep`` (the foreground of the last frame: a person who walked in and stopped is in
+        ``image``, and the background known behind them is what keeps them held)."""
+        if self._bg is None or self._bg.shape != image.shape:
+            return
+        keep = (self._seen > 0) if keep is None else (keep | (self._seen > 0))
+        bg = image.copy()
+        bg[keep] = self._bg[keep]
+        self._bg = bg
+
     def background(self, model: np.ndarray) -> np.ndarray:
         """The subtractor's background image ``model`` with the hold's background where a pixel
         is held or remembered: what is behind a stopped object there, not the object."""

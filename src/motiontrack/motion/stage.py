@@ -17,6 +17,17 @@ Each frame (:meth:`MotionStage.apply`):
    being learnt. The frame is then detected again by the new model; the pipeline ignores the
    regions of ``relearn_frames`` frames from there (its tracks coast).
 4. The mask is warped back into the frame's coordinates (:meth:`Stabilizer.unwarp`).
+
+**The first background** (``motion.bootstrap_s``, off by default). A model starts from the
+first frame, so whoever stands in it is learnt as background: when they walk off, the place they
+stood is a ghost for as long as the model takes to forget them (KNN's history is 500 frames).
+Over the first ``bootstrap_s`` seconds the stage keeps :data:`BOOT_SAMPLES` frames, evenly
+spaced; then the model starts again from their per-pixel median (what the scene showed most of
+that time: the ground where people walked, and whoever stood still for more than half of it)
+while the hold keeps the background it knew under this frame's foreground and the boxes it
+holds (:meth:`MotionDetector.reseed`); the ghost filter's backgrounds take the median too. The
+scene-background-initialisation methods of the SBI benchmark do the same with all the frames at
+hand; here it costs the kept frames' memory at processing scale and nothing after.
 """
 
 from __future__ import annotations
@@ -40,6 +51,8 @@ _WIDEN = cv2.getStructuringElement(cv2.MORPH_RECT, (2 * _REACH + 1, 2 * _REACH +
 #: some models call much of the frame foreground while they settle (CNT for its
 #: min_pixel_stability frames, 15 by default)
 _YOUNG = 25
+#: frames kept for the first background's median (``motion.bootstrap_s``)
+BOOT_SAMPLES = 11
 
 
 @dataclass(frozen=True)
@@ -59,6 +72,9 @@ class StageOutput:
     reanchored: bool = False
     step: np.ndarray | None = None
     held: np.ndarray | None = None
+    #: the first background (``motion.bootstrap_s``), in the frame's own coordinates, at the
+    #: frame the model re-learnt from it: the other models of the scene take it too
+    seed: np.ndarray | None = None
 
 
 def sudden_change(fraction: float, jump: float, cfg: MotionConfig) -> bool:
@@ -95,9 +111,13 @@ class MotionStage:
     """
 
     def __init__(self, detector: MotionDetector, motion: MotionConfig,
-                 stabilize: StabilizeConfig) -> None:
+                 stabilize: StabilizeConfig, fps: float | None = None) -> None:
         self.detector = detector
         self.cfg = motion
+        #: frames after which the model re-learns from the median of the first frames
+        self._boot_at = int(round(motion.bootstrap_s * (fps or 25.0)))
+        self._boot: list[np.ndarray] | None = [] if self._boot_at > 1 else None
+        self._frames = 0
         self.stabilizer = Stabilizer(stabilize) if stabilize.enabled else None
         self._mean: float | None = None          # previous frame's mean brightness
         self._moving: np.ndarray | None = None   # previous frame's mask (model coordinates)
@@ -115,6 +135,8 @@ class MotionStage:
         self._mean = self._moving = None
         self._calm = 0
         self._young = _YOUNG
+        self._boot = [] if self._boot_at > 1 else None
+        self._frames = 0
 
     def relearn(self, image: np.ndarray | None = None) -> None:
         """The detector forgets its model and learns the scene afresh (from ``image``, a
@@ -140,7 +162,11 @@ class MotionStage:
         else:
             raw = self.detector.apply(view, protect)
         relearned = self._sudden(view, raw)
-        if relearned:
+        keep = raw > 0
+        if isinstance(protect, np.ndarray) and protect.shape == keep.shape:
+            keep |= protect
+        seed = None if relearned else self._booted(view, keep)
+        if relearned or seed is not None:
             raw = self.detector.apply(view, None)
         held = self.detector.held()
         self._moving = raw
@@ -149,8 +175,31 @@ class MotionStage:
             if held is not None:
                 held = self.stabilizer.unwarp(held, seen)
         if seen is None:
-            return StageOutput(raw, view, relearned, held=held)
-        return StageOutput(raw, view, relearned, seen.reanchored, seen.step, held)
+            return StageOutput(raw, view, relearned, held=held, seed=seed)
+        if seed is not None and seen.transform is not None:
+            seed = self.stabilizer.unwarp(seed, seen)
+        return StageOutput(raw, view, relearned, seen.reanchored, seen.step, held, seed)
+
+    def _booted(self, view: np.ndarray, keep: np.ndarray) -> np.ndarray | None:
+        """Keep ``view`` for the first background when it is due; at ``bootstrap_s`` re-learn
+        the model from the median of the frames kept, the hold keeping its background at
+        ``keep`` (this frame's mask and the boxes it holds), and return that median (see the
+        module notes); None on every other frame."""
+        if self._boot is None:
+            return None
+        self._frames += 1
+        every = max(1, self._boot_at // (BOOT_SAMPLES - 1))
+        if (self._frames - 1) % every == 0:
+            self._boot.append(view.copy())
+        if self._frames < self._boot_at:
+            return None
+        samples, self._boot = self._boot, None
+        if len(samples) < 3 or any(v.shape != view.shape for v in samples):
+            return None
+        seed = np.median(np.stack(samples), axis=0).astype(np.uint8)
+        self.detector.reseed(seed, keep)
+        self._young = _YOUNG
+        return seed
 
     def _follow(self, seen: StabilizedFrame) -> None:
         """The reference moved on at ``seen``: the model re-learns from its background carried
@@ -161,6 +210,7 @@ class MotionStage:
             old = None
         self.relearn(self.stabilizer.to_anchor(old, seen, fill) if old is not None else fill)
         self.reanchored += 1
+        self._boot = None   # the frames kept are in the old reference's coordinates
 
     def _sudden(self, view: np.ndarray, raw: np.ndarray) -> bool:
         """Look for a sudden change at this frame and re-learn when there is one."""
