@@ -556,12 +556,12 @@ class TrackerConfig(_Section):
                                       "into one synthetic measurement per track (people crossing); "
                                       "never applied to --detections boxes (one object each)",
         when={"method": "kalman"})
-    group_fragments: bool = param(True, doc="join the pieces of a tracked object's mask (head, "
-                                            "torso, legs of a person who slows down) that lie "
-                                            "inside its prediction into one measurement, so no "
-                                            "piece starts a track of its own; never applied to "
-                                            "--detections boxes",
-                                  when={"method": "kalman"})
+    absorb_pieces: bool = param(True, doc="the pieces of a tracked object's mask (head, torso, "
+                                          "legs of a person who slows down) start no track of "
+                                          "their own, and a track lying inside a larger one for "
+                                          "half a second ends; off while the scene's tracks are "
+                                          "mostly vehicles; never applied to --detections boxes",
+                                when={"method": "kalman"})
     coast_frames: int = param(10, lo=0, hi=1000,
                               doc="a lost track coasts at the median pace of its last N steps, not its "
                                   "last Kalman velocity (a fragment at an occluder's edge tilts that); "

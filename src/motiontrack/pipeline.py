@@ -254,7 +254,7 @@ class Pipeline:
             # and no fragment at an occluder's edge to tilt the Kalman velocity (coasting at the
             # median pace there: HOTA the same in sum over the benchmark's rows, MOTA -0.028
             # with 20% dropped boxes)
-            tracker_cfg = replace(tracker_cfg, split_merged=False, group_fragments=False,
+            tracker_cfg = replace(tracker_cfg, split_merged=False, absorb_pieces=False,
                                   coast_frames=0)
         self.tracker = TRACKERS.get(cfg.tracker.method)(tracker_cfg, image_size, fps)
         #: the tracker weighs the appearance of external detections in the frame's picture

@@ -1,6 +1,6 @@
 """One object, one track: the pieces of a tracked object's mask (a person who slows down and
-breaks into head, torso and legs) are joined into one measurement, start no track of their own,
-and a track that formed on a piece anyway ends inside the object's track."""
+breaks into head, torso and legs) start no track of their own, a track that formed on a piece
+anyway ends inside the object's track, and a blob one track explains is not split."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from motiontrack.config import TrackerConfig
-from motiontrack.tracking.merge import group_fragments, split_merged
+from motiontrack.tracking.merge import fragment_matrix, split_merged
 from motiontrack.tracking.tracker import NEST_S, MultiObjectTracker
 
 #: a person tracked at (100, 50), 40 x 100 px: expected box 52 x 130 around the centre (120, 100)
@@ -17,38 +17,27 @@ PERSON = np.array([[100.0, 50.0, 40.0, 100.0]])
 REF = np.array([[40.0, 100.0]])
 
 
-def test_the_pieces_of_one_tracked_object_become_one_measurement():
+def test_pieces_of_a_tracked_object_are_found_in_its_expected_box():
     head, legs = [108.0, 50, 20, 22], [104.0, 95, 30, 55]
-    far = [300.0, 50, 40, 100]
-    boxes, origin = group_fragments(PERSON, np.array([True]), np.array([head, legs, far]), REF)
-    # the far detection first, then the box around head and legs (origin: the larger piece)
-    np.testing.assert_allclose(boxes, [far, [104, 50, 30, 100]])
-    assert origin.tolist() == [2, 1]
+    far, whole = [300.0, 50, 40, 100], [100.0, 50, 40, 100]
+    part, size = fragment_matrix(PERSON, np.array([True]), np.array([head, legs, far, whole]),
+                                 REF)
+    # expected box: 40 x 100 grown by 15 % a side, 52 x 130 around the prediction's centre;
+    # the far box is outside it, the whole person no piece (as large as the track)
+    assert part.tolist() == [[True, True, False, False]]
+    np.testing.assert_allclose(size, [[52, 130]])
+    # a tentative track has no pieces
+    assert not fragment_matrix(PERSON, np.array([False]), np.array([head]), REF)[0].any()
 
 
-def test_a_neighbours_own_box_is_never_taken():
-    # a second track stands beside the first: its detection touches its own prediction, so it
-    # is no piece of the first even where it reaches into the first's expected box
+def test_a_neighbours_own_box_is_a_piece_of_nobody_when_alone_is_asked():
+    # a second track stands beside the first: its detection touches its own prediction
     pred = np.vstack([PERSON, [[140.0, 60, 30, 80]]])
     ref = np.vstack([REF, [[30.0, 80.0]]])
-    head, neighbour = [108.0, 50, 20, 22], [138.0, 60, 12, 60]
-    boxes, origin = group_fragments(pred, np.array([True, True]), np.array([head, neighbour]),
-                                    ref)
-    assert origin.tolist() == [0, 1]
-
-
-@pytest.mark.parametrize("case, dets, established", [
-    ("one piece is a partial view, not a group", [[108.0, 50, 20, 22]], [True]),
-    ("a tentative track gathers nothing", [[108.0, 50, 20, 22], [104.0, 95, 30, 55]], [False]),
-    ("pieces that would make a taller object", [[108.0, 20, 20, 30], [104.0, 120, 30, 60]],
-     [True]),
-    ("a whole object is no piece", [[100.0, 50, 40, 100], [104.0, 95, 30, 55]], [True]),
-])
-def test_no_group_when(case, dets, established):
-    det = np.array(dets)
-    boxes, origin = group_fragments(PERSON, np.array(established), det, REF)
-    np.testing.assert_allclose(boxes, det)
-    assert origin.tolist() == list(range(len(det))), case
+    neighbour = np.array([[138.0, 60, 12, 60]])
+    assert not fragment_matrix(pred, np.array([True, True]), neighbour, ref)[0].any()
+    # without alone, a piece of someone: it starts no track either way
+    assert fragment_matrix(pred, np.array([True, True]), neighbour, ref, alone=False)[0].any()
 
 
 def _tracker(**kw) -> MultiObjectTracker:
@@ -64,7 +53,7 @@ def test_a_piece_beside_a_tracked_person_starts_no_track():
         out = trk.update(np.array([[103.0 + t, 60, 40, 85], [98.0 + t, 120, 10, 12]]))
         assert [tr.id for tr in out] == [1]
     assert len(trk.meta) == 1
-    off = _tracker(group_fragments=False)
+    off = _tracker(absorb_pieces=False)
     for t in range(5):
         off.update(np.array([[100.0 + t, 50, 40, 100]]))
     for t in range(5, 10):
@@ -106,16 +95,16 @@ def test_a_blob_one_track_explains_is_not_split_between_pieces():
 @pytest.mark.data
 @pytest.mark.slow
 def test_on_the_sbi_office_people_are_not_shredded_into_tracks(data):
-    """SBI HumanBody2: four people walk in and out, stand and talk. Without the joining of
-    pieces the tracker reports 27 tracks of at least a second, with it 21 (with a scene that
-    keeps a dual background, 28 and 18: benchmarks/still_people.py)."""
+    """SBI HumanBody2: four people walk in and out, stand and talk. Without absorbing the
+    pieces the tracker reports 27 tracks of at least a second, with it 21
+    (benchmarks/still_people.py counts them with a scene)."""
     from motiontrack.config import load_config
     from motiontrack.pipeline import run
 
     counts = {}
     for group in (True, False):
         spans: dict[int, list[int]] = {}
-        cfg = load_config(None, ["source.fps=25", f"tracker.group_fragments={str(group).lower()}"])
+        cfg = load_config(None, ["source.fps=25", f"tracker.absorb_pieces={str(group).lower()}"])
         with run(str(data("sbi", "HumanBody2") / "input" / "*.jpg"), cfg) as r:
             for res in r:
                 for t in res.tracks:

@@ -21,25 +21,46 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["split_merged", "anchor_partial", "group_fragments", "fragment_matrix"]
+__all__ = ["split_merged", "anchor_partial", "fragment_matrix"]
 
 #: reference height / width from which a track is taken for a person (upright) in the claim test
 UPRIGHT = 1.5
 #: IoU with a blob at which a track too large to claim a share of it is the blob's one object
 SOLE_IOU = 0.5
-#: a prediction is grown by this fraction of its size on each side to hold its fragments
+#: a track's expected box is its reference size grown by this fraction on each side
 FRAGMENT_MARGIN = 0.15
-#: share of a detection's box inside one track's grown prediction that makes it a fragment of it
+#: share of a detection's box inside a track's expected box that makes it a piece of it
 FRAGMENT_INSIDE = 0.7
-#: a fragment is smaller than this share of the prediction's area (a whole object is not one)
+#: a piece is smaller than this share of the track's reference area (a whole object is not one)
 FRAGMENT_AREA = 0.8
 
 
 def fragment_matrix(pred: np.ndarray, established: np.ndarray, det: np.ndarray,
                     ref: np.ndarray, alone: bool = True) -> tuple[np.ndarray, np.ndarray]:
-    """(N, M) bool: detection ``j`` is a piece of track ``i`` (see :func:`group_fragments`;
-    without ``alone``, also a piece that lies in several tracks' boxes or touches another's
-    prediction), and (N, 2) the size of each track's expected box."""
+    """Which detections are pieces of which established tracks.
+
+    A moving object's mask breaks into parts as it slows, turns or crosses a background of its
+    own colour (a person's head, torso and legs). Each established track's *expected box* is its
+    reference size centred on its prediction, grown by :data:`FRAGMENT_MARGIN` on each side. A
+    detection is a piece of a track when at least :data:`FRAGMENT_INSIDE` of it lies in that
+    track's expected box and it is smaller than :data:`FRAGMENT_AREA` of the track's reference
+    area; with ``alone``, also only when it lies in no other established track's expected box
+    and touches no other's prediction.
+
+    Parameters
+    ----------
+    pred : (N, 4) float64
+        Predicted track boxes ``x, y, w, h``.
+    established : (N,) bool
+        Tracks that may have pieces (confirmed or lost, not tentative).
+    det : (M, 4) float64
+        Measured boxes.
+    ref : (N, 2) float64
+        Each track's reference (unoccluded) size ``w, h``.
+
+    Returns
+    -------
+    (N, M) bool, and (N, 2) the size of each track's expected box."""
     size = ref * (1 + 2 * FRAGMENT_MARGIN)
     cx, cy = _centre(pred)
     x1, y1 = cx - size[:, 0] / 2, cy - size[:, 1] / 2
@@ -58,69 +79,6 @@ def fragment_matrix(pred: np.ndarray, established: np.ndarray, det: np.ndarray,
         touches = (_overlap(pred, det) > 0) & established[:, None]
         part &= (inside.sum(axis=0) == 1)[None, :] & ((touches & ~part).sum(axis=0) == 0)[None, :]
     return part, size
-
-
-def group_fragments(pred: np.ndarray, established: np.ndarray, det: np.ndarray,
-                    ref: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Join the pieces of one tracked object into one measurement.
-
-    A moving object's mask breaks into parts as it slows, turns or crosses a background of its
-    own colour (a person's head, torso and legs). Each part alone is a poor measurement, and an
-    unmatched part starts a track of its own. Each established track's *expected box* is its
-    reference size centred on its prediction, grown by :data:`FRAGMENT_MARGIN` on each side. A
-    detection is a fragment of a track when at least :data:`FRAGMENT_INSIDE` of it lies in that
-    track's expected box, it is smaller than :data:`FRAGMENT_AREA` of the track's reference
-    area, and it lies in no other established track's expected box nor overlaps another's
-    prediction (a neighbour's own measurement is never taken). Two or more fragments of a track
-    whose bounding box fits in its expected box are replaced by that bounding box.
-
-    Parameters
-    ----------
-    pred : (N, 4) float64
-        Predicted track boxes ``x, y, w, h``.
-    established : (N,) bool
-        Tracks whose fragments are joined (confirmed or lost, not tentative).
-    det : (M, 4) float64
-        Measured boxes.
-    ref : (N, 2) float64
-        Each track's reference (unoccluded) size ``w, h``.
-
-    Returns
-    -------
-    boxes : (K, 4) float64
-        The detections that are no fragment of a track with several, in their order, then one
-        box per track with several fragments.
-    origin : (K,) int64
-        Index into ``det`` of each output box (for a joined box, its largest fragment).
-    """
-    pred = np.asarray(pred, np.float64).reshape(-1, 4)
-    det = np.asarray(det, np.float64).reshape(-1, 4)
-    ref = np.asarray(ref, np.float64).reshape(-1, 2)
-    est = np.asarray(established, bool)
-    m = len(det)
-    keep_all = (det.copy(), np.arange(m))
-    if m < 2 or not est.any():
-        return keep_all
-    part, size = fragment_matrix(pred, est, det, ref)
-    area = det[:, 2] * det[:, 3]
-    counts = part.sum(axis=1)
-    joined = np.zeros(m, bool)
-    boxes, origin = [], []
-    for i in np.flatnonzero(counts >= 2):
-        cols = np.flatnonzero(part[i])
-        d = det[cols]
-        lo = d[:, :2].min(axis=0)
-        hi = (d[:, :2] + d[:, 2:]).max(axis=0)
-        if ((hi - lo) > size[i]).any():     # the pieces would make a larger object
-            continue
-        joined[cols] = True
-        boxes.append(np.concatenate([lo, hi - lo]))
-        origin.append(cols[np.argmax(area[cols])])
-    if not boxes:
-        return keep_all
-    rest = np.flatnonzero(~joined)
-    return (np.concatenate([det[rest], np.array(boxes)]),
-            np.concatenate([rest, np.array(origin, np.int64)]))
 
 
 def _iou(a: np.ndarray, b: np.ndarray) -> np.ndarray:

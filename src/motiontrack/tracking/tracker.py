@@ -16,7 +16,10 @@ Lifecycle (parameters of :class:`~motiontrack.config.TrackerConfig`):
 
 Region-tracker semantics of the Reading People Tracker (see :mod:`.merge`): a blob holding
 several tracks' predictions is split into one synthetic measurement per track, and a partly
-occluded view is anchored on its visible edges with the track's reference size. Optional: an
+occluded view is anchored on its visible edges with the track's reference size. One object,
+one track (``absorb_pieces``): a piece of an established track's expected box starts no track,
+a track lying inside a larger one for :data:`NEST_S` seconds ends (the older id lives on), and a
+blob one established track explains is not split between smaller ones. Optional: an
 appearance model in the cost (:mod:`.appearance`) and measurements *owned* by one track (a
 single-object tracker's bridge, a shape hypothesis) that can never start a track.
 
@@ -39,7 +42,7 @@ from . import kalman
 from .appearance import bhattacharyya, histograms
 from .association import (INF_COST, assign_in_stages, association_cost, center_distance_matrix,
                           iou_matrix)
-from .merge import anchor_partial, fragment_matrix, group_fragments, split_merged
+from .merge import anchor_partial, fragment_matrix, split_merged
 
 __all__ = ["TRACKERS", "MultiObjectTracker", "TrackView"]
 
@@ -141,7 +144,7 @@ class MultiObjectTracker:
         #: ``(frame, snapshot)`` of the tracks confirmed in the last update, at each earlier frame
         #: where they were tentative (empty unless :attr:`keep_tentative`)
         self.confirmed_earlier: list[tuple[int, Track]] = []
-        #: the pieces of a tracked object are joined (``group_fragments``), unless the pipeline
+        #: the pieces of a tracked object are absorbed (``absorb_pieces``), unless the pipeline
         #: says the scene's tracks are mostly vehicles: a car's silhouette does not break apart,
         #: and cars one behind the other in a lane would be taken for one car's pieces
         self.vehicles = False
@@ -227,7 +230,7 @@ class MultiObjectTracker:
         matches, un_tracks, un_dets = assign_in_stages(*self._cost(pred, det, owner, n_real, det_hist))
         self._correct(matches, pred, det, det_scores, owner, n_real, det_hist)
         self._miss(un_tracks, dt)
-        if self.joins_pieces:
+        if self.absorbs_pieces:
             self._drop_nested()
         self._name_confirmed()
         for m in self.meta:
@@ -235,7 +238,7 @@ class MultiObjectTracker:
         # synthetic (split) and owned (bridge, hypothesis) measurements never start tracks, nor
         # does a piece of a tracked object
         new = un_dets[owner[un_dets] < 0]
-        if self.joins_pieces and len(new) and before is not None:
+        if self.absorbs_pieces and len(new) and before is not None:
             hosts, established, ref = before
             pieces = fragment_matrix(hosts, established, det[new], ref, alone=False)[0]
             new = new[~pieces.any(axis=0)]
@@ -243,14 +246,15 @@ class MultiObjectTracker:
         return self._snapshots(self.frame_count - 1 if frame is None else frame)
 
     @property
-    def joins_pieces(self) -> bool:
-        """Whether the pieces of tracked objects are joined this frame (see :attr:`vehicles`)."""
-        return self.cfg.group_fragments and not self.vehicles
+    def absorbs_pieces(self) -> bool:
+        """Whether the pieces of tracked objects are absorbed this frame (see
+        :attr:`vehicles`): they start no track, and a track inside a larger one ends."""
+        return self.cfg.absorb_pieces and not self.vehicles
 
     def _fragment_hosts(self, pred: np.ndarray):
         """``(pred, established, ref)`` of the tracks whose pieces are no new track
         (:func:`~.merge.fragment_matrix`), or None when there is none."""
-        if not self.joins_pieces or not len(self.meta):
+        if not self.absorbs_pieces or not len(self.meta):
             return None
         established = np.array([m.state != TrackState.TENTATIVE for m in self.meta], bool)
         if not established.any():
@@ -286,12 +290,9 @@ class MultiObjectTracker:
 
         Returns ``(boxes, scores, owner, n_real)``: ``owner`` is the track index a synthetic
         measurement belongs to (-1 for a detection); rows from ``n_real`` on are owned ones."""
-        established = np.array([m.state != TrackState.TENTATIVE for m in self.meta], bool)
-        ref = np.array([m.ref for m in self.meta], np.float64).reshape(-1, 2)
-        if self.joins_pieces and len(det) > 1:
-            det, origin = group_fragments(pred, established, det, ref)
-            det_scores = det_scores[origin]
         if self.cfg.split_merged and len(det):
+            established = np.array([m.state != TrackState.TENTATIVE for m in self.meta], bool)
+            ref = np.array([m.ref for m in self.meta], np.float64).reshape(-1, 2)
             own = None
             if located:
                 own = np.full((len(pred), 4), np.nan)
