@@ -33,7 +33,9 @@ from motiontrack.cli import main
 from motiontrack.evaluate.events import evaluate_events
 from motiontrack.io.events import read_events
 
-from _pets import add_data_argument, pets_video  # benchmarks/ is on sys.path when a script here runs
+# benchmarks/ is on sys.path when a script here runs
+from _pets import add_data_argument, pets_video
+from _rows import parse_row
 
 SCENE = Path(__file__).resolve().parents[1] / "examples" / "pets-s2l1-alarms.toml"
 #: the rate PETS 2009 was recorded at (the clip is stored at 10 fps)
@@ -66,13 +68,6 @@ def speeding(tracks: Path, scene: Path, camera: Path, folder: Path) -> int:
     quiet(["analyze", str(tracks), "--scene", str(scene), "--fps", str(FPS), "--camera",
            str(camera), "-o", str(folder), "--force"])
     return sum(e.type == "speeding" for e in read_events(folder / "events.jsonl").events)
-
-
-def parse_row(text: str) -> tuple[str, list[str]]:
-    name, _, sets = text.partition("=")
-    if not sets:
-        raise argparse.ArgumentTypeError(f"--row needs NAME=KEY=VALUE[,KEY=VALUE], got {text!r}")
-    return name, [s for s in sets.split(",") if s]
 
 
 def main_(argv: list[str] | None = None) -> int:

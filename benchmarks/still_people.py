@@ -27,12 +27,11 @@ import argparse
 import os
 import sys
 import time
+import tomllib
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import cv2
-
-import tomllib
 
 from motiontrack.analytics import Analytics, parse_scene
 from motiontrack.config import load_config
@@ -40,6 +39,8 @@ from motiontrack.evaluate.masks import MaskCounts, compare_masks, read_roi
 from motiontrack.pipeline import open_configured_source
 from motiontrack.run.processors import TrackProcessor
 from motiontrack.types import frame_number
+
+from _rows import parse_row  # benchmarks/ is on sys.path when a script here runs
 
 #: the sequences and the people in each (None: not counted)
 PEOPLE = {"HumanBody2": 4, "HallAndMonitor": 2, "CAVIAR2": 6, "HighwayII": None}
@@ -85,13 +86,6 @@ def run_sequence(folder: Path, sets: list[str]) -> dict:
     return {"p": m["precision"], "r": m["recall"], "f": m["f_measure"],
             "long": sum(b - a + 1 >= LONG for a, b in spans.values()), "alarms": alarms,
             "cpu_ms": 1000 * cpu / max(info.frame_count or frames, 1)}
-
-
-def parse_row(text: str) -> tuple[str, list[str]]:
-    name, _, sets = text.partition("=")
-    if not sets:
-        raise argparse.ArgumentTypeError(f"--row needs NAME=KEY=VALUE[,KEY=VALUE], got {text!r}")
-    return name, [s for s in sets.split(",") if s]
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -309,3 +309,32 @@ def test_silhouettes_benchmark_scores_every_step_and_leaves_people_unclosed():
     assert [name for name, _ in rows] == ["walker"], out
     cleaned, not_closed, closed, default = rows[0][1].split()
     assert default == not_closed != closed, out     # a scene of people is not closed
+
+
+def test_alarms_benchmark_scores_every_event_type_and_counts_speeding_at_two(data, tmp_path):
+    data("pets09-s2l1", "video.avi")
+    out = subprocess.run([sys.executable, str(REPO / "benchmarks" / "alarms.py"), "--data",
+                          str(data_root()), "--frames", "60", "--row",
+                          "raw=motion.knn.shadow_inside=false", "--keep", str(tmp_path)],
+                         capture_output=True, text=True, timeout=120, check=True).stdout
+    rows = {line.split()[0]: line for line in out.splitlines()[2:] if line.strip()}
+    for t in ("line_cross", "zone_enter", "zone_exit", "loiter", "stationary_start",
+              "stationary_end", "speeding", "all"):
+        assert t in rows, out
+    # one column per row of settings: the defaults and the row asked for
+    assert out.splitlines()[1].split()[-2:] == ["defaults", "raw"]
+    (at_two,) = [line for line in out.splitlines() if line.startswith("speeding at 2.0")]
+    assert re.match(r"speeding at 2\.0\s+\d+\s+\d+$", at_two), out
+    assert (tmp_path / "gt" / "events.jsonl").is_file()
+
+
+@pytest.mark.slow
+def test_still_people_benchmark_reports_masks_tracks_and_alarms(data):
+    data("sbi", "HallAndMonitor")
+    out = subprocess.run([sys.executable, str(REPO / "benchmarks" / "still_people.py"), "--data",
+                          str(data_root()), "--seqs", "HallAndMonitor", "-j", "1"],
+                         capture_output=True, text=True, timeout=180, check=True).stdout
+    (line,) = [row for row in out.splitlines() if "HallAndMonitor" in row]
+    p, r, f, tracks, per, alarms, cpu = line.split()[2:]
+    assert 0.8 <= float(f) <= 1.0 and int(tracks) >= 1 and float(per) == int(tracks) / 2
+    assert int(alarms) >= 0 and float(cpu) > 0
