@@ -439,15 +439,21 @@ class MultiObjectTracker:
         host = ((inter >= NEST_INSIDE * area[:, None]) & (area[:, None] < NEST_AREA * area[None, :])
                 & seen[:, None] & seen[None, :])
         limit = max(1, int(round(NEST_S * self.fps)))
-        drop = []
         for k, i in enumerate(named):
             m = self.meta[i]
             m.nested = m.nested + 1 if host[k].any() else 0
-            if m.nested >= limit:
-                j = named[int(np.argmax(np.where(host[k], area, -1)))]
-                if m.tid < self.meta[j].tid:        # the piece is the older track: its id lives on
-                    self.meta[j].tid, m.tid = m.tid, self.meta[j].tid
-                drop.append(i)
+        drop: list[int] = []
+        # the smallest pieces first; a track that ends is no host of another
+        for k in np.argsort(area, kind="stable").tolist():
+            i = named[k]
+            m = self.meta[i]
+            hosts = host[k] & ~np.isin(named, drop)
+            if m.nested < limit or not hosts.any():
+                continue
+            j = named[int(np.argmax(np.where(hosts, area, -1)))]
+            if m.tid < self.meta[j].tid:        # the piece is the older track: its id lives on
+                self.meta[j].tid, m.tid = m.tid, self.meta[j].tid
+            drop.append(i)
         if drop:
             keep = np.ones(len(self.meta), bool)
             keep[drop] = False
@@ -576,9 +582,9 @@ class MultiObjectTracker:
         """Boxes (N, 4) where established tracks that have travelled at least :data:`MOVED` of
         their height and were seen in the last ``unseen`` frames are expected next frame
         (current box moved by one step of velocity, grown by ``margin`` of its size on each
-        side); with ``slower``, only
-        those whose speed is below that many box heights a frame. Used to protect them from
-        being learnt into the background, and to keep people who stop in the mask."""
+        side); with ``slower``, only those whose speed is below that many box heights a frame.
+        Used to protect them from being learnt into the background, and to keep people who stop
+        in the mask."""
         keep = [i for i, m in enumerate(self.meta) if m.moved and m.state != TrackState.TENTATIVE
                 and m.tsu <= unseen]
         if keep and slower is not None:
