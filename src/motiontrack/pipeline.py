@@ -52,7 +52,7 @@ from .people import PeopleStage, head_params
 from .people.heads import split_regions_by_heads
 from .preprocess import load_roi, preprocess
 from .tracking import detections as _detections  # noqa: F401  (registers tracker "detections")
-from .tracking.association import iou_matrix
+from .tracking.association import intersections, iou_matrix
 from .tracking.bridge import Bridge
 from .tracking.tracker import TRACKERS
 from .types import (Annotations, Box, Discontinuity, Frame, FrameResult, PeopleFrame, Region,
@@ -76,16 +76,6 @@ def resolve_config(config: PipelineConfig | str | Path | None) -> PipelineConfig
     if isinstance(config, PipelineConfig):
         return config
     return load_config(config)
-
-
-def _covered(box: np.ndarray, boxes: np.ndarray) -> float:
-    """The largest share of ``box`` (4,) that one of ``boxes`` (N, 4) covers (0 for none)."""
-    if not len(boxes):
-        return 0.0
-    iw = np.minimum(box[0] + box[2], boxes[:, 0] + boxes[:, 2]) - np.maximum(box[0], boxes[:, 0])
-    ih = np.minimum(box[1] + box[3], boxes[:, 1] + boxes[:, 3]) - np.maximum(box[1], boxes[:, 1])
-    inter = np.clip(iw, 0, None) * np.clip(ih, 0, None)
-    return float(inter.max() / max(box[2] * box[3], 1e-9))
 
 
 def _regions_from_detections(det: Annotations, rows: np.ndarray | None) -> list[Region]:
@@ -420,7 +410,8 @@ class Pipeline:
         held = []
         for o in static.objects:
             b = o.box.as_array()
-            cover = _covered(b, tracks)
+            # the largest share of the object one track's box covers
+            cover = intersections(b, tracks).max(initial=0.0) / max(b[2] * b[3], 1e-9)
             if cover >= 0.5 or (len(kept) and iou_matrix(b[None], kept).max() >= 0.3):
                 held.append(b)
         self._held_static = held

@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 from ..assignment import linear_sum_assignment
 
-__all__ = ["iou_matrix", "center_distance_matrix", "association_cost", "assign", "assign_in_stages"]
+__all__ = ["iou_matrix", "intersections", "center_distance_matrix", "association_cost", "assign",
+           "assign_in_stages"]
 
 #: cost given to forbidden pairs (never chosen)
 INF_COST = 1e6
@@ -26,6 +27,17 @@ def iou_matrix(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     out = np.zeros_like(inter)
     np.divide(inter, union, out=out, where=union > 0)
     return out
+
+
+def intersections(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Intersection areas of boxes ``a`` (N, 4) and ``b`` (M, 4), ``x, y, w, h`` → (N, M)."""
+    a = np.asarray(a, np.float64).reshape(-1, 4)
+    b = np.asarray(b, np.float64).reshape(-1, 4)
+    iw = (np.minimum(a[:, None, 0] + a[:, None, 2], b[None, :, 0] + b[None, :, 2])
+          - np.maximum(a[:, None, 0], b[None, :, 0]))
+    ih = (np.minimum(a[:, None, 1] + a[:, None, 3], b[None, :, 1] + b[None, :, 3])
+          - np.maximum(a[:, None, 1], b[None, :, 1]))
+    return np.clip(iw, 0, None) * np.clip(ih, 0, None)
 
 
 def center_distance_matrix(a: np.ndarray, b: np.ndarray) -> np.ndarray:

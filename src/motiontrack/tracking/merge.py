@@ -21,6 +21,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .association import intersections, iou_matrix
+
 __all__ = ["split_merged", "anchor_partial", "fragment_matrix"]
 
 #: reference height / width from which a track is taken for a person (upright) in the claim test
@@ -63,38 +65,16 @@ def fragment_matrix(pred: np.ndarray, established: np.ndarray, det: np.ndarray,
     (N, M) bool, and (N, 2) the size of each track's expected box."""
     size = ref * (1 + 2 * FRAGMENT_MARGIN)
     cx, cy = _centre(pred)
-    x1, y1 = cx - size[:, 0] / 2, cy - size[:, 1] / 2
-    x2, y2 = x1 + size[:, 0], y1 + size[:, 1]
-    dx2, dy2 = det[:, 0] + det[:, 2], det[:, 1] + det[:, 3]
-    iw = np.clip(np.minimum(x2[:, None], dx2[None]) - np.maximum(x1[:, None], det[None, :, 0]),
-                 0, None)
-    ih = np.clip(np.minimum(y2[:, None], dy2[None]) - np.maximum(y1[:, None], det[None, :, 1]),
-                 0, None)
+    expected = np.column_stack([cx - size[:, 0] / 2, cy - size[:, 1] / 2, size])
     area = det[:, 2] * det[:, 3]
-    share = iw * ih / np.maximum(area, 1e-9)[None, :]
+    share = intersections(expected, det) / np.maximum(area, 1e-9)[None, :]
     inside = (share >= FRAGMENT_INSIDE) & established[:, None]
     part = inside & (area[None, :] < FRAGMENT_AREA * (ref[:, 0] * ref[:, 1])[:, None])
     if alone:
         # a piece in two tracks' boxes, or touching another track's prediction, is not taken
-        touches = (_overlap(pred, det) > 0) & established[:, None]
+        touches = (intersections(pred, det) > 0) & established[:, None]
         part &= (inside.sum(axis=0) == 1)[None, :] & ((touches & ~part).sum(axis=0) == 0)[None, :]
     return part, size
-
-
-def _iou(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """(N, M) IoU of boxes ``a`` and ``b``."""
-    inter = _overlap(a, b)
-    union = (a[:, 2] * a[:, 3])[:, None] + (b[:, 2] * b[:, 3])[None, :] - inter
-    return inter / np.maximum(union, 1e-9)
-
-
-def _overlap(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """(N, M) intersection areas of boxes ``a`` and ``b``."""
-    iw = np.minimum(a[:, None, 0] + a[:, None, 2], b[None, :, 0] + b[None, :, 2]) \
-        - np.maximum(a[:, None, 0], b[None, :, 0])
-    ih = np.minimum(a[:, None, 1] + a[:, None, 3], b[None, :, 1] + b[None, :, 3]) \
-        - np.maximum(a[:, None, 1], b[None, :, 1])
-    return np.clip(iw, 0, None) * np.clip(ih, 0, None)
 
 
 def split_merged(pred: np.ndarray, established: np.ndarray, det: np.ndarray,
@@ -151,7 +131,7 @@ def split_merged(pred: np.ndarray, established: np.ndarray, det: np.ndarray,
     # a blob one established track explains on its own (its prediction, too large to claim a
     # share, covers it) is that object: the smaller tracks inside are pieces of it, not people
     # merged with it
-    whole = inside & ~claim & (_iou(pred, det) >= SOLE_IOU)
+    whole = inside & ~claim & (iou_matrix(pred, det) >= SOLE_IOU)
     claim[:, whole.any(axis=0)] = False
     return _split(pred, det, claim, size, own)
 

@@ -41,7 +41,7 @@ from ..types import Box, Region, Track, TrackState
 from . import kalman
 from .appearance import bhattacharyya, histograms
 from .association import (INF_COST, assign_in_stages, association_cost, center_distance_matrix,
-                          iou_matrix)
+                          intersections, iou_matrix)
 from .merge import anchor_partial, fragment_matrix, split_merged
 
 __all__ = ["TRACKERS", "MultiObjectTracker", "TrackView"]
@@ -60,15 +60,6 @@ NEST_INSIDE, NEST_AREA, NEST_S = 0.8, 0.6, 0.5
 #: a track has moved once its centre is this many of its heights from where it was first seen:
 #: only what has moved is held when it slows down (a flickering light or a ghost never moved)
 MOVED = 0.5
-
-
-def _intersections(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """(N, M) intersection areas of boxes ``a`` and ``b`` (``x, y, w, h``)."""
-    iw = (np.minimum(a[:, None, 0] + a[:, None, 2], b[None, :, 0] + b[None, :, 2])
-          - np.maximum(a[:, None, 0], b[None, :, 0]))
-    ih = (np.minimum(a[:, None, 1] + a[:, None, 3], b[None, :, 1] + b[None, :, 3])
-          - np.maximum(a[:, None, 1], b[None, :, 1]))
-    return np.clip(iw, 0, None) * np.clip(ih, 0, None)
 
 
 def _recent_velocity(history: deque, k: int) -> np.ndarray | None:
@@ -434,7 +425,7 @@ class MultiObjectTracker:
         boxes = self._boxes()[named]
         seen = np.array([self.meta[i].tsu == 0 for i in named], bool)
         area = boxes[:, 2] * boxes[:, 3]
-        inter = _intersections(boxes, boxes)
+        inter = intersections(boxes, boxes)
         np.fill_diagonal(inter, 0.0)
         host = ((inter >= NEST_INSIDE * area[:, None]) & (area[:, None] < NEST_AREA * area[None, :])
                 & seen[:, None] & seen[None, :])
