@@ -25,10 +25,12 @@ import sys
 import threading
 from typing import Any, Iterator
 
+import cv2
 import numpy as np
 
 from ..errors import ConfigError
 from .base import DETECTORS, MotionDetector
+from .detectors import binary
 from .hold import Hold
 from .shadows import enclosed_shadows, shadow_test
 
@@ -122,12 +124,12 @@ class BGSLibrary(MotionDetector):
         fg = np.ascontiguousarray(self.model.apply(image))
         if fg.ndim == 3:   # some models give a colour mask
             fg = fg.max(axis=2)
-        raw = np.where(fg > 0, 255, 0).astype(np.uint8)
+        raw = cv2.compare(fg, 0, cv2.CMP_GT)
         if self.shadows:
             raw = enclosed_shadows(shadow_test(image, self._model_background(), raw,
                                                self.darkest))
         if self.hold is None:
-            return np.where(raw == 255, 255, 0).astype(np.uint8)
+            return binary(raw)
         if relearn is True:
             self.hold.reset()
             relearn = None

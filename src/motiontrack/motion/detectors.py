@@ -27,7 +27,7 @@ def _absdiff_max(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return d.max(axis=2) if d.ndim == 3 else d
 
 
-def _binary(fg: np.ndarray) -> np.ndarray:
+def binary(fg: np.ndarray) -> np.ndarray:
     """Subtractor output → 0/255 with shadows (127) and soft values dropped."""
     _, out = cv2.threshold(fg, 200, 255, cv2.THRESH_BINARY)
     return out
@@ -78,7 +78,7 @@ class _OpenCVSubtractor(MotionDetector):
         self.learning_rate = float(learning_rate)
 
     def apply(self, image: np.ndarray, protect: np.ndarray | None = None) -> np.ndarray:
-        return _binary(self.sub.apply(image, learningRate=self.learning_rate))
+        return binary(self.sub.apply(image, learningRate=self.learning_rate))
 
     def relearn(self, image: np.ndarray | None = None) -> None:
         """A new model from ``make()``, which learns ``image`` first when given."""
@@ -167,14 +167,14 @@ class _SelectiveSubtractor(_OpenCVSubtractor):
         if not self.feeds or protect is None or self._frames < 3 or not protect.any():
             if self._frames % self.BG_REFRESH == 0:
                 self._bg = None
-            return _binary(self._subtract(image))
+            return binary(self._subtract(image))
         if self._bg is None or self._frames % self.BG_REFRESH == 0 or self._bg.shape != image.shape:
             self._bg = self.sub.getBackgroundImage()
             if self._bg.shape != image.shape:  # gray model on colour input or vice versa
-                return _binary(self._subtract(image))
+                return binary(self._subtract(image))
         fed = image.copy()
         fed[protect] = self._bg[protect]
-        fg = _binary(self._subtract(fed))
+        fg = binary(self._subtract(fed))
         diff = _absdiff_max(image, self._bg)
         fg[protect] = np.where(diff[protect] > self.protect_threshold, 255, 0)
         return fg
@@ -236,8 +236,9 @@ class KNN(_SelectiveSubtractor):
 
     def __init__(self, history: int = 500, dist2_threshold: float = 300.0, detect_shadows: bool = True,
                  shadow_threshold: float = 0.5, vehicle_shadow_threshold: float = 0.7,
-                 shadow_inside: bool = True, learning_rate: float = -1.0, protect: bool = False, protect_threshold: int = 30,
-                 seed: int = 0, n_samples: int = 7, knn_samples: int = 2, hold: bool = True,
+                 shadow_inside: bool = True, learning_rate: float = -1.0, protect: bool = False,
+                 protect_threshold: int = 30, seed: int = 0, n_samples: int = 7,
+                 knn_samples: int = 2, hold: bool = True,
                  hold_threshold: int = 30, hold_speed: float = 0.2,
                  accept_s: float = 180.0) -> None:
         check_knn_samples(int(n_samples), int(knn_samples))
@@ -294,7 +295,7 @@ class GSOC(_OpenCVSubtractor):
     def apply(self, image: np.ndarray, protect: np.ndarray | None = None) -> np.ndarray:
         if image.ndim == 2:
             image = cv2.cvtColor(image, cv2.COLOR_GRAY2BGR)
-        return _binary(self.sub.apply(image))
+        return binary(self.sub.apply(image))
 
 
 @DETECTORS.register("mog")

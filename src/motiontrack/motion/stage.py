@@ -162,10 +162,7 @@ class MotionStage:
         else:
             raw = self.detector.apply(view, protect)
         relearned = self._sudden(view, raw)
-        keep = raw > 0
-        if isinstance(protect, np.ndarray) and protect.shape == keep.shape:
-            keep |= protect
-        seed = None if relearned else self._booted(view, keep)
+        seed = None if relearned else self._booted(view, raw, protect)
         if relearned or seed is not None:
             raw = self.detector.apply(view, None)
         held = self.detector.held()
@@ -180,11 +177,12 @@ class MotionStage:
             seed = self.stabilizer.unwarp(seed, seen)
         return StageOutput(raw, view, relearned, seen.reanchored, seen.step, held, seed)
 
-    def _booted(self, view: np.ndarray, keep: np.ndarray) -> np.ndarray | None:
+    def _booted(self, view: np.ndarray, raw: np.ndarray,
+                protect: np.ndarray | None) -> np.ndarray | None:
         """Keep ``view`` for the first background when it is due; at ``bootstrap_s`` re-learn
-        the model from the median of the frames kept, the hold keeping its background at
-        ``keep`` (this frame's mask and the boxes it holds), and return that median (see the
-        module notes); None on every other frame."""
+        the model from the median of the frames kept, the hold keeping its background under
+        this frame's mask ``raw`` and the boxes it holds (``protect``), and return that median
+        (see the module notes); None on every other frame."""
         if self._boot is None:
             return None
         self._frames += 1
@@ -197,6 +195,9 @@ class MotionStage:
         if len(samples) < 3 or any(v.shape != view.shape for v in samples):
             return None
         seed = np.median(np.stack(samples), axis=0).astype(np.uint8)
+        keep = raw > 0
+        if isinstance(protect, np.ndarray) and protect.shape == keep.shape:
+            keep |= protect
         self.detector.reseed(seed, keep)
         self._young = _YOUNG
         return seed
