@@ -49,13 +49,24 @@ class WindowSpeed:
     def add(self, frame: int, x: float, y: float) -> float | None:
         """Add the position at ``frame`` (frames increasing); the speed (units per second) over
         the window ending there, or ``None`` while the window spans less than half its length."""
-        self.samples.append((frame, x, y))
+        first = self.oldest((frame, x, y))
+        if first is None:
+            return None
+        f0, x0, y0 = first
+        return math.hypot(x - x0, y - y0) * self.fps / (frame - f0)
+
+    def oldest(self, sample: tuple) -> tuple | None:
+        """Add ``sample`` (its frame first; frames increasing) and drop those older than the
+        window; the oldest sample left, or None while the window spans less than half its
+        length (or nothing)."""
+        frame = sample[0]
+        self.samples.append(sample)
         while self.samples and frame - self.samples[0][0] > self.window_frames + 1e-9:
             self.samples.popleft()
-        f0, x0, y0 = self.samples[0]
-        if frame - f0 < self.window_frames / 2.0 or frame == f0:
+        first = self.samples[0]
+        if frame - first[0] < self.window_frames / 2.0 or frame == first[0]:
             return None
-        return math.hypot(x - x0, y - y0) * self.fps / (frame - f0)
+        return first
 
 
 def mean_speed(frames: Iterable[int], xy: Iterable[tuple[float, float]], fps: float,

@@ -21,9 +21,10 @@ both on the tracks' smoothed trajectories (:mod:`.smoothing`).
 from __future__ import annotations
 
 import math
-from collections import deque
 
 import numpy as np
+
+from ..speed import WindowSpeed
 
 __all__ = ["Stay", "SpeedWindow", "REARM", "SIGMAS"]
 
@@ -79,33 +80,31 @@ class Stay:
         return ("end", lasted) if ended else (None, 0)
 
 
-class SpeedWindow:
+class SpeedWindow(WindowSpeed):
     """One track's speed over a trailing window of ``window_s`` seconds of its smoothed
-    positions at ``fps`` frames a second (:meth:`add`), and its alarm state."""
+    positions at ``fps`` frames a second (:meth:`add`, the window of
+    :class:`~motiontrack.speed.WindowSpeed`), and its alarm state."""
 
-    __slots__ = ("samples", "window_frames", "fps", "speeding", "over_since", "updates")
+    __slots__ = ("speeding", "over_since", "updates")
 
     def __init__(self, window_s: float, fps: float) -> None:
-        self.samples: deque[tuple[int, np.ndarray, np.ndarray]] = deque()
-        self.window_frames = window_s * fps
-        self.fps = fps
+        super().__init__(window_s, fps)
         self.speeding = False
         #: the first frame of the current run of frames over the limit (None: not over it)
         self.over_since: int | None = None
         #: the smoother's measurements when last seen: fewer means it started again
         self.updates = 0
 
-    def add(self, frame: int, p: np.ndarray, cov: np.ndarray) -> tuple[float, float] | None:
+    def add(self, frame: int, p: np.ndarray,  # type: ignore[override]
+            cov: np.ndarray) -> tuple[float, float] | None:
         """Add the smoothed position ``p`` (2,) with covariance ``cov`` (2, 2) at ``frame``;
         the speed over the window ending there (units per second) and its standard deviation,
         or None while the window spans less than half its length."""
-        self.samples.append((frame, p, cov))
-        while frame - self.samples[0][0] > self.window_frames + 1e-9:
-            self.samples.popleft()
-        f0, p0, cov0 = self.samples[0]
-        span = frame - f0
-        if span < self.window_frames / 2.0 or span == 0:
+        first = self.oldest((frame, p, cov))
+        if first is None:
             return None
+        f0, p0, cov0 = first
+        span = frame - f0
         d = p - p0
         dist = math.hypot(d[0], d[1])
         c = cov + cov0

@@ -59,6 +59,17 @@ def box_iou(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return inter / (a[2] * a[3] + b[:, 2] * b[:, 3] - inter)
 
 
+def _lying_on(o: "TrackedObject", ids: np.ndarray, boxes: np.ndarray) -> int | None:
+    """The row of the track other than ``o``'s owner that overlaps ``o`` most, when that
+    overlap is at least :data:`SAME_IOU` (a track lying on it); else None."""
+    if not len(ids):
+        return None
+    iou = box_iou(o.box, boxes)
+    iou[ids == o.owner] = 0.0
+    k = int(iou.argmax())
+    return k if iou[k] >= SAME_IOU else None
+
+
 class TrackedObject:
     """One static object as the rules see it."""
 
@@ -139,12 +150,10 @@ class StaticObjects:
         if o.oid is None:
             o.oid = o.origin
         if o.oid is None:
-            if len(ids):
-                iou = box_iou(o.box, boxes)
-                iou[ids == o.owner] = 0.0
-                if iou.max() >= SAME_IOU:
-                    o.oid = int(ids[int(iou.argmax())])
-            if o.oid is None:
+            k = _lying_on(o, ids, boxes)
+            if k is not None:
+                o.oid = int(ids[k])
+            else:
                 o.oid = self.next_id
                 self.next_id += 1
         return o.oid
@@ -174,12 +183,8 @@ class StaticObjects:
         """The track ``o`` continues: the latest of ``frames`` (``(frame, ids, boxes, labels)``)
         with a track other than its owner lying on it, the one overlapping it most."""
         for _, ids, boxes, labels in reversed(frames):
-            if not len(ids):
-                continue
-            iou = box_iou(o.box, boxes)
-            iou[ids == o.owner] = 0.0
-            k = int(iou.argmax())
-            if iou[k] >= SAME_IOU:
+            k = _lying_on(o, ids, boxes)
+            if k is not None:
                 o.origin = int(ids[k])
                 o.origin_label = "" if labels is None else str(labels[k] or "")
                 return
