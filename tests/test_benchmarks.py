@@ -13,12 +13,17 @@ import pytest
 from helpers import REPO, data_root
 
 
+def _bench(script: str, *args: str, timeout: float = 120) -> str:
+    """What ``benchmarks/SCRIPT ARGS`` prints; a failure raises with its output."""
+    return subprocess.run([sys.executable, str(REPO / "benchmarks" / script), *args],
+                          capture_output=True, text=True, timeout=timeout, check=True).stdout
+
+
 @pytest.mark.slow
 def test_stages_benchmark_reports_every_stage(data):
     data("pets09-s2l1", "video.avi")
-    out = subprocess.run([sys.executable, str(REPO / "benchmarks" / "stages.py"), "--data",
-                          str(data_root()), "--frames", "20", "--repeat", "1"],
-                         capture_output=True, text=True, timeout=120, check=True).stdout
+    out = _bench("stages.py", "--data", str(data_root()), "--frames", "20", "--repeat", "1",
+                 timeout=120)
     times = dict(re.findall(r"^(\S.*?)\s{2,}(\d+\.\d+)", out, re.M))
     stages = ["decode", "preprocess", "motion detector", "mask clean-up", "ghosts + regions",
               "head splitting", "tracker", "classes"]
@@ -32,9 +37,8 @@ def test_stages_benchmark_reports_every_stage(data):
 
 def test_people_stage_benchmark_replays_the_stage_identically_and_reports_its_parts(data):
     data("pets09-s2l1", "video.avi")
-    out = subprocess.run([sys.executable, str(REPO / "benchmarks" / "people_stage.py"), "--data",
-                          str(data_root()), "--frames", "12", "--repeat", "1", "--chunk", "5"],
-                         capture_output=True, text=True, timeout=120, check=True).stdout
+    out = _bench("people_stage.py", "--data", str(data_root()), "--frames", "12", "--repeat", "1",
+                 "--chunk", "5", timeout=120)
     times = {k.strip(): float(v) for k, v in re.findall(r"^(.+?)\s+(\d+\.\d+) ms/frame$", out, re.M)}
     assert out.startswith("PETS09-S2L1, 12 frames"), out
     assert set(times) == {"people stage", "heads + splitting", "the rest (shapes)"}, out
@@ -46,9 +50,8 @@ def test_people_stage_benchmark_replays_the_stage_identically_and_reports_its_pa
 @pytest.mark.slow
 def test_pets_detections_benchmark_reports_every_row(data):
     data("pets09-s2l1", "video.avi")
-    out = subprocess.run([sys.executable, str(REPO / "benchmarks" / "detections_pets.py"), "--data",
-                          str(data_root()), "--frames", "40", "--seeds", "1"],
-                         capture_output=True, text=True, timeout=120, check=True).stdout
+    out = _bench("detections_pets.py", "--data", str(data_root()), "--frames", "40", "--seeds", "1",
+                 timeout=120)
     rows = re.findall(r"^\s*(\d\.\d\d)\s+(\d\.\d\d)\s+(\d\.\d\d)\s+(\d\.\d)((?:\s+-?\d+\.\d+){6})$",
                       out, re.M)
     assert len(rows) == 8, out
@@ -60,9 +63,7 @@ def test_pets_detections_benchmark_reports_every_row(data):
 @pytest.mark.slow
 def test_detections_benchmark_puts_motiontrack_beside_sort_settings_on_mot15(data):
     data("mot15-dev", "TUD-Campus", "det", "det.txt")
-    out = subprocess.run([sys.executable, str(REPO / "benchmarks" / "detections.py"), "--data",
-                          str(data_root()), "--repeat", "1"],
-                         capture_output=True, text=True, timeout=300, check=True).stdout
+    out = _bench("detections.py", "--data", str(data_root()), "--repeat", "1", timeout=300)
     rows = {m[0].strip(): [float(v) for v in m[1].split()] for m in re.findall(
         r"^(motiontrack[\w ']*?)\s+((?:\d+\.\d+\s+){3}\d+\s+\d+)$", out, re.M)}
     assert set(rows) >= {"motiontrack", "motiontrack SORT settings"}, out
@@ -86,9 +87,8 @@ def test_serve_benchmark_with_browsers_reports_each_browser_count():
             pytest.fail("chromium, chromedriver, selenium or uvicorn missing and "
                         "MOTIONTRACK_REQUIRE_DATA=1")
         pytest.skip("chromium, chromedriver, selenium or uvicorn missing")
-    out = subprocess.run([sys.executable, str(REPO / "benchmarks" / "serve.py"), "--browsers",
-                          "--seconds", "1", "--rounds", "1", "--viewers", "0,1"],
-                         capture_output=True, text=True, timeout=240, check=True).stdout
+    out = _bench("serve.py", "--browsers", "--seconds", "1", "--rounds", "1", "--viewers", "0,1",
+                 timeout=240)
     rows = {int(n): [float(v) for v in rest.split()] for n, rest in
             re.findall(r"^\s+(\d+)((?:\s+\d+\.\d+){4})$", out, re.M)}
     assert sorted(rows) == [0, 1], out
@@ -105,10 +105,8 @@ def test_serve_benchmark_with_browsers_reports_each_browser_count():
 def test_throughput_benchmark_measures_every_whole_process_row(data, tmp_path):
     data("pets09-s2l1", "video.avi")
     report = tmp_path / "throughput.json"
-    out = subprocess.run([sys.executable, str(REPO / "benchmarks" / "throughput.py"), "--data",
-                          str(data_root()), "--frames", "20", "--rounds", "1",
-                          "--tutorial-fourccs", "MJPG,mp4v", "--json", str(report)],
-                         capture_output=True, text=True, timeout=300, check=True).stdout
+    out = _bench("throughput.py", "--data", str(data_root()), "--frames", "20", "--rounds", "1",
+                 "--tutorial-fourccs", "MJPG,mp4v", "--json", str(report), timeout=300)
     doc = json.loads(report.read_text())
     rows = doc["rows"]
     assert list(rows) == ["decode only", "motion stage alone", "tutorial", "tutorial + video MJPG",
@@ -141,9 +139,8 @@ def test_tutorial_script_writes_its_boxes_and_annotated_video(data, tmp_path):
 
     video = data("pets09-s2l1", "video.avi")
     boxes, annotated = tmp_path / "boxes.txt", tmp_path / "tutorial.avi"
-    out = subprocess.run([sys.executable, str(REPO / "benchmarks" / "tutorial.py"), str(video),
-                          "--frames", "15", "--out", str(boxes), "--video", str(annotated)],
-                         capture_output=True, text=True, timeout=120, check=True).stdout
+    out = _bench("tutorial.py", str(video), "--frames", "15", "--out", str(boxes), "--video",
+                 str(annotated), timeout=120)
     assert out.startswith("frames 15 in "), out
     found = read_mot(boxes, kind="results")
     # MOG2 marks moving people from the second frame on; each box is an id of its own
@@ -160,9 +157,8 @@ def test_tutorial_script_writes_its_boxes_and_annotated_video(data, tmp_path):
 def test_memory_benchmark_reports_rss_at_every_tenth_of_the_run(tmp_path):
     report = tmp_path / "memory.json"
     # enough frames for several samples in every tenth of the run on a fast machine
-    out = subprocess.run([sys.executable, str(REPO / "benchmarks" / "memory.py"), "--frames", "300",
-                          "--scene", "walker", "--interval", "0.1", "--json", str(report)],
-                         capture_output=True, text=True, timeout=300, check=True).stdout
+    out = _bench("memory.py", "--frames", "300", "--scene", "walker", "--interval", "0.1", "--json",
+                 str(report), timeout=300)
     doc = json.loads(report.read_text())
     assert doc["frames"] == 300 and doc["peak_rss_mb"] > 50, out
     # the progress bar was read: the marks are at the frames of each tenth
@@ -179,8 +175,7 @@ def test_memory_benchmark_reports_rss_at_every_tenth_of_the_run(tmp_path):
 
 @pytest.mark.slow
 def test_startup_benchmark_reports_every_case_against_the_opencv_floor():
-    out = subprocess.run([sys.executable, str(REPO / "benchmarks" / "startup.py"), "--rounds", "1"],
-                         capture_output=True, text=True, timeout=300, check=True).stdout
+    out = _bench("startup.py", "--rounds", "1", timeout=300)
     # a row: the case in 30 columns, then its numbers
     rows = {line[:30].strip(): [float(v) for v in re.findall(r"\d+\.\d+", line[30:])]
             for line in out.splitlines()[2:] if not line.startswith("target: ")}
@@ -197,10 +192,8 @@ def test_startup_benchmark_reports_every_case_against_the_opencv_floor():
 @pytest.mark.slow
 def test_video_benchmark_reports_each_encoder_and_drawing_row(data):
     data("pets09-s2l1", "video.avi")
-    out = subprocess.run([sys.executable, str(REPO / "benchmarks" / "video.py"), "--data",
-                          str(data_root()), "--encoders", "--drawing", "--frames", "5",
-                          "--rounds", "1", "--only", "VideoSink", "--only", "OpenCV mp4v"],
-                         capture_output=True, text=True, timeout=300, check=True).stdout
+    out = _bench("video.py", "--data", str(data_root()), "--encoders", "--drawing", "--frames", "5",
+                 "--rounds", "1", "--only", "VideoSink", "--only", "OpenCV mp4v", timeout=300)
     rows = re.findall(r"^(\S.*?)\s+(\d+\.\d\d)\s+(\d+\.\d\d)\s+(\d+\.\d)\s+(\d+\.\d\d)$", out, re.M)
     assert [r[0] for r in rows] == ["OpenCV mp4v (MPEG-4 part 2, browsers do not play it)",
                                     "motiontrack VideoSink vp80 (the default: static-thresh 1000)",
@@ -213,9 +206,7 @@ def test_video_benchmark_reports_each_encoder_and_drawing_row(data):
 @pytest.mark.slow
 def test_seed_sweeps_script_finds_the_crossing_switch_of_seed_9():
     # the one seed of docs/pipeline.md's sweep at which the crossing people switch identities
-    out = subprocess.run([sys.executable, str(REPO / "benchmarks" / "seed_sweeps.py"), "identity",
-                          "--seeds", "9"], capture_output=True, text=True, timeout=300,
-                         check=True).stdout
+    out = _bench("seed_sweeps.py", "identity", "--seeds", "9", timeout=300)
     rows = {line.split("|")[1].strip(): line for line in out.splitlines() if line.startswith("| `")}
     assert "1 of 1 (seed 9)" in rows["`synth:crossing` (two people crossing)"], out
     assert "0 of 1" in rows["`synth:column` (a person passing behind a column)"], out
@@ -235,9 +226,8 @@ def test_event_store_benchmark_reports_each_query_with_its_matches():
 @pytest.mark.slow
 def test_motion_models_benchmark_times_every_model(data):
     data("pets09-s2l1", "video.avi")
-    out = subprocess.run([sys.executable, str(REPO / "benchmarks" / "motion_models.py"), "--data",
-                          str(data_root()), "--frames", "12", "--repeat", "1"],
-                         capture_output=True, text=True, timeout=120, check=True).stdout
+    out = _bench("motion_models.py", "--data", str(data_root()), "--frames", "12", "--repeat", "1",
+                 timeout=120)
     times = dict(re.findall(r"^(\S.*?)\s{2,}(\d+\.\d+)\s+\[", out, re.M))
     assert set(times) == {"knn", "knn + hold slow", "knn + hold boxes", "knn, hold=false",
                           "mog2", "vibe", "vibe + protect", "vibe, n_samples 6 + protect",
@@ -247,10 +237,9 @@ def test_motion_models_benchmark_times_every_model(data):
 
 @pytest.mark.slow
 def test_static_foreground_benchmark_keeps_the_stopped_person_with_the_hold_and_vibe():
-    out = subprocess.run([sys.executable, str(REPO / "benchmarks" / "static_foreground.py"),
-                          "--no-cost", "--stand", "4", "--park", "2", "--scenes", "person,parks",
-                          "--rows", "knn + hold (default),knn hold=false,vibe (selective update)"],
-                         capture_output=True, text=True, timeout=300, check=True).stdout
+    out = _bench("static_foreground.py", "--no-cost", "--stand", "4", "--park", "2", "--scenes",
+                 "person,parks", "--rows",
+                 "knn + hold (default),knn hold=false,vibe (selective update)", timeout=300)
     blocks = dict(re.findall(r"^== (.+?)  \(.*?\)\n((?:  .*\n?)+)", out, re.M))
     assert set(blocks) == {"knn + hold (default)", "knn hold=false", "vibe (selective update)"}, out
     for row in ("knn + hold (default)", "vibe (selective update)"):
@@ -302,9 +291,7 @@ def test_serve_soak_benchmark_samples_both_cameras_and_checks_every_target(tmp_p
 
 
 def test_silhouettes_benchmark_scores_every_step_and_leaves_people_unclosed():
-    out = subprocess.run([sys.executable, str(REPO / "benchmarks" / "silhouettes.py"),
-                          "--scenes", "walker", "--frames", "60"],
-                         capture_output=True, text=True, timeout=120, check=True).stdout
+    out = _bench("silhouettes.py", "--scenes", "walker", "--frames", "60", timeout=120)
     rows = re.findall(r"^(\w+)\s+((?:\s*\d\.\d{3}/\d\.\d{3}/\d\.\d{3}){4})$", out, re.M)
     assert [name for name, _ in rows] == ["walker"], out
     cleaned, not_closed, closed, default = rows[0][1].split()
@@ -313,10 +300,8 @@ def test_silhouettes_benchmark_scores_every_step_and_leaves_people_unclosed():
 
 def test_alarms_benchmark_scores_every_event_type_and_counts_speeding_at_two(data, tmp_path):
     data("pets09-s2l1", "video.avi")
-    out = subprocess.run([sys.executable, str(REPO / "benchmarks" / "alarms.py"), "--data",
-                          str(data_root()), "--frames", "60", "--row",
-                          "raw=motion.knn.shadow_inside=false", "--keep", str(tmp_path)],
-                         capture_output=True, text=True, timeout=120, check=True).stdout
+    out = _bench("alarms.py", "--data", str(data_root()), "--frames", "60", "--row",
+                 "raw=motion.knn.shadow_inside=false", "--keep", str(tmp_path), timeout=120)
     rows = {line.split()[0]: line for line in out.splitlines()[2:] if line.strip()}
     for t in ("line_cross", "zone_enter", "zone_exit", "loiter", "stationary_start",
               "stationary_end", "speeding", "all"):
@@ -331,9 +316,8 @@ def test_alarms_benchmark_scores_every_event_type_and_counts_speeding_at_two(dat
 @pytest.mark.slow
 def test_still_people_benchmark_reports_masks_tracks_and_alarms(data):
     data("sbi", "HallAndMonitor")
-    out = subprocess.run([sys.executable, str(REPO / "benchmarks" / "still_people.py"), "--data",
-                          str(data_root()), "--seqs", "HallAndMonitor", "-j", "1"],
-                         capture_output=True, text=True, timeout=180, check=True).stdout
+    out = _bench("still_people.py", "--data", str(data_root()), "--seqs", "HallAndMonitor", "-j",
+                 "1", timeout=180)
     (line,) = [row for row in out.splitlines() if "HallAndMonitor" in row]
     p, r, f, tracks, per, alarms, cpu = line.split()[2:]
     assert 0.8 <= float(f) <= 1.0 and int(tracks) >= 1 and float(per) == int(tracks) / 2
