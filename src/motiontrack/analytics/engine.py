@@ -213,7 +213,7 @@ class Analytics:
             smoother.clear(fresh)
             if unit == "m" and world is not None:
                 out[unit] = smoother.step(frame, rows, world, boxes[:, 3],
-                                          jacobians(self.context.world_of, boxes))
+                                          jacobians(self.context.world_of, boxes, world))
             else:
                 out[unit] = smoother.step(frame, rows, points, boxes[:, 3])
         return out

@@ -85,11 +85,13 @@ class Smoothed:
         return speed, np.sqrt(np.maximum(var, 0.0))
 
 
-def jacobians(world_of: Callable[[np.ndarray], np.ndarray], boxes: np.ndarray) -> np.ndarray:
+def jacobians(world_of: Callable[[np.ndarray], np.ndarray], boxes: np.ndarray,
+              base: np.ndarray | None = None) -> np.ndarray:
     """(N, 2, 2) metres per pixel of the ground position of each box's foot point, in each image
-    axis (columns: a pixel right, a pixel down), by finite differences; NaN above the horizon."""
+    axis (columns: a pixel right, a pixel down), by finite differences; NaN above the horizon.
+    ``base``: ``world_of(boxes)`` when the caller has it already."""
     b = np.asarray(boxes, np.float64).reshape(-1, 4)
-    base = world_of(b)
+    base = world_of(b) if base is None else base
     right, down = b.copy(), b.copy()
     right[:, 0] += 1.0
     down[:, 1] += 1.0

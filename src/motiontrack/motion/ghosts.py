@@ -209,14 +209,7 @@ class GhostFilter:
         self._frames += 1
         gray = None
         if self._bg is None or self._bg.shape != mask.shape:
-            gray = to_gray(image)
-            self._bg = gray.astype(np.float32)
-            self._bg8 = gray.copy()
-            colour = self.lit_share > 0 and image.ndim == 3
-            self._bgc = image.astype(np.float32) if colour else None
-            self._bgc8 = image.copy() if colour else None
-            self._ghost = np.full(gray.shape, -1, np.int16)
-            self._win = None
+            self._start(image)
             self._prev = []
             return mask, find(mask)
         detected = mask
@@ -368,15 +361,19 @@ class GhostFilter:
         """The running backgrounds start again from ``background`` (the first background of
         ``motion.bootstrap_s``: gray or BGR, processing scale); remembered ghost pixels are
         forgotten."""
-        if self._bg is None or self._bg.shape != background.shape[:2]:
-            return
-        gray = to_gray(background)
+        if self._bg is not None and self._bg.shape == background.shape[:2]:
+            self._start(background)
+
+    def _start(self, image: np.ndarray) -> None:
+        """The running backgrounds from ``image`` (the colour one for the light test, on colour
+        frames), no ghost pixel remembered."""
+        gray = to_gray(image)
         self._bg = gray.astype(np.float32)
         self._bg8 = gray.copy()
-        if self._bgc is not None and background.ndim == 3:
-            self._bgc = background.astype(np.float32)
-            self._bgc8 = background.copy()
-        self._ghost.fill(-1)
+        colour = self.lit_share > 0 and image.ndim == 3
+        self._bgc = image.astype(np.float32) if colour else None
+        self._bgc8 = image.copy() if colour else None
+        self._ghost = np.full(gray.shape, -1, np.int16)
         self._win = None
 
     def ghost_pixels(self, shape: tuple[int, int]) -> np.ndarray | None:
